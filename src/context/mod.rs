@@ -1,0 +1,1 @@
+//! Headless OpenGL contexts.

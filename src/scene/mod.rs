@@ -1,0 +1,1 @@
+//! Scenes: glTF loading and built-ins.
