@@ -4,8 +4,12 @@
 #![warn(missing_docs)]
 
 pub mod context;
+pub mod gl;
 pub mod error;
+pub mod gbuffer;
+pub mod readback;
 pub mod resolve;
+pub mod retrofit;
 pub mod scene;
 
 pub use error::{Error, Result};

@@ -1,5 +1,397 @@
-//! The depth-aware resolve: its GLSL pass and its CPU reference.
+//! The depth-aware resolve: a full-screen pass that reads every sample of a
+//! multisampled G-buffer and writes a single-sample one (DESIGN.md section 3).
+//!
+//! The math lives in two places only: `shaders_glsl/resolve.frag` and its CPU
+//! reference, [`cpu`]. This module builds the shader permutations (the sample
+//! count, attachment set and options are compile-time defines, cached by a
+//! typed key) and runs the pass.
 
+pub mod cpu;
 mod settings;
 
 pub use settings::{DepthProjection, ResolveMethod, ResolveRule, ResolveSettings, Window};
+
+use crate::gl::format::SampleKind;
+use crate::gl::{Framebuffer, Program, ShaderStage, TextureRef, VertexArray, check_error, preamble};
+use crate::{Error, Result};
+use glow::HasContext;
+use std::collections::HashMap;
+
+/// The resolve's fragment shader body.
+pub const RESOLVE_FRAG: &str = include_str!("../../shaders_glsl/resolve.frag");
+/// The full-screen triangle's vertex shader body.
+pub const FULLSCREEN_VERT: &str = include_str!("../../shaders_glsl/fullscreen.vert");
+
+/// The most colour attachments one resolve handles (GL 3.2 guarantees 8 draw buffers).
+pub const MAX_ATTACHMENTS: usize = 8;
+
+/// Where the per-sample depth key comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+pub enum KeySource {
+    /// `z = −position.z` of the colour attachment with this index.
+    Position(usize),
+    /// The depth attachment, linearised with the projection.
+    Depth,
+}
+
+/// Everything that selects one compiled resolve program.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct ResolveProgramKey {
+    /// Real sample count.
+    pub samples: u32,
+    /// Inputs are `sampler2DArray`s with one layer per sample (test harness).
+    pub samples_as_layers: bool,
+    /// Per colour attachment: its rule and how shaders read it.
+    pub attachments: Vec<(ResolveRule, SampleKind)>,
+    /// Key source.
+    pub key: KeySource,
+    /// Reference choice.
+    pub method: ResolveMethod,
+    /// Window (normalised to `Smooth` for `Average`, which ignores it).
+    pub window: Window,
+    /// Uniform-pixel fast path.
+    pub fast_path: bool,
+    /// Write `gl_FragDepth`.
+    pub write_depth: bool,
+    /// Blend depth instead of selecting the reference's.
+    pub blend_depth: bool,
+    /// Write the complex-pixel mask to output `attachments.len()`.
+    pub complex_output: bool,
+}
+
+impl ResolveProgramKey {
+    /// The `#define` block for this permutation.
+    pub fn defines(&self) -> Vec<(String, String)> {
+        let mut d: Vec<(String, String)> = Vec::new();
+        let mut def = |k: &str, v: String| d.push((k.to_string(), v));
+        def("NUM_SAMPLES", self.samples.to_string());
+        def("NUM_ATTACHMENTS", self.attachments.len().to_string());
+        if self.samples_as_layers {
+            def("SAMPLES_AS_LAYERS", "1".into());
+        }
+        for (k, (rule, kind)) in self.attachments.iter().enumerate() {
+            let prefix = match kind {
+                SampleKind::Float => "",
+                SampleKind::Uint => "u",
+                SampleKind::Int => "i",
+            };
+            let sampler = if self.samples_as_layers {
+                "sampler2DArray"
+            } else {
+                "sampler2DMS"
+            };
+            def(&format!("ATT{k}_SAMPLER"), format!("{prefix}{sampler}"));
+            def(&format!("ATT{k}_VEC"), format!("{prefix}vec4"));
+            let rule = match rule {
+                ResolveRule::Blend => "RULE_BLEND",
+                ResolveRule::BlendNormal => "RULE_BLEND_NORMAL",
+                ResolveRule::BlendHdr => "RULE_BLEND_HDR",
+                ResolveRule::Select => "RULE_SELECT",
+            };
+            def(&format!("ATT{k}_RULE"), rule.into());
+        }
+        if let KeySource::Position(k) = self.key {
+            def("KEY_SAMPLER", format!("u_att{k}"));
+        }
+        let method = match self.method {
+            ResolveMethod::Average => "METHOD_AVERAGE",
+            ResolveMethod::Front => "METHOD_FRONT",
+            ResolveMethod::Median => "METHOD_MEDIAN",
+            ResolveMethod::Back => "METHOD_BACK",
+        };
+        def("METHOD", method.into());
+        if self.window == Window::Hard {
+            def("WINDOW_HARD", "1".into());
+        }
+        if self.fast_path {
+            def("FAST_PATH", "1".into());
+        }
+        if self.write_depth {
+            def("WRITE_DEPTH", "1".into());
+        }
+        if self.blend_depth {
+            def("BLEND_DEPTH", "1".into());
+        }
+        if self.complex_output {
+            def("COMPLEX_OUTPUT", "1".into());
+        }
+        d
+    }
+}
+
+/// The inputs of one resolve.
+#[derive(Clone, Debug)]
+pub struct ResolveInputs<'a> {
+    /// The multisampled depth texture (or its per-sample layer array).
+    pub depth: TextureRef,
+    /// The multisampled colour textures, in output order.
+    pub colors: &'a [TextureRef],
+    /// One rule per colour texture.
+    pub rules: &'a [ResolveRule],
+    /// Where the depth key comes from.
+    pub key: KeySource,
+    /// Sample count; for layer arrays, the number of layers.
+    pub samples: u32,
+}
+
+/// The camera facts the closeness window needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ResolveParams {
+    /// Method, window and options.
+    pub settings: ResolveSettings,
+    /// Depth linearisation and the clear depth.
+    pub projection: DepthProjection,
+    /// Vertical field of view, radians.
+    pub fov_y: f64,
+    /// Height of the framebuffer in pixels.
+    pub height_px: u32,
+}
+
+impl ResolveParams {
+    /// `tan(fov_y / height_px)`: a pixel's view-space size at distance 1.
+    pub fn footprint(&self) -> f64 {
+        (self.fov_y / self.height_px.max(1) as f64).tan()
+    }
+}
+
+/// Compiles, caches and runs resolve programs.
+#[derive(Debug)]
+pub struct Resolver {
+    programs: HashMap<ResolveProgramKey, Program>,
+    vao: VertexArray,
+}
+
+impl Resolver {
+    /// Create the pass (programs are built on first use).
+    pub fn new(gl: &glow::Context) -> Result<Self> {
+        Ok(Resolver {
+            programs: HashMap::new(),
+            vao: VertexArray::new(gl, "resolve full-screen triangle")?,
+        })
+    }
+
+    /// The program for `key`, built on first use.
+    pub fn program(&mut self, gl: &glow::Context, key: &ResolveProgramKey) -> Result<&Program> {
+        if !self.programs.contains_key(key) {
+            let program = build_program(gl, key)?;
+            self.programs.insert(key.clone(), program);
+        }
+        self.programs
+            .get(key)
+            .ok_or_else(|| Error::Layout("resolve program cache lost an entry".into()))
+    }
+
+    /// Number of cached programs.
+    pub fn cached_programs(&self) -> usize {
+        self.programs.len()
+    }
+
+    /// Resolve `inputs` into `target`, whose colour attachment `k` (draw buffer
+    /// `k`) receives input `k`, whose depth attachment (if any) receives the
+    /// resolved depth, and whose draw buffer `colors.len()` receives the
+    /// complex-pixel mask when `complex_output` is set.
+    pub fn run(
+        &mut self,
+        gl: &glow::Context,
+        inputs: &ResolveInputs<'_>,
+        target: &Framebuffer,
+        params: &ResolveParams,
+        complex_output: bool,
+    ) -> Result<()> {
+        params.settings.validate()?;
+        if inputs.colors.len() != inputs.rules.len() {
+            return Err(Error::Layout(format!(
+                "{} colour inputs but {} rules",
+                inputs.colors.len(),
+                inputs.rules.len()
+            )));
+        }
+        if inputs.colors.len() > MAX_ATTACHMENTS {
+            return Err(Error::Layout(format!(
+                "{} colour attachments; the resolve handles at most {MAX_ATTACHMENTS}",
+                inputs.colors.len()
+            )));
+        }
+        let mut attachments = Vec::with_capacity(inputs.colors.len());
+        for (tex, &rule) in inputs.colors.iter().zip(inputs.rules) {
+            let kind = tex.format.sample_kind();
+            if kind != SampleKind::Float && rule != ResolveRule::Select {
+                return Err(Error::UnsupportedFormat {
+                    attachment: format!("{} input", tex.format),
+                    format: tex.format.name().into(),
+                    reason: format!("integer formats can only be selected, not resolved by `{rule}`"),
+                });
+            }
+            attachments.push((rule, kind));
+        }
+        let write_depth = target.attachments.iter().any(|(_, t)| t.format.is_depth());
+        let s = params.settings;
+        let key = ResolveProgramKey {
+            samples: inputs.samples,
+            samples_as_layers: inputs.depth.target == glow::TEXTURE_2D_ARRAY,
+            attachments,
+            key: inputs.key,
+            method: s.method,
+            window: if s.method == ResolveMethod::Average {
+                Window::Smooth
+            } else {
+                s.window
+            },
+            fast_path: s.fast_path,
+            write_depth,
+            blend_depth: s.blend_depth && write_depth,
+            complex_output,
+        };
+        let vao = self.vao.raw;
+        let program = self.program(gl, &key)?;
+
+        let state = SavedState::capture(gl);
+        unsafe {
+            target.bind(gl);
+            gl.disable(glow::BLEND);
+            gl.disable(glow::CULL_FACE);
+            gl.disable(glow::SCISSOR_TEST);
+            gl.disable(glow::STENCIL_TEST);
+            if write_depth {
+                gl.enable(glow::DEPTH_TEST);
+                gl.depth_func(glow::ALWAYS);
+                gl.depth_mask(true);
+            } else {
+                gl.disable(glow::DEPTH_TEST);
+            }
+            gl.color_mask(true, true, true, true);
+            program.bind(gl);
+            inputs.depth.bind(gl, 0);
+            program.set_i32(gl, "u_depth", 0);
+            for (k, tex) in inputs.colors.iter().enumerate() {
+                tex.bind(gl, 1 + k as u32);
+                program.set_i32(gl, &format!("u_att{k}"), 1 + k as i32);
+            }
+            let proj = params.projection;
+            program.set_f32(gl, "u_clear_depth", proj.clear_depth as f32);
+            let to_ndc = if proj.zero_to_one { [1.0, 0.0] } else { [2.0, -1.0] };
+            program.set_vec2(gl, "u_depth_to_ndc", to_ndc);
+            program.set_vec2(gl, "u_projection", [proj.p22 as f32, proj.p23 as f32]);
+            program.set_f32(gl, "u_footprint", params.footprint() as f32);
+            program.set_f32(gl, "u_c", s.c as f32);
+            program.set_f32(gl, "u_c_in", s.c_in as f32);
+            gl.bind_vertex_array(Some(vao));
+            gl.draw_arrays(glow::TRIANGLES, 0, 3);
+            for k in 0..=inputs.colors.len() as u32 {
+                gl.active_texture(glow::TEXTURE0 + k);
+                gl.bind_texture(inputs.depth.target, None);
+                gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
+            }
+        }
+        state.restore(gl);
+        check_error(gl, "the resolve pass")
+    }
+
+    /// Free the programs and the vertex array.
+    pub fn destroy(self, gl: &glow::Context) {
+        for (_, program) in self.programs {
+            program.destroy(gl);
+        }
+        self.vao.destroy(gl);
+    }
+}
+
+fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program> {
+    let outputs: Vec<String> = (0..key.attachments.len()).map(|k| format!("o_att{k}")).collect();
+    let mut frag_outputs: Vec<(&str, u32)> = outputs
+        .iter()
+        .enumerate()
+        .map(|(k, name)| (name.as_str(), k as u32))
+        .collect();
+    if key.complex_output {
+        frag_outputs.push(("o_complex", key.attachments.len() as u32));
+    }
+    let label = format!(
+        "resolve {}x {} {} ({} attachments)",
+        key.samples,
+        key.method,
+        key.window,
+        key.attachments.len()
+    );
+    Program::build(
+        gl,
+        &label,
+        &preamble(&[], &key.defines()),
+        &[
+            (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
+            (ShaderStage::Fragment, "resolve.frag", RESOLVE_FRAG),
+        ],
+        &frag_outputs,
+    )
+}
+
+/// The host state a pass changes, put back afterwards: the crate runs inside
+/// the host's context and must leave it as it found it.
+pub(crate) struct SavedState {
+    framebuffer: i32,
+    program: i32,
+    vertex_array: i32,
+    active_texture: i32,
+    viewport: [i32; 4],
+    depth_test: bool,
+    depth_func: i32,
+    depth_mask: bool,
+    blend: bool,
+    cull: bool,
+    scissor: bool,
+    stencil: bool,
+}
+
+impl SavedState {
+    pub(crate) fn capture(gl: &glow::Context) -> Self {
+        unsafe {
+            let mut viewport = [0; 4];
+            gl.get_parameter_i32_slice(glow::VIEWPORT, &mut viewport);
+            SavedState {
+                framebuffer: gl.get_parameter_i32(glow::DRAW_FRAMEBUFFER_BINDING),
+                program: gl.get_parameter_i32(glow::CURRENT_PROGRAM),
+                vertex_array: gl.get_parameter_i32(glow::VERTEX_ARRAY_BINDING),
+                active_texture: gl.get_parameter_i32(glow::ACTIVE_TEXTURE),
+                viewport,
+                depth_test: gl.is_enabled(glow::DEPTH_TEST),
+                depth_func: gl.get_parameter_i32(glow::DEPTH_FUNC),
+                depth_mask: gl.get_parameter_i32(glow::DEPTH_WRITEMASK) != 0,
+                blend: gl.is_enabled(glow::BLEND),
+                cull: gl.is_enabled(glow::CULL_FACE),
+                scissor: gl.is_enabled(glow::SCISSOR_TEST),
+                stencil: gl.is_enabled(glow::STENCIL_TEST),
+            }
+        }
+    }
+
+    pub(crate) fn restore(&self, gl: &glow::Context) {
+        fn set(gl: &glow::Context, cap: u32, on: bool) {
+            unsafe {
+                if on {
+                    gl.enable(cap)
+                } else {
+                    gl.disable(cap)
+                }
+            }
+        }
+        unsafe {
+            gl.bind_framebuffer(
+                glow::DRAW_FRAMEBUFFER,
+                std::num::NonZeroU32::new(self.framebuffer as u32).map(glow::NativeFramebuffer),
+            );
+            gl.use_program(std::num::NonZeroU32::new(self.program as u32).map(glow::NativeProgram));
+            gl.bind_vertex_array(
+                std::num::NonZeroU32::new(self.vertex_array as u32).map(glow::NativeVertexArray),
+            );
+            gl.active_texture(self.active_texture as u32);
+            gl.viewport(self.viewport[0], self.viewport[1], self.viewport[2], self.viewport[3]);
+            gl.depth_func(self.depth_func as u32);
+            gl.depth_mask(self.depth_mask);
+        }
+        set(gl, glow::DEPTH_TEST, self.depth_test);
+        set(gl, glow::BLEND, self.blend);
+        set(gl, glow::CULL_FACE, self.cull);
+        set(gl, glow::SCISSOR_TEST, self.scissor);
+        set(gl, glow::STENCIL_TEST, self.stencil);
+    }
+}

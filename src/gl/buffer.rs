@@ -1,0 +1,110 @@
+//! Buffer objects and vertex arrays.
+
+use super::counters::{self, Kind};
+use super::{check_error, label_object};
+use crate::{Error, Result};
+use glow::HasContext;
+
+/// A buffer object.
+#[derive(Debug)]
+pub struct Buffer {
+    /// The GL name.
+    pub raw: glow::Buffer,
+    /// The target it was created for, e.g. `ARRAY_BUFFER`.
+    pub target: u32,
+    /// Size in bytes.
+    pub size: usize,
+}
+
+impl Buffer {
+    /// Create a buffer of `target` holding `data` (`usage` e.g. `STATIC_DRAW`).
+    pub fn with_data(
+        gl: &glow::Context,
+        label: &str,
+        target: u32,
+        data: &[u8],
+        usage: u32,
+    ) -> Result<Self> {
+        let raw = unsafe { gl.create_buffer() }.map_err(|reason| Error::Create {
+            what: format!("buffer `{label}`"),
+            reason,
+        })?;
+        counters::created(Kind::Buffer);
+        let buffer = Buffer {
+            raw,
+            target,
+            size: data.len(),
+        };
+        unsafe {
+            gl.bind_buffer(target, Some(raw));
+            gl.buffer_data_u8_slice(target, data, usage);
+            gl.bind_buffer(target, None);
+        }
+        if let Err(e) = check_error(gl, &format!("allocating buffer `{label}` ({} bytes)", data.len())) {
+            buffer.destroy(gl);
+            return Err(e);
+        }
+        label_object(gl, glow::BUFFER, raw.0.get(), label);
+        Ok(buffer)
+    }
+
+    /// Create an uninitialised buffer of `size` bytes.
+    pub fn with_size(gl: &glow::Context, label: &str, target: u32, size: usize, usage: u32) -> Result<Self> {
+        let raw = unsafe { gl.create_buffer() }.map_err(|reason| Error::Create {
+            what: format!("buffer `{label}`"),
+            reason,
+        })?;
+        counters::created(Kind::Buffer);
+        let buffer = Buffer { raw, target, size };
+        unsafe {
+            gl.bind_buffer(target, Some(raw));
+            gl.buffer_data_size(target, size as i32, usage);
+            gl.bind_buffer(target, None);
+        }
+        if let Err(e) = check_error(gl, &format!("allocating buffer `{label}` ({size} bytes)")) {
+            buffer.destroy(gl);
+            return Err(e);
+        }
+        label_object(gl, glow::BUFFER, raw.0.get(), label);
+        Ok(buffer)
+    }
+
+    /// Free the buffer.
+    pub fn destroy(self, gl: &glow::Context) {
+        unsafe { gl.delete_buffer(self.raw) };
+        counters::destroyed(Kind::Buffer);
+    }
+}
+
+/// A vertex array object (core profile draws need one bound, even an empty one).
+#[derive(Debug)]
+pub struct VertexArray {
+    /// The GL name.
+    pub raw: glow::VertexArray,
+}
+
+impl VertexArray {
+    /// Create an empty vertex array.
+    pub fn new(gl: &glow::Context, label: &str) -> Result<Self> {
+        let raw = unsafe { gl.create_vertex_array() }.map_err(|reason| Error::Create {
+            what: format!("vertex array `{label}`"),
+            reason,
+        })?;
+        counters::created(Kind::VertexArray);
+        unsafe { gl.bind_vertex_array(Some(raw)) };
+        label_object(gl, glow::VERTEX_ARRAY, raw.0.get(), label);
+        unsafe { gl.bind_vertex_array(None) };
+        Ok(VertexArray { raw })
+    }
+
+    /// Bind it.
+    pub fn bind(&self, gl: &glow::Context) {
+        unsafe { gl.bind_vertex_array(Some(self.raw)) };
+    }
+
+    /// Free the vertex array (not the buffers it refers to).
+    pub fn destroy(self, gl: &glow::Context) {
+        unsafe { gl.delete_vertex_array(self.raw) };
+        counters::destroyed(Kind::VertexArray);
+    }
+}

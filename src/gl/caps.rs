@@ -1,0 +1,263 @@
+//! What the context can do: versions, limits, real sample counts and positions.
+
+use super::{Attachment, Format, Framebuffer, Texture2dMultisample, TextureRef, check_error};
+use crate::Result;
+use glow::HasContext;
+use std::ffi::c_void;
+
+type GetMultisamplefv = unsafe extern "system" fn(pname: u32, index: u32, val: *mut f32);
+type ClipControl = unsafe extern "system" fn(origin: u32, depth: u32);
+
+/// Entry points glow does not wrap, loaded through the host's loader.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ExtraFns {
+    get_multisamplefv: Option<GetMultisamplefv>,
+    clip_control: Option<ClipControl>,
+}
+
+impl ExtraFns {
+    /// Load through `loader` (e.g. `eglGetProcAddress`); absent functions stay `None`.
+    pub fn load(gl: &glow::Context, loader: impl Fn(&str) -> *const c_void) -> Self {
+        let v = gl.version();
+        let clip_control_exists = (v.major, v.minor) >= (4, 5)
+            || gl.supported_extensions().contains("GL_ARB_clip_control");
+        // SAFETY: a non-null pointer returned for these names has the documented GL signature.
+        unsafe {
+            let ms = loader("glGetMultisamplefv");
+            let cc = if clip_control_exists {
+                loader("glClipControl")
+            } else {
+                std::ptr::null()
+            };
+            ExtraFns {
+                get_multisamplefv: (!ms.is_null())
+                    .then(|| std::mem::transmute::<*const c_void, GetMultisamplefv>(ms)),
+                clip_control: (!cc.is_null())
+                    .then(|| std::mem::transmute::<*const c_void, ClipControl>(cc)),
+            }
+        }
+    }
+
+    /// Whether `glClipControl` is available (GL 4.5 or ARB_clip_control).
+    pub fn has_clip_control(&self) -> bool {
+        self.clip_control.is_some()
+    }
+
+    /// `glClipControl(GL_LOWER_LEFT, zero_to_one ? GL_ZERO_TO_ONE : GL_NEGATIVE_ONE_TO_ONE)`;
+    /// returns `false` when the context lacks it.
+    pub fn set_clip_depth_zero_to_one(&self, zero_to_one: bool) -> bool {
+        match self.clip_control {
+            Some(f) => {
+                let depth = if zero_to_one {
+                    glow::ZERO_TO_ONE
+                } else {
+                    glow::NEGATIVE_ONE_TO_ONE
+                };
+                // SAFETY: loaded for this context; arguments are valid enums.
+                unsafe { f(glow::LOWER_LEFT, depth) };
+                true
+            }
+            None => false,
+        }
+    }
+}
+
+/// Limits and features of the current context.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Capabilities {
+    /// `GL_VERSION`.
+    pub gl_version: String,
+    /// `GL_SHADING_LANGUAGE_VERSION`.
+    pub glsl_version: String,
+    /// `GL_RENDERER`.
+    pub renderer: String,
+    /// `GL_VENDOR`.
+    pub vendor: String,
+    /// Parsed major and minor version.
+    pub version: (u32, u32),
+    /// `GL_MAX_SAMPLES`.
+    pub max_samples: u32,
+    /// `GL_MAX_COLOR_TEXTURE_SAMPLES`.
+    pub max_color_texture_samples: u32,
+    /// `GL_MAX_DEPTH_TEXTURE_SAMPLES`.
+    pub max_depth_texture_samples: u32,
+    /// `GL_MAX_INTEGER_SAMPLES`.
+    pub max_integer_samples: u32,
+    /// `GL_MAX_TEXTURE_SIZE`.
+    pub max_texture_size: u32,
+    /// `GL_MAX_DRAW_BUFFERS`.
+    pub max_draw_buffers: u32,
+    /// `GL_MAX_COLOR_ATTACHMENTS`.
+    pub max_color_attachments: u32,
+    /// `GL_TIME_ELAPSED` queries.
+    pub timer_query: bool,
+    /// `glGetInternalformativ` (GL 4.2 or ARB_internalformat_query).
+    pub internalformat_query: bool,
+    /// `gl_SampleMaskIn` in fragment shaders (GL 4.0 or ARB_gpu_shader5 / ARB_sample_shading).
+    pub sample_mask_in: bool,
+    /// Shader storage buffers and atomic counters (GL 4.3).
+    pub storage_buffers: bool,
+    /// KHR_debug.
+    pub khr_debug: bool,
+}
+
+fn get_u32(gl: &glow::Context, pname: u32) -> u32 {
+    unsafe { gl.get_parameter_i32(pname) }.max(0) as u32
+}
+
+impl Capabilities {
+    /// Query the current context.
+    pub fn query(gl: &glow::Context) -> Self {
+        let v = gl.version();
+        let version = (v.major, v.minor);
+        let ext = gl.supported_extensions();
+        let (gl_version, glsl_version, renderer, vendor) = unsafe {
+            (
+                gl.get_parameter_string(glow::VERSION),
+                gl.get_parameter_string(glow::SHADING_LANGUAGE_VERSION),
+                gl.get_parameter_string(glow::RENDERER),
+                gl.get_parameter_string(glow::VENDOR),
+            )
+        };
+        let caps = Capabilities {
+            gl_version,
+            glsl_version,
+            renderer,
+            vendor,
+            version,
+            max_samples: get_u32(gl, glow::MAX_SAMPLES),
+            max_color_texture_samples: get_u32(gl, glow::MAX_COLOR_TEXTURE_SAMPLES),
+            max_depth_texture_samples: get_u32(gl, glow::MAX_DEPTH_TEXTURE_SAMPLES),
+            max_integer_samples: get_u32(gl, glow::MAX_INTEGER_SAMPLES),
+            max_texture_size: get_u32(gl, glow::MAX_TEXTURE_SIZE),
+            max_draw_buffers: get_u32(gl, glow::MAX_DRAW_BUFFERS),
+            max_color_attachments: get_u32(gl, glow::MAX_COLOR_ATTACHMENTS),
+            timer_query: version >= (3, 3) || ext.contains("GL_ARB_timer_query"),
+            internalformat_query: version >= (4, 2) || ext.contains("GL_ARB_internalformat_query"),
+            sample_mask_in: version >= (4, 0)
+                || ext.contains("GL_ARB_gpu_shader5")
+                || ext.contains("GL_ARB_sample_shading"),
+            storage_buffers: version >= (4, 3),
+            khr_debug: version >= (4, 3) || ext.contains("GL_KHR_debug"),
+        };
+        // Drain anything an unknown enum left behind on older contexts.
+        let _ = check_error(gl, "querying capabilities");
+        caps
+    }
+
+    /// The distinct sample counts a `GL_TEXTURE_2D_MULTISAMPLE` of `format`
+    /// really gets, ascending. Candidates come from `glGetInternalformativ`
+    /// where the context has it, else the powers of two up to the format's
+    /// `GL_MAX_*_SAMPLES`; each is then allocated at 1x1 and read back, because
+    /// drivers round requests.
+    pub fn sample_counts_for(gl: &glow::Context, format: Format) -> Vec<u32> {
+        let v = gl.version();
+        let iq = (v.major, v.minor) >= (4, 2)
+            || gl.supported_extensions().contains("GL_ARB_internalformat_query");
+        let mut candidates: Vec<u32> = Vec::new();
+        if iq {
+            let mut n = [0i32];
+            unsafe {
+                gl.get_internal_format_i32_slice(
+                    glow::TEXTURE_2D_MULTISAMPLE,
+                    format.internal_format(),
+                    glow::NUM_SAMPLE_COUNTS,
+                    &mut n,
+                )
+            };
+            if n[0] > 0 && n[0] < 64 {
+                let mut counts = vec![0i32; n[0] as usize];
+                unsafe {
+                    gl.get_internal_format_i32_slice(
+                        glow::TEXTURE_2D_MULTISAMPLE,
+                        format.internal_format(),
+                        glow::SAMPLES,
+                        &mut counts,
+                    )
+                };
+                candidates.extend(counts.into_iter().filter(|&c| c > 0).map(|c| c as u32));
+            }
+        }
+        if candidates.is_empty() {
+            let max = if format.is_depth() {
+                get_u32(gl, glow::MAX_DEPTH_TEXTURE_SAMPLES)
+            } else if format.sample_kind() != super::format::SampleKind::Float {
+                get_u32(gl, glow::MAX_INTEGER_SAMPLES)
+            } else {
+                get_u32(gl, glow::MAX_COLOR_TEXTURE_SAMPLES)
+            };
+            let mut c = 2;
+            while c <= max.min(64) {
+                candidates.push(c);
+                c *= 2;
+            }
+        }
+        let _ = check_error(gl, "querying sample counts");
+        let mut real: Vec<u32> = Vec::new();
+        for requested in candidates {
+            if let Some(n) = probe_samples(gl, format, requested) {
+                if !real.contains(&n) {
+                    real.push(n);
+                }
+            }
+        }
+        real.sort_unstable();
+        real
+    }
+}
+
+fn probe_samples(gl: &glow::Context, format: Format, requested: u32) -> Option<u32> {
+    unsafe {
+        let raw = gl.create_texture().ok()?;
+        gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, Some(raw));
+        gl.tex_image_2d_multisample(
+            glow::TEXTURE_2D_MULTISAMPLE,
+            requested as i32,
+            format.internal_format() as i32,
+            1,
+            1,
+            true,
+        );
+        let ok = check_error(gl, "probing a sample count").is_ok();
+        let n = gl.get_tex_level_parameter_i32(glow::TEXTURE_2D_MULTISAMPLE, 0, glow::TEXTURE_SAMPLES);
+        gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
+        gl.delete_texture(raw);
+        (ok && n > 0).then_some(n as u32)
+    }
+}
+
+/// The sample positions (in pixel units, 0..1) of an `samples`-sample colour
+/// framebuffer, read with `glGetMultisamplefv(GL_SAMPLE_POSITION)`. Returns
+/// the real count and the positions; an empty list when the entry point is missing.
+pub fn sample_positions(gl: &glow::Context, extra: &ExtraFns, samples: u32) -> Result<(u32, Vec<[f32; 2]>)> {
+    let texture = Texture2dMultisample::new(gl, "sample-position probe", Format::Rgba8, 1, 1, samples)?;
+    let real = texture.samples;
+    let fbo = match Framebuffer::new(
+        gl,
+        "sample-position probe",
+        &[(Attachment::Color(0), TextureRef::from(&texture))],
+        &[Some(0)],
+    ) {
+        Ok(f) => f,
+        Err(e) => {
+            texture.destroy(gl);
+            return Err(e);
+        }
+    };
+    let mut positions = Vec::new();
+    if let Some(f) = extra.get_multisamplefv {
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo.raw)) };
+        let n = get_u32(gl, glow::SAMPLES);
+        for i in 0..n {
+            let mut xy = [0.0f32; 2];
+            // SAFETY: `xy` holds the two floats GL_SAMPLE_POSITION writes.
+            unsafe { f(glow::SAMPLE_POSITION, i, xy.as_mut_ptr()) };
+            positions.push(xy);
+        }
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, None) };
+    }
+    fbo.destroy(gl);
+    texture.destroy(gl);
+    check_error(gl, "reading sample positions")?;
+    Ok((real, positions))
+}

@@ -1,0 +1,185 @@
+//! Framebuffer objects, checked for completeness.
+
+use super::counters::{self, Kind};
+use super::{TextureRef, check_error, label_object};
+use crate::{Error, Result};
+use glow::HasContext;
+
+/// The name of a `glCheckFramebufferStatus` value.
+pub fn framebuffer_status_name(status: u32) -> &'static str {
+    match status {
+        glow::FRAMEBUFFER_COMPLETE => "GL_FRAMEBUFFER_COMPLETE",
+        glow::FRAMEBUFFER_UNDEFINED => "GL_FRAMEBUFFER_UNDEFINED",
+        glow::FRAMEBUFFER_INCOMPLETE_ATTACHMENT => "GL_FRAMEBUFFER_INCOMPLETE_ATTACHMENT",
+        glow::FRAMEBUFFER_INCOMPLETE_MISSING_ATTACHMENT => {
+            "GL_FRAMEBUFFER_INCOMPLETE_MISSING_ATTACHMENT"
+        }
+        glow::FRAMEBUFFER_INCOMPLETE_DRAW_BUFFER => "GL_FRAMEBUFFER_INCOMPLETE_DRAW_BUFFER",
+        glow::FRAMEBUFFER_INCOMPLETE_READ_BUFFER => "GL_FRAMEBUFFER_INCOMPLETE_READ_BUFFER",
+        glow::FRAMEBUFFER_UNSUPPORTED => "GL_FRAMEBUFFER_UNSUPPORTED",
+        glow::FRAMEBUFFER_INCOMPLETE_MULTISAMPLE => "GL_FRAMEBUFFER_INCOMPLETE_MULTISAMPLE",
+        glow::FRAMEBUFFER_INCOMPLETE_LAYER_TARGETS => "GL_FRAMEBUFFER_INCOMPLETE_LAYER_TARGETS",
+        _ => "unknown framebuffer status",
+    }
+}
+
+/// Where a texture is attached.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Attachment {
+    /// `GL_COLOR_ATTACHMENTi`.
+    Color(u32),
+    /// `GL_DEPTH_ATTACHMENT`.
+    Depth,
+    /// `GL_STENCIL_ATTACHMENT`.
+    Stencil,
+    /// `GL_DEPTH_STENCIL_ATTACHMENT`.
+    DepthStencil,
+}
+
+impl Attachment {
+    /// The GL enum.
+    pub fn gl_enum(self) -> u32 {
+        match self {
+            Attachment::Color(i) => glow::COLOR_ATTACHMENT0 + i,
+            Attachment::Depth => glow::DEPTH_ATTACHMENT,
+            Attachment::Stencil => glow::STENCIL_ATTACHMENT,
+            Attachment::DepthStencil => glow::DEPTH_STENCIL_ATTACHMENT,
+        }
+    }
+
+    /// The GL name, e.g. `GL_COLOR_ATTACHMENT2`.
+    pub fn name(self) -> String {
+        match self {
+            Attachment::Color(i) => format!("GL_COLOR_ATTACHMENT{i}"),
+            Attachment::Depth => "GL_DEPTH_ATTACHMENT".into(),
+            Attachment::Stencil => "GL_STENCIL_ATTACHMENT".into(),
+            Attachment::DepthStencil => "GL_DEPTH_STENCIL_ATTACHMENT".into(),
+        }
+    }
+
+    /// The attachment point a depth format belongs to.
+    pub fn for_depth_format(format: super::Format) -> Attachment {
+        if format.has_stencil() {
+            Attachment::DepthStencil
+        } else {
+            Attachment::Depth
+        }
+    }
+}
+
+/// A framebuffer object with its attachments recorded.
+#[derive(Debug)]
+pub struct Framebuffer {
+    /// The GL name.
+    pub raw: glow::Framebuffer,
+    /// Debug label, used in errors.
+    pub label: String,
+    /// Width of the attachments.
+    pub width: u32,
+    /// Height of the attachments.
+    pub height: u32,
+    /// Sample count of the attachments (1 when single-sampled).
+    pub samples: u32,
+    /// What is attached where.
+    pub attachments: Vec<(Attachment, TextureRef)>,
+}
+
+impl Framebuffer {
+    /// Create a framebuffer, attach `attachments`, map colour attachment `i` to
+    /// fragment output `draw_buffers[i]` (a `None` leaves the slot unmapped) and
+    /// check completeness. On failure nothing is left allocated.
+    pub fn new(
+        gl: &glow::Context,
+        label: &str,
+        attachments: &[(Attachment, TextureRef)],
+        draw_buffers: &[Option<u32>],
+    ) -> Result<Self> {
+        let (width, height, samples) = match attachments.first() {
+            Some((_, t)) => (t.width, t.height, t.samples),
+            None => {
+                return Err(Error::Layout(format!("framebuffer `{label}` has no attachments")));
+            }
+        };
+        let raw = unsafe { gl.create_framebuffer() }.map_err(|reason| Error::Create {
+            what: format!("framebuffer `{label}`"),
+            reason,
+        })?;
+        counters::created(Kind::Framebuffer);
+        let fbo = Framebuffer {
+            raw,
+            label: label.to_string(),
+            width,
+            height,
+            samples,
+            attachments: attachments.to_vec(),
+        };
+        match fbo.configure(gl, draw_buffers) {
+            Ok(()) => Ok(fbo),
+            Err(e) => {
+                fbo.destroy(gl);
+                Err(e)
+            }
+        }
+    }
+
+    fn configure(&self, gl: &glow::Context, draw_buffers: &[Option<u32>]) -> Result<()> {
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.raw));
+            for (point, tex) in &self.attachments {
+                match tex.target {
+                    glow::TEXTURE_2D | glow::TEXTURE_2D_MULTISAMPLE => gl.framebuffer_texture_2d(
+                        glow::FRAMEBUFFER,
+                        point.gl_enum(),
+                        tex.target,
+                        Some(tex.raw),
+                        0,
+                    ),
+                    _ => gl.framebuffer_texture(glow::FRAMEBUFFER, point.gl_enum(), Some(tex.raw), 0),
+                }
+            }
+            let buffers: Vec<u32> = draw_buffers
+                .iter()
+                .map(|b| b.map_or(glow::NONE, |i| glow::COLOR_ATTACHMENT0 + i))
+                .collect();
+            if buffers.is_empty() {
+                gl.draw_buffers(&[glow::NONE]);
+                gl.read_buffer(glow::NONE);
+            } else {
+                gl.draw_buffers(&buffers);
+            }
+        }
+        label_object(gl, glow::FRAMEBUFFER, self.raw.0.get(), &self.label);
+        let status = unsafe { gl.check_framebuffer_status(glow::FRAMEBUFFER) };
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, None) };
+        check_error(gl, &format!("configuring framebuffer `{}`", self.label))?;
+        if status != glow::FRAMEBUFFER_COMPLETE {
+            return Err(Error::FramebufferIncomplete {
+                label: self.label.clone(),
+                status: framebuffer_status_name(status),
+            });
+        }
+        Ok(())
+    }
+
+    /// Bind to `GL_FRAMEBUFFER` and set the viewport to its size.
+    pub fn bind(&self, gl: &glow::Context) {
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.raw));
+            gl.viewport(0, 0, self.width as i32, self.height as i32);
+        }
+    }
+
+    /// The texture at an attachment point.
+    pub fn texture(&self, point: Attachment) -> Option<TextureRef> {
+        self.attachments
+            .iter()
+            .find(|(p, _)| *p == point)
+            .map(|(_, t)| *t)
+    }
+
+    /// Free the framebuffer object (not its textures).
+    pub fn destroy(self, gl: &glow::Context) {
+        unsafe { gl.delete_framebuffer(self.raw) };
+        counters::destroyed(Kind::Framebuffer);
+    }
+}

@@ -1,0 +1,182 @@
+//! Reading textures back to the CPU, every sample of a multisampled one
+//! included (`glGetTexImage` cannot read those): a full-screen pass copies
+//! one sample at a time into an RGBA32F texture, which is then read.
+
+use crate::gl::format::SampleKind;
+use crate::gl::{
+    Attachment, Format, Framebuffer, Program, ShaderStage, Texture2d, TextureRef, VertexArray,
+    check_error, preamble,
+};
+use crate::resolve::FULLSCREEN_VERT;
+use crate::resolve::SavedState;
+use crate::{Error, Result};
+use glow::HasContext;
+use std::collections::HashMap;
+
+const READBACK_FRAG: &str = include_str!("../shaders_glsl/readback.frag");
+
+/// Float values of a texture, `[samples][height][width][4]`, row 0 = the TOP row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampleImage {
+    /// Samples (1 for single-sample textures, layers for arrays).
+    pub samples: u32,
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// RGBA per sample and texel; depth textures carry depth in `.r`.
+    pub data: Vec<f32>,
+}
+
+impl SampleImage {
+    /// The RGBA value of sample `s` at (`x`, `y`), `y` counted from the top.
+    pub fn get(&self, s: u32, x: u32, y: u32) -> [f32; 4] {
+        let i = (((s * self.height + y) * self.width + x) * 4) as usize;
+        [self.data[i], self.data[i + 1], self.data[i + 2], self.data[i + 3]]
+    }
+
+    /// One sample's plane as `[height][width][4]`.
+    pub fn plane(&self, s: u32) -> &[f32] {
+        let n = (self.width * self.height * 4) as usize;
+        &self.data[s as usize * n..(s as usize + 1) * n]
+    }
+}
+
+/// The readback pass, with its programs cached by sampler type.
+#[derive(Debug)]
+pub struct Readback {
+    programs: HashMap<(u32, SampleKind), Program>,
+    vao: VertexArray,
+}
+
+impl Readback {
+    /// Create the pass.
+    pub fn new(gl: &glow::Context) -> Result<Self> {
+        Ok(Readback {
+            programs: HashMap::new(),
+            vao: VertexArray::new(gl, "readback full-screen triangle")?,
+        })
+    }
+
+    fn program(&mut self, gl: &glow::Context, target: u32, kind: SampleKind) -> Result<&Program> {
+        let key = (target, kind);
+        if !self.programs.contains_key(&key) {
+            let prefix = match kind {
+                SampleKind::Float => "",
+                SampleKind::Uint => "u",
+                SampleKind::Int => "i",
+            };
+            let (sampler, flavour) = match target {
+                glow::TEXTURE_2D_MULTISAMPLE => ("sampler2DMS", Some("SRC_MS")),
+                glow::TEXTURE_2D_ARRAY => ("sampler2DArray", Some("SRC_ARRAY")),
+                _ => ("sampler2D", None),
+            };
+            let mut defines = vec![("SRC_SAMPLER".to_string(), format!("{prefix}{sampler}"))];
+            if let Some(f) = flavour {
+                defines.push((f.to_string(), "1".to_string()));
+            }
+            let program = Program::build(
+                gl,
+                &format!("readback {prefix}{sampler}"),
+                &preamble(&[], &defines),
+                &[
+                    (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
+                    (ShaderStage::Fragment, "readback.frag", READBACK_FRAG),
+                ],
+                &[("o_value", 0)],
+            )?;
+            self.programs.insert(key, program);
+        }
+        self.programs
+            .get(&key)
+            .ok_or_else(|| Error::Layout("readback program cache lost an entry".into()))
+    }
+
+    /// Read every sample (or layer) of `texture`.
+    pub fn read(&mut self, gl: &glow::Context, texture: TextureRef, layers: u32) -> Result<SampleImage> {
+        let count = match texture.target {
+            glow::TEXTURE_2D_MULTISAMPLE => texture.samples,
+            glow::TEXTURE_2D_ARRAY => layers.max(1),
+            _ => 1,
+        };
+        let (w, h) = (texture.width, texture.height);
+        let scratch = Texture2d::new(gl, "readback scratch", Format::Rgba32f, w, h)?;
+        let fbo = match Framebuffer::new(
+            gl,
+            "readback",
+            &[(Attachment::Color(0), TextureRef::from(&scratch))],
+            &[Some(0)],
+        ) {
+            Ok(f) => f,
+            Err(e) => {
+                scratch.destroy(gl);
+                return Err(e);
+            }
+        };
+        let result = self.read_into(gl, texture, count, &fbo);
+        fbo.destroy(gl);
+        scratch.destroy(gl);
+        result
+    }
+
+    fn read_into(&mut self, gl: &glow::Context, texture: TextureRef, count: u32, fbo: &Framebuffer) -> Result<SampleImage> {
+        let (w, h) = (texture.width as usize, texture.height as usize);
+        let vao = self.vao.raw;
+        let state = SavedState::capture(gl);
+        let program = self.program(gl, texture.target, texture.format.sample_kind())?;
+        let mut data = vec![0.0f32; count as usize * w * h * 4];
+        let mut plane = vec![0.0f32; w * h * 4];
+        unsafe {
+            fbo.bind(gl);
+            gl.disable(glow::DEPTH_TEST);
+            gl.disable(glow::BLEND);
+            gl.disable(glow::SCISSOR_TEST);
+            gl.disable(glow::CULL_FACE);
+            gl.disable(glow::STENCIL_TEST);
+            program.bind(gl);
+            texture.bind(gl, 0);
+            program.set_i32(gl, "u_src", 0);
+            gl.bind_vertex_array(Some(vao));
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(fbo.raw));
+            gl.read_buffer(glow::COLOR_ATTACHMENT0);
+            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 4);
+            for s in 0..count {
+                program.set_i32(gl, "u_sample", s as i32);
+                gl.draw_arrays(glow::TRIANGLES, 0, 3);
+                gl.read_pixels(
+                    0,
+                    0,
+                    w as i32,
+                    h as i32,
+                    glow::RGBA,
+                    glow::FLOAT,
+                    glow::PixelPackData::Slice(Some(bytemuck::cast_slice_mut(&mut plane))),
+                );
+                // GL rows run bottom-up; ours top-down.
+                let base = s as usize * w * h * 4;
+                for y in 0..h {
+                    let src = (h - 1 - y) * w * 4;
+                    data[base + y * w * 4..base + (y + 1) * w * 4].copy_from_slice(&plane[src..src + w * 4]);
+                }
+            }
+            gl.bind_texture(texture.target, None);
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+        }
+        state.restore(gl);
+        check_error(gl, "reading a texture back")?;
+        Ok(SampleImage {
+            samples: count,
+            width: w as u32,
+            height: h as u32,
+            data,
+        })
+    }
+
+    /// Free the programs and the vertex array.
+    pub fn destroy(self, gl: &glow::Context) {
+        for (_, p) in self.programs {
+            p.destroy(gl);
+        }
+        self.vao.destroy(gl);
+    }
+}

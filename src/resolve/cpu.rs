@@ -1,0 +1,458 @@
+//! The resolve's CPU reference, in `f64`: the same math as
+//! `shaders_glsl/resolve.frag`, sample for sample. Tests compare the GLSL
+//! against it; change both together.
+
+use super::{DepthProjection, ResolveMethod, ResolveRule, ResolveSettings, Window};
+
+/// Where the depth key of a sample comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CpuKeySource {
+    /// `z = −position.z` of this attachment (index into the pixel's attachments).
+    Position(usize),
+    /// The depth-buffer value, linearised with the projection.
+    Depth(DepthProjection),
+}
+
+/// The fixed inputs of a CPU resolve.
+#[derive(Clone, Debug)]
+pub struct CpuResolve {
+    /// Method, window, widths, fast path, depth blending.
+    pub settings: ResolveSettings,
+    /// One rule per colour attachment.
+    pub rules: Vec<ResolveRule>,
+    /// Where the key comes from.
+    pub key_source: CpuKeySource,
+    /// The background's depth-buffer value.
+    pub clear_depth: f64,
+    /// `tan(fov_y / height_px)`: the view-space size of a pixel at distance 1.
+    pub footprint: f64,
+}
+
+/// One pixel's samples: `depth[i]` and `attachments[k][i]`.
+#[derive(Clone, Debug, Default)]
+pub struct PixelSamples {
+    /// Depth-buffer value per sample.
+    pub depth: Vec<f64>,
+    /// Per colour attachment, one RGBA value per sample.
+    pub attachments: Vec<Vec<[f64; 4]>>,
+}
+
+/// One resolved pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedPixel {
+    /// Per colour attachment, the resolved value.
+    pub attachments: Vec<[f64; 4]>,
+    /// The resolved depth-buffer value.
+    pub depth: f64,
+    /// The reference sample (0 on the fast path).
+    pub reference: usize,
+    /// Weights per sample (all 1 on the fast path: sample 0 stands for them all).
+    pub weights: Vec<f64>,
+    /// The pixel took the slow path.
+    pub complex: bool,
+    /// A sample sits so close to a window edge or a depth tie that `f32`
+    /// arithmetic may decide it differently: compare such pixels loosely.
+    pub ambiguous: bool,
+}
+
+/// Per-sample classification shared by the steps below.
+struct Keys {
+    z: Vec<f64>,
+    bg: Vec<bool>,
+}
+
+impl Keys {
+    /// Strict order by (z, index) with background at +infinity.
+    fn less(&self, i: usize, j: usize) -> bool {
+        if self.bg[i] != self.bg[j] {
+            return self.bg[j];
+        }
+        if !self.bg[i] && self.z[i] != self.z[j] {
+            return self.z[i] < self.z[j];
+        }
+        i < j
+    }
+}
+
+fn is_finite4(x: &[f64; 4]) -> bool {
+    x.iter().all(|c| c.is_finite())
+}
+
+fn max3(x: &[f64; 4]) -> f64 {
+    x[0].max(x[1]).max(x[2])
+}
+
+impl CpuResolve {
+    fn keys(&self, px: &PixelSamples) -> Keys {
+        let n = px.depth.len();
+        let mut z = Vec::with_capacity(n);
+        let mut bg = Vec::with_capacity(n);
+        for i in 0..n {
+            let depth = px.depth[i];
+            let key = match self.key_source {
+                CpuKeySource::Position(k) => -px.attachments[k][i][2],
+                CpuKeySource::Depth(proj) => proj.linearize(depth),
+            };
+            bg.push(depth == self.clear_depth || !key.is_finite());
+            z.push(key);
+        }
+        Keys { z, bg }
+    }
+
+    /// The reference sample for a method, ties to the lower index.
+    fn reference(&self, keys: &Keys) -> usize {
+        let n = keys.z.len();
+        match self.settings.method {
+            ResolveMethod::Front => (1..n).fold(0, |r, i| if keys.less(i, r) { i } else { r }),
+            ResolveMethod::Back => (1..n).fold(0, |r, i| {
+                let farther = (keys.bg[i] && !keys.bg[r])
+                    || (!keys.bg[i] && !keys.bg[r] && keys.z[i] > keys.z[r]);
+                if farther { i } else { r }
+            }),
+            ResolveMethod::Median | ResolveMethod::Average => {
+                let mut order: Vec<usize> = (0..n).collect();
+                order.sort_by(|&a, &b| {
+                    if keys.less(a, b) {
+                        std::cmp::Ordering::Less
+                    } else if keys.less(b, a) {
+                        std::cmp::Ordering::Greater
+                    } else {
+                        std::cmp::Ordering::Equal
+                    }
+                });
+                order[n / 2]
+            }
+        }
+    }
+
+    /// The closeness weight of sample `i` to reference `r`, and whether it is
+    /// within `f32` noise of a window edge.
+    fn closeness(&self, keys: &Keys, i: usize, r: usize) -> (f64, bool) {
+        if i == r || self.settings.method == ResolveMethod::Average {
+            return (1.0, false);
+        }
+        if keys.bg[r] {
+            return (if keys.bg[i] { 1.0 } else { 0.0 }, false);
+        }
+        if keys.bg[i] {
+            return (0.0, false);
+        }
+        let (zi, zr) = (keys.z[i], keys.z[r]);
+        let d = (zi - zr).abs();
+        let m = zi.min(zr) * self.footprint;
+        let (c, c_in) = (self.settings.c, self.settings.c_in);
+        // f32 rounds each depth to about 6e-8 of itself and the edge to about 1e-7.
+        let near = |edge: f64| (d - edge).abs() <= 1e-6 * zi.abs().max(zr.abs()) + 1e-5 * edge.abs();
+        match self.settings.window {
+            Window::Hard => (if d <= c * m { 1.0 } else { 0.0 }, near(c * m)),
+            Window::Smooth => {
+                let w = if d <= c_in * m {
+                    1.0
+                } else if d >= c * m {
+                    0.0
+                } else {
+                    // 1 − smoothstep(t) = smoothstep(1 − t), measured from the outer edge.
+                    let u = (c * m - d) / ((c - c_in) * m);
+                    u * u * (3.0 - 2.0 * u)
+                };
+                // The ramp is continuous, but a weight this small is mostly f32
+                // rounding on the GPU, and HDR blending can amplify it.
+                (w, w > 0.0 && w < 1e-3)
+            }
+        }
+    }
+
+    /// Resolve one pixel.
+    pub fn resolve_pixel(&self, px: &PixelSamples) -> ResolvedPixel {
+        let n = px.depth.len();
+        let keys = self.keys(px);
+
+        let uniform = self.settings.fast_path
+            && (1..n).all(|i| keys.bg[i] == keys.bg[0] && (keys.bg[0] || keys.z[i] == keys.z[0]));
+        if uniform {
+            return ResolvedPixel {
+                attachments: px.attachments.iter().map(|a| a[0]).collect(),
+                depth: px.depth[0],
+                reference: 0,
+                weights: vec![1.0; n],
+                complex: false,
+                ambiguous: false,
+            };
+        }
+
+        let r = self.reference(&keys);
+        let mut weights = Vec::with_capacity(n);
+        let mut ambiguous = false;
+        for i in 0..n {
+            let (w, near_edge) = self.closeness(&keys, i, r);
+            weights.push(w);
+            ambiguous |= near_edge;
+        }
+        // Depths that differ by an f32 rounding may order differently on the GPU.
+        for i in 0..n {
+            for j in 0..i {
+                if !keys.bg[i] && !keys.bg[j] && keys.z[i] != keys.z[j] {
+                    let scale = keys.z[i].abs().max(keys.z[j].abs());
+                    if (keys.z[i] - keys.z[j]).abs() <= 1e-6 * scale {
+                        ambiguous = true;
+                    }
+                }
+            }
+        }
+
+        let attachments = px
+            .attachments
+            .iter()
+            .zip(&self.rules)
+            .map(|(values, rule)| match rule {
+                ResolveRule::Select => values[r],
+                ResolveRule::Blend => blend(values, &weights, r),
+                ResolveRule::BlendNormal => blend_normal(values, &weights, r),
+                ResolveRule::BlendHdr => blend_hdr(values, &weights, r),
+            })
+            .collect();
+
+        let depth = if self.settings.blend_depth {
+            let sum: f64 = (0..n).map(|i| weights[i] * px.depth[i]).sum();
+            sum / weights.iter().sum::<f64>()
+        } else {
+            px.depth[r]
+        };
+
+        ResolvedPixel {
+            attachments,
+            depth,
+            reference: r,
+            weights,
+            complex: true,
+            ambiguous,
+        }
+    }
+}
+
+/// Weighted mean over finite samples; the reference's value when none weigh.
+pub fn blend(values: &[[f64; 4]], weights: &[f64], r: usize) -> [f64; 4] {
+    let mut sum = [0.0; 4];
+    let mut weight = 0.0;
+    for (x, &w) in values.iter().zip(weights) {
+        if w > 0.0 && is_finite4(x) {
+            for c in 0..4 {
+                sum[c] += w * x[c];
+            }
+            weight += w;
+        }
+    }
+    if weight > 0.0 {
+        sum.map(|s| s / weight)
+    } else {
+        values[r]
+    }
+}
+
+/// xyz: the normalised weighted sum (the reference's xyz when it is shorter
+/// than 1e-6); w: blended like [`blend`].
+pub fn blend_normal(values: &[[f64; 4]], weights: &[f64], r: usize) -> [f64; 4] {
+    let mean = blend(values, weights, r);
+    let mut n = [0.0; 3];
+    for (x, &w) in values.iter().zip(weights) {
+        if w > 0.0 && is_finite4(x) {
+            for c in 0..3 {
+                n[c] += w * x[c];
+            }
+        }
+    }
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if len >= 1e-6 {
+        [n[0] / len, n[1] / len, n[2] / len, mean[3]]
+    } else {
+        [values[r][0], values[r][1], values[r][2], mean[3]]
+    }
+}
+
+/// Blend in the tonemapped domain `T(x) = x / (1 + m)`, `m = max(max3(x), 0)`,
+/// map back with `T⁻¹(y) = y / (1 − max3(y))`, and clamp to the contributing
+/// samples' per-channel range; alpha blends linearly. `1 − max3(y)` is
+/// accumulated directly as the smallest blended `(1 + m − x) / (1 + m)`, which
+/// is the same value without the cancellation near 65504.
+pub fn blend_hdr(values: &[[f64; 4]], weights: &[f64], r: usize) -> [f64; 4] {
+    let mut sum = [0.0; 3];
+    let mut complement = [0.0; 3];
+    let mut alpha = 0.0;
+    let mut weight = 0.0;
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for (x, &w) in values.iter().zip(weights) {
+        if w > 0.0 && is_finite4(x) {
+            let m = max3(x).max(0.0);
+            for c in 0..3 {
+                sum[c] += w * x[c] / (1.0 + m);
+                complement[c] += w * (1.0 + m - x[c]) / (1.0 + m);
+                lo[c] = lo[c].min(x[c]);
+                hi[c] = hi[c].max(x[c]);
+            }
+            alpha += w * x[3];
+            weight += w;
+        }
+    }
+    if weight <= 0.0 {
+        return values[r];
+    }
+    // Both sums carry the same 1/weight, which cancels in the quotient; the
+    // weight itself bounds the complement for all-negative colours (m = 0).
+    let denominator = complement[0].min(complement[1]).min(complement[2]).min(weight).max(1e-30);
+    [
+        (sum[0] / denominator).clamp(lo[0], hi[0]),
+        (sum[1] / denominator).clamp(lo[1], hi[1]),
+        (sum[2] / denominator).clamp(lo[2], hi[2]),
+        alpha / weight,
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn resolver(method: ResolveMethod, window: Window) -> CpuResolve {
+        CpuResolve {
+            settings: ResolveSettings {
+                method,
+                window,
+                ..ResolveSettings::default()
+            },
+            rules: vec![ResolveRule::Blend, ResolveRule::Blend],
+            key_source: CpuKeySource::Position(1),
+            clear_depth: 1.0,
+            footprint: 0.001,
+        }
+    }
+
+    /// Colour = sample index, position z = −depths[i].
+    fn pixel(depths: &[f64]) -> PixelSamples {
+        PixelSamples {
+            depth: depths.iter().map(|&z| if z.is_infinite() { 1.0 } else { 0.5 }).collect(),
+            attachments: vec![
+                (0..depths.len()).map(|i| [i as f64, 0.0, 0.0, 1.0]).collect(),
+                depths.iter().map(|&z| [0.0, 0.0, -z, 1.0]).collect(),
+            ],
+        }
+    }
+
+    #[test]
+    fn median_is_the_median_by_depth_not_by_index() {
+        // Sorted by depth the samples are 3, 1, 0, 2: position 2 is sample 0.
+        // An index-comparing network (FreeSpace Open's bug) would return sample 2.
+        let cpu = resolver(ResolveMethod::Median, Window::Hard);
+        let px = pixel(&[30.0, 20.0, 40.0, 10.0]);
+        assert_eq!(cpu.resolve_pixel(&px).reference, 0);
+        let px = pixel(&[5.0, 9.0, 1.0, 7.0, 3.0, 8.0, 2.0, 6.0]);
+        // Sorted: 1(s2) 2(s6) 3(s4) 5(s0) 6(s7) 7(s3) 8(s5) 9(s1); position 4 is s7.
+        assert_eq!(cpu.resolve_pixel(&px).reference, 7);
+    }
+
+    #[test]
+    fn ties_break_to_the_lower_index() {
+        let px = pixel(&[10.0, 5.0, 5.0, 10.0]);
+        assert_eq!(resolver(ResolveMethod::Front, Window::Hard).resolve_pixel(&px).reference, 1);
+        assert_eq!(resolver(ResolveMethod::Back, Window::Hard).resolve_pixel(&px).reference, 0);
+        // Sorted (z, i): s1 s2 s0 s3 → position 2 is s0.
+        assert_eq!(resolver(ResolveMethod::Median, Window::Hard).resolve_pixel(&px).reference, 0);
+    }
+
+    #[test]
+    fn background_majority_resolves_to_background() {
+        let inf = f64::INFINITY;
+        let px = pixel(&[10.0, inf, inf, inf]);
+        let out = resolver(ResolveMethod::Median, Window::Smooth).resolve_pixel(&px);
+        assert_eq!(out.weights, vec![0.0, 1.0, 1.0, 1.0]);
+        assert_eq!(out.attachments[0][0], 2.0); // mean of samples 1..3
+        assert_eq!(out.depth, 1.0);
+    }
+
+    #[test]
+    fn hard_window_blends_only_close_samples() {
+        // footprint at z=100: 0.1 → c·m = 0.5.
+        let px = pixel(&[100.0, 100.4, 100.6, 300.0]);
+        let out = resolver(ResolveMethod::Front, Window::Hard).resolve_pixel(&px);
+        assert_eq!(out.reference, 0);
+        assert_eq!(out.weights, vec![1.0, 1.0, 0.0, 0.0]);
+        assert_eq!(out.attachments[0][0], 0.5);
+    }
+
+    #[test]
+    fn smooth_window_ramps() {
+        // c_in·m = 0.25, c·m = 0.5 at z = 100.
+        let px = pixel(&[100.0, 100.2, 100.375, 100.6]);
+        let out = resolver(ResolveMethod::Front, Window::Smooth).resolve_pixel(&px);
+        assert_eq!(out.weights[1], 1.0);
+        assert!((out.weights[2] - 0.5).abs() < 1e-9, "{:?}", out.weights);
+        assert_eq!(out.weights[3], 0.0);
+    }
+
+    #[test]
+    fn average_weighs_everything() {
+        let inf = f64::INFINITY;
+        let px = pixel(&[1.0, 100.0, inf, 7.0]);
+        let out = resolver(ResolveMethod::Average, Window::Hard).resolve_pixel(&px);
+        assert_eq!(out.weights, vec![1.0; 4]);
+        assert_eq!(out.attachments[0][0], 1.5);
+    }
+
+    #[test]
+    fn fast_path_takes_sample_zero() {
+        let mut px = pixel(&[10.0; 4]);
+        px.attachments[0][1] = [9.0, 9.0, 9.0, 9.0];
+        let cpu = resolver(ResolveMethod::Median, Window::Smooth);
+        let out = cpu.resolve_pixel(&px);
+        assert!(!out.complex);
+        assert_eq!(out.attachments[0], px.attachments[0][0]);
+        let mut slow = cpu.clone();
+        slow.settings.fast_path = false;
+        let out = slow.resolve_pixel(&px);
+        assert!(out.complex);
+        assert_eq!(out.attachments[0][0], (0.0 + 9.0 + 2.0 + 3.0) / 4.0);
+    }
+
+    #[test]
+    fn non_finite_values_are_skipped() {
+        let mut px = pixel(&[10.0; 4]);
+        px.attachments[0][2] = [f64::NAN, 0.0, 0.0, 1.0];
+        let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
+        cpu.settings.fast_path = false;
+        let out = cpu.resolve_pixel(&px);
+        assert_eq!(out.attachments[0][0], (0.0 + 1.0 + 3.0) / 3.0);
+    }
+
+    #[test]
+    fn opposite_normals_fall_back_to_the_reference() {
+        let values = vec![[0.0, 0.0, 1.0, 0.3], [0.0, 0.0, -1.0, 0.5]];
+        let out = blend_normal(&values, &[1.0, 1.0], 1);
+        assert_eq!(out, [0.0, 0.0, -1.0, 0.4]);
+    }
+
+    #[test]
+    fn hdr_blend_stays_finite_and_in_range() {
+        let values = vec![[65504.0, 65504.0, 65504.0, 1.0], [65504.0, 0.0, 1.0, 1.0]];
+        let out = blend_hdr(&values, &[1.0, 1.0], 0);
+        assert!(out.iter().all(|c| c.is_finite()));
+        assert!(out[0] <= 65504.0 && out[0] >= 65504.0 * 0.99);
+        let one = blend_hdr(&values[..1], &[1.0], 0);
+        assert_eq!(one[0], 65504.0);
+    }
+
+    #[test]
+    fn depth_keys_from_the_projection() {
+        // Standard GL projection terms for near 0.1, far 100.
+        let (n, f) = (0.1, 100.0);
+        let dp = DepthProjection { p22: -(f + n) / (f - n), p23: -2.0 * f * n / (f - n), zero_to_one: false, clear_depth: 1.0 };
+        // A point at distance 10: z_clip = p22·(−10) + p23, w = 10.
+        let z_ndc = (dp.p22 * -10.0 + dp.p23) / 10.0;
+        let depth = (z_ndc + 1.0) * 0.5;
+        assert!((dp.linearize(depth) - 10.0).abs() < 1e-9);
+        assert!((dp.linearize(0.0) - n).abs() < 1e-12);
+        assert!((dp.linearize(1.0) - f).abs() < 1e-9);
+        // Reversed-Z with an infinite far plane and GL_ZERO_TO_ONE: depth = n / z.
+        let rev = DepthProjection { p22: 0.0, p23: n, zero_to_one: true, clear_depth: 0.0 };
+        assert!((rev.linearize(n / 10.0) - 10.0).abs() < 1e-9);
+        assert!(rev.linearize(0.0).is_infinite());
+    }
+}
