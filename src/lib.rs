@@ -3,6 +3,7 @@
 //! Depth-aware multi-sample anti-aliasing for OpenGL 3.2+ deferred renderers.
 #![warn(missing_docs)]
 
+pub mod cli;
 pub mod context;
 pub mod gl;
 pub mod error;

@@ -1,1 +1,5 @@
-fn main(){}
+//! The `deferred-msaa` binary; everything lives in the library's `cli` module.
+
+fn main() {
+    std::process::exit(deferred_msaa::cli::main());
+}

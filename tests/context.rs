@@ -16,6 +16,9 @@ fn available(backend: Backend) -> bool {
     match backend.check_library() {
         Ok(()) => true,
         Err(e) => {
+            if std::env::var_os("DEFERRED_MSAA_REQUIRE_ALL").is_some() {
+                panic!("required but missing: {e}");
+            }
             eprintln!("skipped: {e}");
             false
         }

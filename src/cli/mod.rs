@@ -1,0 +1,82 @@
+//! The `deferred-msaa` command line: argument parsing and the subcommands.
+//! `src/main.rs` only calls [`main`].
+
+mod info;
+
+use crate::context::Backend;
+use crate::{Error, Result};
+use clap::{Parser, Subcommand};
+
+/// Depth-aware MSAA for OpenGL 3.2+ deferred renderers.
+#[derive(Debug, Parser)]
+#[command(name = "deferred-msaa", version, about)]
+pub struct Cli {
+    /// What to do (default: render the built-in default scene).
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// Options every subcommand takes.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CommonArgs {
+    /// Headless context backend.
+    #[arg(long, default_value = "egl", value_parser = parse_backend)]
+    pub backend: Backend,
+}
+
+fn parse_backend(s: &str) -> std::result::Result<Backend, String> {
+    s.parse::<Backend>().map_err(|e| e.to_string())
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Report the context: versions, renderer, real sample counts and positions.
+    Info(info::InfoArgs),
+}
+
+/// Run the CLI; returns the process exit code. Errors print as one line on stderr.
+pub fn main() -> i32 {
+    // A panic is a bug, but even then the user gets one line, not a backtrace.
+    std::panic::set_hook(Box::new(|info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown".into());
+        let msg = msg.lines().next().unwrap_or("").to_string();
+        eprintln!("error: internal error ({msg}); please report it");
+    }));
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn"))
+        .format_timestamp(None)
+        .init();
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return code;
+        }
+    };
+    match std::panic::catch_unwind(|| run(cli)) {
+        Ok(Ok(())) => 0,
+        Ok(Err(e)) => {
+            eprintln!("error: {}", one_line(&e));
+            1
+        }
+        Err(_) => 101,
+    }
+}
+
+/// An error's message on one line (shader logs are folded).
+pub fn one_line(e: &Error) -> String {
+    e.to_string().lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join(" | ")
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Some(Command::Info(args)) => info::run(&args),
+        None => info::run(&info::InfoArgs::default()),
+    }
+}

@@ -1,0 +1,375 @@
+//! The retrofit on real multisampled renders: a tiny host deferred renderer,
+//! written here with its own FBO and shaders, gets MSAA through the public
+//! API alone; every resolved pixel is checked against the CPU reference
+//! computed from the very samples the GPU rasterised.
+
+mod common;
+
+use deferred_msaa::gl::{
+    Attachment, Format, Framebuffer, Program, ShaderStage, Texture2d, TextureRef, VertexArray,
+    live_objects, preamble,
+};
+use deferred_msaa::readback::Readback;
+use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
+use deferred_msaa::resolve::{
+    DepthProjection, ResolveMethod, ResolveParams, ResolveRule, ResolveSettings, Window,
+};
+use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions, introspect};
+use deferred_msaa::Error;
+use glow::HasContext;
+
+const W: u32 = 64;
+const H: u32 = 48;
+const FOV_Y: f32 = 0.8;
+const NEAR: f32 = 0.5;
+const FAR: f32 = 100.0;
+
+/// The host's model shader: it knows nothing of MSAA.
+const HOST_VERT: &str = "
+in vec3 a_position;
+in vec3 a_color;
+uniform mat4 u_projection;
+out vec3 v_view;
+out vec3 v_color;
+void main() {
+    v_view = a_position;
+    v_color = a_color;
+    gl_Position = u_projection * vec4(a_position, 1.0);
+}
+";
+const HOST_FRAG: &str = "
+in vec3 v_view;
+in vec3 v_color;
+out vec4 o_albedo;
+out vec4 o_position;
+out vec4 o_normal;
+void main() {
+    o_albedo = vec4(v_color, 1.0);
+    o_position = vec4(v_view, 1.0);
+    vec3 n = normalize(cross(dFdx(v_view), dFdy(v_view)));
+    o_normal = vec4(n, 0.5);
+}
+";
+
+fn projection() -> [f32; 16] {
+    let f = 1.0 / (FOV_Y / 2.0).tan();
+    let aspect = W as f32 / H as f32;
+    [
+        f / aspect, 0.0, 0.0, 0.0,
+        0.0, f, 0.0, 0.0,
+        0.0, 0.0, (FAR + NEAR) / (NEAR - FAR), -1.0,
+        0.0, 0.0, 2.0 * FAR * NEAR / (NEAR - FAR), 0.0,
+    ]
+}
+
+/// Triangles in view space: a far wall, a model with fine detail a little in
+/// front of itself, a tilted panel, and a sliver.
+fn triangles() -> Vec<f32> {
+    let mut v = Vec::new();
+    let mut tri = |p: [[f32; 3]; 3], c: [f32; 3]| {
+        for q in p {
+            v.extend_from_slice(&q);
+            v.extend_from_slice(&c);
+        }
+    };
+    tri([[-60.0, -40.0, -60.0], [60.0, -40.0, -60.0], [0.0, 50.0, -60.0]], [0.2, 0.3, 0.8]);
+    tri([[-4.0, -3.0, -10.0], [3.0, -2.5, -10.0], [-1.0, 3.0, -10.0]], [0.9, 0.4, 0.1]);
+    tri([[-2.0, -1.0, -9.9], [1.5, -1.2, -9.9], [0.0, 1.0, -9.9]], [0.1, 0.9, 0.2]);
+    tri([[1.0, -3.0, -8.0], [5.0, -3.0, -20.0], [3.0, 3.0, -14.0]], [0.8, 0.8, 0.8]);
+    tri([[-5.0, 2.0, -12.0], [5.0, 2.05, -12.0], [5.0, 2.2, -12.0]], [1.0, 0.0, 1.0]);
+    v
+}
+
+struct Host {
+    albedo: Texture2d,
+    position: Texture2d,
+    normal: Texture2d,
+    depth: Texture2d,
+    fbo: Framebuffer,
+    program: Program,
+    vao: VertexArray,
+    vbo: deferred_msaa::gl::Buffer,
+    vertices: i32,
+}
+
+impl Host {
+    fn new(gl: &glow::Context) -> Host {
+        let albedo = Texture2d::new(gl, "host albedo", Format::Rgba16f, W, H).unwrap();
+        let position = Texture2d::new(gl, "host position", Format::Rgba32f, W, H).unwrap();
+        let normal = Texture2d::new(gl, "host normal", Format::Rgba16f, W, H).unwrap();
+        let depth = Texture2d::new(gl, "host depth", Format::Depth32f, W, H).unwrap();
+        let fbo = Framebuffer::new(
+            gl,
+            "host gbuffer",
+            &[
+                (Attachment::Color(0), TextureRef::from(&albedo)),
+                (Attachment::Color(1), TextureRef::from(&position)),
+                (Attachment::Color(2), TextureRef::from(&normal)),
+                (Attachment::Depth, TextureRef::from(&depth)),
+            ],
+            &[Some(0), Some(1), Some(2)],
+        )
+        .unwrap();
+        let program = Program::build(
+            gl,
+            "host model",
+            &preamble(&[], &[]),
+            &[(ShaderStage::Vertex, "host.vert", HOST_VERT), (ShaderStage::Fragment, "host.frag", HOST_FRAG)],
+            &[("o_albedo", 0), ("o_position", 1), ("o_normal", 2)],
+        )
+        .unwrap();
+        let data = triangles();
+        let vbo = deferred_msaa::gl::Buffer::with_data(
+            gl,
+            "host vertices",
+            glow::ARRAY_BUFFER,
+            bytemuck::cast_slice(&data),
+            glow::STATIC_DRAW,
+        )
+        .unwrap();
+        let vao = VertexArray::new(gl, "host vao").unwrap();
+        unsafe {
+            vao.bind(gl);
+            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo.raw));
+            let pos = gl.get_attrib_location(program.raw, "a_position").unwrap();
+            let col = gl.get_attrib_location(program.raw, "a_color").unwrap();
+            gl.enable_vertex_attrib_array(pos);
+            gl.vertex_attrib_pointer_f32(pos, 3, glow::FLOAT, false, 24, 0);
+            gl.enable_vertex_attrib_array(col);
+            gl.vertex_attrib_pointer_f32(col, 3, glow::FLOAT, false, 24, 12);
+            gl.bind_vertex_array(None);
+        }
+        Host { albedo, position, normal, depth, fbo, program, vao, vbo, vertices: (data.len() / 6) as i32 }
+    }
+
+    /// The host's geometry pass, into whatever framebuffer is bound.
+    fn draw(&self, gl: &glow::Context) {
+        unsafe {
+            gl.viewport(0, 0, W as i32, H as i32);
+            gl.enable(glow::DEPTH_TEST);
+            gl.depth_func(glow::LESS);
+            gl.depth_mask(true);
+            gl.clear_color(0.0, 0.0, 0.0, 0.0);
+            gl.clear_depth_f64(1.0);
+            gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
+            self.program.bind(gl);
+            self.program.set_mat4(gl, "u_projection", &projection());
+            self.vao.bind(gl);
+            gl.draw_arrays(glow::TRIANGLES, 0, self.vertices);
+        }
+    }
+
+    fn destroy(self, gl: &glow::Context) {
+        self.fbo.destroy(gl);
+        for t in [self.albedo, self.position, self.normal, self.depth] {
+            t.destroy(gl);
+        }
+        self.program.destroy(gl);
+        self.vao.destroy(gl);
+        self.vbo.destroy(gl);
+    }
+}
+
+fn params(settings: ResolveSettings) -> ResolveParams {
+    let p = projection();
+    ResolveParams {
+        settings,
+        projection: DepthProjection { p22: p[10] as f64, p23: p[14] as f64, zero_to_one: false, clear_depth: 1.0 },
+        fov_y: FOV_Y as f64,
+        height_px: H,
+    }
+}
+
+fn half_close(gpu: f32, cpu: f64) -> bool {
+    // RGBA16F storage keeps 11 significant bits.
+    ((gpu as f64) - cpu).abs() <= 1e-5 + 1.2e-3 * cpu.abs()
+}
+
+#[test]
+fn resolve_matches_the_cpu_reference_on_real_samples() {
+    let Some(ctx) = common::egl_context() else { return };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let host = Host::new(gl);
+    let options = RetrofitOptions {
+        samples: 4,
+        rules: vec![(2, ResolveRule::BlendNormal)],
+        position_attachment: Some(1),
+    };
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &options).unwrap();
+    assert!(msaa.samples() >= 2, "no multisampling: {}", msaa.samples());
+    // Two lines: draw into our FBO, resolve.
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    host.draw(gl);
+
+    let mut readback = Readback::new(gl).unwrap();
+    let (depth_ref, color_refs) = msaa.inputs().unwrap();
+    let samples: Vec<_> = color_refs.iter().map(|t| readback.read(gl, *t, 1).unwrap()).collect();
+    let depth_samples = readback.read(gl, depth_ref, 1).unwrap();
+    let n = msaa.samples();
+
+    let mut complex_pixels = 0;
+    for &method in ResolveMethod::all() {
+        for &window in Window::all() {
+            for fast_path in [true, false] {
+                let settings = ResolveSettings { method, window, fast_path, ..ResolveSettings::default() };
+                let p = params(settings);
+                msaa.resolve(gl, &p).unwrap();
+                let resolved: Vec<_> = [&host.albedo, &host.position, &host.normal]
+                    .iter()
+                    .map(|t| readback.read(gl, TextureRef::from(*t), 1).unwrap())
+                    .collect();
+                let resolved_depth = readback.read(gl, TextureRef::from(&host.depth), 1).unwrap();
+                let cpu = CpuResolve {
+                    settings,
+                    rules: msaa.rules().to_vec(),
+                    key_source: CpuKeySource::Position(1),
+                    clear_depth: 1.0,
+                    footprint: p.footprint(),
+                };
+                let mut bad = Vec::new();
+                complex_pixels = 0;
+                for y in 0..H {
+                    for x in 0..W {
+                        let px = PixelSamples {
+                            depth: (0..n).map(|s| depth_samples.get(s, x, y)[0] as f64).collect(),
+                            attachments: samples
+                                .iter()
+                                .map(|a| (0..n).map(|s| a.get(s, x, y).map(|c| c as f64)).collect())
+                                .collect(),
+                        };
+                        let want = cpu.resolve_pixel(&px);
+                        complex_pixels += want.complex as usize;
+                        if want.ambiguous {
+                            continue;
+                        }
+                        for k in 0..3 {
+                            let got = resolved[k].get(0, x, y);
+                            let ok = if k == 1 {
+                                (0..4).all(|c| ((got[c] as f64) - want.attachments[k][c]).abs() <= 1e-4 * (1.0 + want.attachments[k][c].abs()))
+                            } else {
+                                (0..4).all(|c| half_close(got[c], want.attachments[k][c]))
+                            };
+                            if !ok {
+                                bad.push(format!("({x},{y}) att {k}: gpu {got:?} cpu {:?}", want.attachments[k]));
+                            }
+                        }
+                        let d = resolved_depth.get(0, x, y)[0] as f64;
+                        if (d - want.depth).abs() > 1e-6 {
+                            bad.push(format!("({x},{y}) depth: gpu {d} cpu {}", want.depth));
+                        }
+                    }
+                }
+                assert!(bad.is_empty(), "{settings:?}: {} mismatches: {:#?}", bad.len(), &bad[..bad.len().min(6)]);
+            }
+        }
+    }
+    // The scene has edges: the slow path must really have been exercised.
+    assert!(complex_pixels > 30, "only {complex_pixels} complex pixels");
+
+    readback.destroy(gl);
+    msaa.destroy(gl);
+    host.destroy(gl);
+    assert_eq!(live_objects(), before, "GL objects leaked");
+}
+
+#[test]
+fn sample_count_and_size_changes_rebuild_the_twins() {
+    let Some(ctx) = common::egl_context() else { return };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let host = Host::new(gl);
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &RetrofitOptions { position_attachment: Some(1), ..Default::default() }).unwrap();
+    let first = msaa.framebuffer();
+    for requested in [2, 4, 1, 3] {
+        msaa.set_samples(gl, requested).unwrap();
+        // Drivers round: the count is read back, never assumed.
+        assert!(msaa.samples() >= requested.max(1));
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        host.draw(gl);
+        msaa.resolve(gl, &params(ResolveSettings::default())).unwrap();
+    }
+    assert_ne!(first, msaa.framebuffer());
+    let e = msaa.set_samples(gl, 64).unwrap_err();
+    assert!(matches!(e, Error::UnsupportedSampleCount { .. }), "{e}");
+    assert!(e.to_string().contains("offers"), "{e}");
+    // A failed change leaves the retrofit working.
+    msaa.resolve(gl, &params(ResolveSettings::default())).unwrap();
+    msaa.destroy(gl);
+    host.destroy(gl);
+    assert_eq!(live_objects(), before);
+}
+
+#[test]
+fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
+    let Some(ctx) = common::egl_context() else { return };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let colour = Texture2d::new(gl, "colour", Format::Rgba16f, 32, 32).unwrap();
+    let small = Texture2d::new(gl, "small", Format::Rgba16f, 16, 16).unwrap();
+    let depth = Texture2d::new(gl, "depth", Format::Depth24, 32, 32).unwrap();
+    let attach = |list: &[(Attachment, TextureRef)]| unsafe {
+        let fbo = gl.create_framebuffer().unwrap();
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+        for (p, t) in list {
+            gl.framebuffer_texture_2d(glow::FRAMEBUFFER, p.gl_enum(), glow::TEXTURE_2D, Some(t.raw), 0);
+        }
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        fbo
+    };
+    // No depth attachment.
+    let fbo = attach(&[(Attachment::Color(0), TextureRef::from(&colour))]);
+    let e = introspect(gl, fbo).unwrap_err().to_string();
+    assert!(e.contains("GL_DEPTH_ATTACHMENT") && e.contains("no depth"), "{e}");
+    unsafe { gl.delete_framebuffer(fbo) };
+    // Different sizes.
+    let fbo = attach(&[
+        (Attachment::Color(0), TextureRef::from(&colour)),
+        (Attachment::Color(1), TextureRef::from(&small)),
+        (Attachment::Depth, TextureRef::from(&depth)),
+    ]);
+    let e = introspect(gl, fbo).unwrap_err().to_string();
+    assert!(e.contains("GL_COLOR_ATTACHMENT1") && e.contains("16x16"), "{e}");
+    unsafe { gl.delete_framebuffer(fbo) };
+    // A renderbuffer.
+    unsafe {
+        let rb = gl.create_renderbuffer().unwrap();
+        gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
+        gl.renderbuffer_storage(glow::RENDERBUFFER, glow::RGBA8, 32, 32);
+        let fbo = attach(&[(Attachment::Depth, TextureRef::from(&depth))]);
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+        gl.framebuffer_renderbuffer(glow::FRAMEBUFFER, glow::COLOR_ATTACHMENT0, glow::RENDERBUFFER, Some(rb));
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        let e = MsaaRetrofit::new(gl, fbo, &RetrofitOptions::default()).unwrap_err().to_string();
+        assert!(e.contains("GL_COLOR_ATTACHMENT0") && e.contains("renderbuffer"), "{e}");
+        gl.delete_framebuffer(fbo);
+        gl.delete_renderbuffer(rb);
+    }
+    // A format the resolve does not know (RGB565).
+    unsafe {
+        let tex = gl.create_texture().unwrap();
+        gl.bind_texture(glow::TEXTURE_2D, Some(tex));
+        gl.tex_image_2d(glow::TEXTURE_2D, 0, glow::RGB565 as i32, 32, 32, 0, glow::RGB, glow::UNSIGNED_BYTE, glow::PixelUnpackData::Slice(None));
+        let fbo = attach(&[(Attachment::Depth, TextureRef::from(&depth))]);
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+        gl.framebuffer_texture_2d(glow::FRAMEBUFFER, glow::COLOR_ATTACHMENT0, glow::TEXTURE_2D, Some(tex), 0);
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        let e = introspect(gl, fbo).unwrap_err();
+        assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
+        assert!(e.to_string().contains("GL_COLOR_ATTACHMENT0"), "{e}");
+        gl.delete_framebuffer(fbo);
+        gl.delete_texture(tex);
+    }
+    // An integer attachment cannot be blended.
+    let ids = Texture2d::new(gl, "ids", Format::Rgba8ui, 32, 32).unwrap();
+    let fbo = attach(&[(Attachment::Color(0), TextureRef::from(&ids)), (Attachment::Depth, TextureRef::from(&depth))]);
+    let e = MsaaRetrofit::new(gl, fbo, &RetrofitOptions { rules: vec![(0, ResolveRule::Blend)], ..Default::default() })
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("RGBA8UI") && e.contains("selected"), "{e}");
+    unsafe { gl.delete_framebuffer(fbo) };
+    for t in [colour, small, depth, ids] {
+        t.destroy(gl);
+    }
+    assert_eq!(live_objects(), before);
+}
