@@ -5,10 +5,8 @@
 
 mod common;
 
-use deferred_msaa::gl::{
-    Attachment, Format, Framebuffer, Program, ShaderStage, Texture2d, TextureRef, VertexArray,
-    live_objects, preamble,
-};
+use common::host::{Host, perspective, triangle};
+use deferred_msaa::gl::{Attachment, Format, Texture2d, TextureRef, live_objects};
 use deferred_msaa::readback::Readback;
 use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
 use deferred_msaa::resolve::{
@@ -20,162 +18,38 @@ use glow::HasContext;
 
 const W: u32 = 64;
 const H: u32 = 48;
-const FOV_Y: f32 = 0.8;
-const NEAR: f32 = 0.5;
-const FAR: f32 = 100.0;
+const FOV_Y: f64 = 0.8;
+const NEAR: f64 = 0.5;
+const FAR: f64 = 100.0;
 
-/// The host's model shader: it knows nothing of MSAA.
-const HOST_VERT: &str = "
-in vec3 a_position;
-in vec3 a_color;
-uniform mat4 u_projection;
-out vec3 v_view;
-out vec3 v_color;
-void main() {
-    v_view = a_position;
-    v_color = a_color;
-    gl_Position = u_projection * vec4(a_position, 1.0);
-}
-";
-const HOST_FRAG: &str = "
-in vec3 v_view;
-in vec3 v_color;
-out vec4 o_albedo;
-out vec4 o_position;
-out vec4 o_normal;
-void main() {
-    o_albedo = vec4(v_color, 1.0);
-    o_position = vec4(v_view, 1.0);
-    vec3 n = normalize(cross(dFdx(v_view), dFdy(v_view)));
-    o_normal = vec4(n, 0.5);
-}
-";
-
-fn projection() -> [f32; 16] {
-    let f = 1.0 / (FOV_Y / 2.0).tan();
-    let aspect = W as f32 / H as f32;
-    [
-        f / aspect, 0.0, 0.0, 0.0,
-        0.0, f, 0.0, 0.0,
-        0.0, 0.0, (FAR + NEAR) / (NEAR - FAR), -1.0,
-        0.0, 0.0, 2.0 * FAR * NEAR / (NEAR - FAR), 0.0,
-    ]
+fn projection() -> [f64; 16] {
+    perspective(FOV_Y, W as f64 / H as f64, NEAR, Some(FAR))
 }
 
 /// Triangles in view space: a far wall, a model with fine detail a little in
 /// front of itself, a tilted panel, and a sliver.
 fn triangles() -> Vec<f32> {
     let mut v = Vec::new();
-    let mut tri = |p: [[f32; 3]; 3], c: [f32; 3]| {
-        for q in p {
-            v.extend_from_slice(&q);
-            v.extend_from_slice(&c);
-        }
-    };
-    tri([[-60.0, -40.0, -60.0], [60.0, -40.0, -60.0], [0.0, 50.0, -60.0]], [0.2, 0.3, 0.8]);
-    tri([[-4.0, -3.0, -10.0], [3.0, -2.5, -10.0], [-1.0, 3.0, -10.0]], [0.9, 0.4, 0.1]);
-    tri([[-2.0, -1.0, -9.9], [1.5, -1.2, -9.9], [0.0, 1.0, -9.9]], [0.1, 0.9, 0.2]);
-    tri([[1.0, -3.0, -8.0], [5.0, -3.0, -20.0], [3.0, 3.0, -14.0]], [0.8, 0.8, 0.8]);
-    tri([[-5.0, 2.0, -12.0], [5.0, 2.05, -12.0], [5.0, 2.2, -12.0]], [1.0, 0.0, 1.0]);
+    triangle(&mut v, [[-60.0, -40.0, -60.0], [60.0, -40.0, -60.0], [0.0, 50.0, -60.0]], [0.2, 0.3, 0.8]);
+    triangle(&mut v, [[-4.0, -3.0, -10.0], [3.0, -2.5, -10.0], [-1.0, 3.0, -10.0]], [0.9, 0.4, 0.1]);
+    triangle(&mut v, [[-2.0, -1.0, -9.9], [1.5, -1.2, -9.9], [0.0, 1.0, -9.9]], [0.1, 0.9, 0.2]);
+    triangle(&mut v, [[1.0, -3.0, -8.0], [5.0, -3.0, -20.0], [3.0, 3.0, -14.0]], [0.8, 0.8, 0.8]);
+    triangle(&mut v, [[-5.0, 2.0, -12.0], [5.0, 2.05, -12.0], [5.0, 2.2, -12.0]], [1.0, 0.0, 1.0]);
     v
 }
 
-struct Host {
-    albedo: Texture2d,
-    position: Texture2d,
-    normal: Texture2d,
-    depth: Texture2d,
-    fbo: Framebuffer,
-    program: Program,
-    vao: VertexArray,
-    vbo: deferred_msaa::gl::Buffer,
-    vertices: i32,
-}
-
-impl Host {
-    fn new(gl: &glow::Context) -> Host {
-        let albedo = Texture2d::new(gl, "host albedo", Format::Rgba16f, W, H).unwrap();
-        let position = Texture2d::new(gl, "host position", Format::Rgba32f, W, H).unwrap();
-        let normal = Texture2d::new(gl, "host normal", Format::Rgba16f, W, H).unwrap();
-        let depth = Texture2d::new(gl, "host depth", Format::Depth32f, W, H).unwrap();
-        let fbo = Framebuffer::new(
-            gl,
-            "host gbuffer",
-            &[
-                (Attachment::Color(0), TextureRef::from(&albedo)),
-                (Attachment::Color(1), TextureRef::from(&position)),
-                (Attachment::Color(2), TextureRef::from(&normal)),
-                (Attachment::Depth, TextureRef::from(&depth)),
-            ],
-            &[Some(0), Some(1), Some(2)],
-        )
-        .unwrap();
-        let program = Program::build(
-            gl,
-            "host model",
-            &preamble(&[], &[]),
-            &[(ShaderStage::Vertex, "host.vert", HOST_VERT), (ShaderStage::Fragment, "host.frag", HOST_FRAG)],
-            &[("o_albedo", 0), ("o_position", 1), ("o_normal", 2)],
-        )
-        .unwrap();
-        let data = triangles();
-        let vbo = deferred_msaa::gl::Buffer::with_data(
-            gl,
-            "host vertices",
-            glow::ARRAY_BUFFER,
-            bytemuck::cast_slice(&data),
-            glow::STATIC_DRAW,
-        )
-        .unwrap();
-        let vao = VertexArray::new(gl, "host vao").unwrap();
-        unsafe {
-            vao.bind(gl);
-            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo.raw));
-            let pos = gl.get_attrib_location(program.raw, "a_position").unwrap();
-            let col = gl.get_attrib_location(program.raw, "a_color").unwrap();
-            gl.enable_vertex_attrib_array(pos);
-            gl.vertex_attrib_pointer_f32(pos, 3, glow::FLOAT, false, 24, 0);
-            gl.enable_vertex_attrib_array(col);
-            gl.vertex_attrib_pointer_f32(col, 3, glow::FLOAT, false, 24, 12);
-            gl.bind_vertex_array(None);
-        }
-        Host { albedo, position, normal, depth, fbo, program, vao, vbo, vertices: (data.len() / 6) as i32 }
-    }
-
-    /// The host's geometry pass, into whatever framebuffer is bound.
-    fn draw(&self, gl: &glow::Context) {
-        unsafe {
-            gl.viewport(0, 0, W as i32, H as i32);
-            gl.enable(glow::DEPTH_TEST);
-            gl.depth_func(glow::LESS);
-            gl.depth_mask(true);
-            gl.clear_color(0.0, 0.0, 0.0, 0.0);
-            gl.clear_depth_f64(1.0);
-            gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
-            self.program.bind(gl);
-            self.program.set_mat4(gl, "u_projection", &projection());
-            self.vao.bind(gl);
-            gl.draw_arrays(glow::TRIANGLES, 0, self.vertices);
-        }
-    }
-
-    fn destroy(self, gl: &glow::Context) {
-        self.fbo.destroy(gl);
-        for t in [self.albedo, self.position, self.normal, self.depth] {
-            t.destroy(gl);
-        }
-        self.program.destroy(gl);
-        self.vao.destroy(gl);
-        self.vbo.destroy(gl);
-    }
+fn host(gl: &glow::Context) -> Host {
+    let mut host = Host::new(gl, W, H, Format::Rgba32f, Format::Depth32f);
+    host.set_triangles(gl, &triangles());
+    host
 }
 
 fn params(settings: ResolveSettings) -> ResolveParams {
     let p = projection();
     ResolveParams {
         settings,
-        projection: DepthProjection { p22: p[10] as f64, p23: p[14] as f64, zero_to_one: false, clear_depth: 1.0 },
-        fov_y: FOV_Y as f64,
+        projection: DepthProjection { p22: p[10], p23: p[14], zero_to_one: false, clear_depth: 1.0 },
+        fov_y: FOV_Y,
         height_px: H,
     }
 }
@@ -190,7 +64,7 @@ fn resolve_matches_the_cpu_reference_on_real_samples() {
     let Some(ctx) = common::egl_context() else { return };
     let gl = ctx.gl();
     let before = live_objects();
-    let host = Host::new(gl);
+    let host = host(gl);
     let options = RetrofitOptions {
         samples: 4,
         rules: vec![(2, ResolveRule::BlendNormal)],
@@ -200,7 +74,7 @@ fn resolve_matches_the_cpu_reference_on_real_samples() {
     assert!(msaa.samples() >= 2, "no multisampling: {}", msaa.samples());
     // Two lines: draw into our FBO, resolve.
     unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
-    host.draw(gl);
+    host.draw(gl, &projection(), false);
 
     let mut readback = Readback::new(gl).unwrap();
     let (depth_ref, color_refs) = msaa.inputs().unwrap();
@@ -278,7 +152,7 @@ fn sample_count_and_size_changes_rebuild_the_twins() {
     let Some(ctx) = common::egl_context() else { return };
     let gl = ctx.gl();
     let before = live_objects();
-    let host = Host::new(gl);
+    let host = host(gl);
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &RetrofitOptions { position_attachment: Some(1), ..Default::default() }).unwrap();
     let first = msaa.framebuffer();
     for requested in [2, 4, 1, 3] {
@@ -286,7 +160,7 @@ fn sample_count_and_size_changes_rebuild_the_twins() {
         // Drivers round: the count is read back, never assumed.
         assert!(msaa.samples() >= requested.max(1));
         unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
-        host.draw(gl);
+        host.draw(gl, &projection(), false);
         msaa.resolve(gl, &params(ResolveSettings::default())).unwrap();
     }
     assert_ne!(first, msaa.framebuffer());

@@ -71,6 +71,7 @@ pub fn report(ctx: &HeadlessContext) -> Result<Value> {
         "max_samples": caps.max_samples,
         "max_texture_size": caps.max_texture_size,
         "timer_query": caps.timer_query,
+        "clip_control": caps.clip_control,
         "sample_counts": counts,
         "sample_positions": positions,
     }))

@@ -99,6 +99,8 @@ pub struct Capabilities {
     pub storage_buffers: bool,
     /// KHR_debug.
     pub khr_debug: bool,
+    /// `glClipControl` (GL 4.5 or ARB_clip_control): reversed-Z with full float precision.
+    pub clip_control: bool,
 }
 
 fn get_u32(gl: &glow::Context, pname: u32) -> u32 {
@@ -139,6 +141,7 @@ impl Capabilities {
                 || ext.contains("GL_ARB_sample_shading"),
             storage_buffers: version >= (4, 3),
             khr_debug: version >= (4, 3) || ext.contains("GL_KHR_debug"),
+            clip_control: version >= (4, 5) || ext.contains("GL_ARB_clip_control"),
         };
         // Drain anything an unknown enum left behind on older contexts.
         let _ = check_error(gl, "querying capabilities");

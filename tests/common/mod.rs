@@ -1,6 +1,9 @@
 //! Shared helpers for the GL integration tests.
 #![allow(dead_code)]
 
+pub mod golden;
+pub mod host;
+
 use deferred_msaa::context::{Backend, HeadlessContext};
 
 /// An EGL context, or `None` (with a printed reason) when the system library is absent.
