@@ -102,7 +102,7 @@ int reference_sample() {
 #elif METHOD == METHOD_BACK
     // Farthest; among equal depths the lower index, so never key_less reversed.
     for (int i = 1; i < NUM_SAMPLES; ++i) {
-        bool farther = (g_bg[i] && !g_bg[r]) || (!g_bg[i] && !g_bg[r] && g_key[i] > g_key[r]);
+        bool farther = !g_bg[r] && (g_bg[i] || g_key[i] > g_key[r]);
         if (farther) r = i;
     }
 #else

@@ -4,11 +4,14 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod compare;
 pub mod context;
 pub mod gl;
+pub mod dump;
 pub mod error;
 pub mod gbuffer;
 pub mod readback;
+pub mod renderer;
 pub mod resolve;
 pub mod retrofit;
 pub mod scene;

@@ -9,7 +9,7 @@ use crate::gl::{
 };
 use crate::resolve::FULLSCREEN_VERT;
 use crate::resolve::SavedState;
-use crate::{Error, Result};
+use crate::Result;
 use glow::HasContext;
 use std::collections::HashMap;
 
@@ -59,37 +59,35 @@ impl Readback {
     }
 
     fn program(&mut self, gl: &glow::Context, target: u32, kind: SampleKind) -> Result<&Program> {
-        let key = (target, kind);
-        if !self.programs.contains_key(&key) {
-            let prefix = match kind {
-                SampleKind::Float => "",
-                SampleKind::Uint => "u",
-                SampleKind::Int => "i",
-            };
-            let (sampler, flavour) = match target {
-                glow::TEXTURE_2D_MULTISAMPLE => ("sampler2DMS", Some("SRC_MS")),
-                glow::TEXTURE_2D_ARRAY => ("sampler2DArray", Some("SRC_ARRAY")),
-                _ => ("sampler2D", None),
-            };
-            let mut defines = vec![("SRC_SAMPLER".to_string(), format!("{prefix}{sampler}"))];
-            if let Some(f) = flavour {
-                defines.push((f.to_string(), "1".to_string()));
-            }
-            let program = Program::build(
-                gl,
-                &format!("readback {prefix}{sampler}"),
-                &preamble(&[], &defines),
-                &[
-                    (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
-                    (ShaderStage::Fragment, "readback.frag", READBACK_FRAG),
-                ],
-                &[("o_value", 0)],
-            )?;
-            self.programs.insert(key, program);
+        let entry = match self.programs.entry((target, kind)) {
+            std::collections::hash_map::Entry::Occupied(e) => return Ok(e.into_mut()),
+            std::collections::hash_map::Entry::Vacant(v) => v,
+        };
+        let prefix = match kind {
+            SampleKind::Float => "",
+            SampleKind::Uint => "u",
+            SampleKind::Int => "i",
+        };
+        let (sampler, flavour) = match target {
+            glow::TEXTURE_2D_MULTISAMPLE => ("sampler2DMS", Some("SRC_MS")),
+            glow::TEXTURE_2D_ARRAY => ("sampler2DArray", Some("SRC_ARRAY")),
+            _ => ("sampler2D", None),
+        };
+        let mut defines = vec![("SRC_SAMPLER".to_string(), format!("{prefix}{sampler}"))];
+        if let Some(f) = flavour {
+            defines.push((f.to_string(), "1".to_string()));
         }
-        self.programs
-            .get(&key)
-            .ok_or_else(|| Error::Layout("readback program cache lost an entry".into()))
+        let program = Program::build(
+            gl,
+            &format!("readback {prefix}{sampler}"),
+            &preamble(&[], &defines),
+            &[
+                (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
+                (ShaderStage::Fragment, "readback.frag", READBACK_FRAG),
+            ],
+            &[("o_value", 0)],
+        )?;
+        Ok(entry.insert(program))
     }
 
     /// Read every sample (or layer) of `texture`.

@@ -6,6 +6,9 @@
 //! geometry sample, NaN and Inf values, denormals, equal depths with different
 //! colours, opposite normals, HDR values up to 65504.
 
+// Per-sample arrays run in parallel; indices read clearer than zipped iterators.
+#![allow(clippy::needless_range_loop)]
+
 mod common;
 
 use common::Rng;

@@ -117,8 +117,8 @@ fn resolve_matches_the_cpu_reference_on_real_samples() {
                         if want.ambiguous {
                             continue;
                         }
-                        for k in 0..3 {
-                            let got = resolved[k].get(0, x, y);
+                        for (k, plane) in resolved.iter().enumerate() {
+                            let got = plane.get(0, x, y);
                             let ok = if k == 1 {
                                 (0..4).all(|c| ((got[c] as f64) - want.attachments[k][c]).abs() <= 1e-4 * (1.0 + want.attachments[k][c].abs()))
                             } else {

@@ -2,6 +2,7 @@
 //! `src/main.rs` only calls [`main`].
 
 mod info;
+mod render;
 
 use crate::context::Backend;
 use crate::{Error, Result};
@@ -33,6 +34,10 @@ fn parse_backend(s: &str) -> std::result::Result<Backend, String> {
 pub enum Command {
     /// Report the context: versions, renderer, real sample counts and positions.
     Info(info::InfoArgs),
+    /// Render a scene through the deferred pipeline and write a PNG.
+    Render(render::RenderCmd),
+    /// Render, then write every sample of every attachment as .npy, final.png and meta.json.
+    Dump(render::DumpCmd),
 }
 
 /// Run the CLI; returns the process exit code. Errors print as one line on stderr.
@@ -77,6 +82,9 @@ pub fn one_line(e: &Error) -> String {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Some(Command::Info(args)) => info::run(&args),
-        None => info::run(&info::InfoArgs::default()),
+        Some(Command::Render(cmd)) => render::run_render(&cmd),
+        Some(Command::Dump(cmd)) => render::run_dump(&cmd),
+        // The main job on the built-in default scene.
+        None => render::run_render(&render::RenderCmd::default_scene()?),
     }
 }

@@ -136,6 +136,18 @@ impl Format {
         })
     }
 
+    /// Number of components (depth formats: 1).
+    pub const fn channels(self) -> u32 {
+        use Format::*;
+        match self {
+            R8 | R16f | R32f | R32ui | Depth16 | Depth24 | Depth32f | Depth24Stencil8
+            | Depth32fStencil8 => 1,
+            Rg8 | Rg16f | Rg32f => 2,
+            R11fG11fB10f => 3,
+            _ => 4,
+        }
+    }
+
     /// A depth or depth-stencil format.
     pub const fn is_depth(self) -> bool {
         matches!(

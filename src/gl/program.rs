@@ -173,12 +173,12 @@ impl Program {
     /// A uniform's location (cached); `None` if the linker removed or never had it.
     pub fn uniform(&self, gl: &glow::Context, name: &str) -> Option<glow::UniformLocation> {
         if let Some(loc) = self.uniforms.borrow().get(name) {
-            return loc.clone();
+            return *loc;
         }
         let loc = unsafe { gl.get_uniform_location(self.raw, name) };
         self.uniforms
             .borrow_mut()
-            .insert(name.to_string(), loc.clone());
+            .insert(name.to_string(), loc);
         loc
     }
 

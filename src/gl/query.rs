@@ -35,11 +35,19 @@ pub struct GpuTimer {
 }
 
 impl GpuTimer {
-    /// A timer with a query object where supported (or when `force_wall_clock` is false).
+    /// A timer with a query object where the context has a trustworthy one,
+    /// else (or with `force_wall_clock`) `glFinish`-bracketed wall time.
+    /// Software rasterisers get wall time: llvmpipe restarts `GL_TIME_ELAPSED`
+    /// at every tile a thread rasterises, so its query spans only the last tiles.
     pub fn new(gl: &glow::Context, force_wall_clock: bool) -> Result<Self> {
         let v = gl.version();
-        let has_query = (v.major, v.minor) >= (3, 3)
-            || gl.supported_extensions().contains("GL_ARB_timer_query");
+        let renderer = unsafe { gl.get_parameter_string(glow::RENDERER) }.to_ascii_lowercase();
+        let software = ["llvmpipe", "softpipe", "swrast", "swr"]
+            .iter()
+            .any(|s| renderer.contains(s));
+        let has_query = !software
+            && ((v.major, v.minor) >= (3, 3)
+                || gl.supported_extensions().contains("GL_ARB_timer_query"));
         if has_query && !force_wall_clock {
             let query = unsafe { gl.create_query() }.map_err(|reason| Error::Create {
                 what: "timer query".into(),

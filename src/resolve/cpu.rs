@@ -105,8 +105,7 @@ impl CpuResolve {
         match self.settings.method {
             ResolveMethod::Front => (1..n).fold(0, |r, i| if keys.less(i, r) { i } else { r }),
             ResolveMethod::Back => (1..n).fold(0, |r, i| {
-                let farther = (keys.bg[i] && !keys.bg[r])
-                    || (!keys.bg[i] && !keys.bg[r] && keys.z[i] > keys.z[r]);
+                let farther = !keys.bg[r] && (keys.bg[i] || keys.z[i] > keys.z[r]);
                 if farther { i } else { r }
             }),
             ResolveMethod::Median | ResolveMethod::Average => {

@@ -172,13 +172,10 @@ impl Resolver {
 
     /// The program for `key`, built on first use.
     pub fn program(&mut self, gl: &glow::Context, key: &ResolveProgramKey) -> Result<&Program> {
-        if !self.programs.contains_key(key) {
-            let program = build_program(gl, key)?;
-            self.programs.insert(key.clone(), program);
+        match self.programs.entry(key.clone()) {
+            std::collections::hash_map::Entry::Occupied(e) => Ok(e.into_mut()),
+            std::collections::hash_map::Entry::Vacant(v) => Ok(v.insert(build_program(gl, key)?)),
         }
-        self.programs
-            .get(key)
-            .ok_or_else(|| Error::Layout("resolve program cache lost an entry".into()))
     }
 
     /// Number of cached programs.

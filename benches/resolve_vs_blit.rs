@@ -1,0 +1,847 @@
+//! The depth-aware resolve against the hardware resolve, measured in one run.
+//!
+//! A host G-buffer (RGBA16F colour, RGBA16F view-space position, RGBA16F
+//! normal, DEPTH32F) is retrofitted with MSAA; its multisampled twin is drawn
+//! once with a scene of a few hundred small-to-medium triangles over a big
+//! background triangle, and then these are timed, interleaved round-robin so
+//! that machine noise hits every method alike:
+//!
+//! 1. `MsaaRetrofit::resolve`, median, smooth window, fast path on;
+//! 2. the same with the fast path off;
+//! 3. three `glBlitFramebuffer` calls (twin → host, one per colour
+//!    attachment, `GL_NEAREST`): what a hardware resolve costs;
+//! 4. a trivial full-screen pass writing the three attachments, for scale.
+//!
+//! ```text
+//! cargo bench --bench resolve_vs_blit [-- --size 640x360 --samples 4 --runs 30]
+//! ```
+//! Other options: `--warmup N`, `--triangles N`, `--seed N`,
+//! `--timer auto|query|wall`. Each run is timed both by a `GL_TIME_ELAPSED`
+//! query (where the context has one) and by `glFinish`-bracketed wall time;
+//! `auto` reports the query, except on software renderers, whose query does
+//! not span the pass (llvmpipe restarts it at every tile a thread rasterises).
+//! Results also go to `target/resolve_vs_blit.json`.
+
+use deferred_msaa::context::{Backend, HeadlessContext};
+use deferred_msaa::gl::{
+    Attachment, Buffer, Format, Framebuffer, GpuTimer, Program, ShaderStage, Texture2d, TextureRef,
+    TimerKind, VertexArray, check_error, preamble,
+};
+use deferred_msaa::readback::Readback;
+use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
+use deferred_msaa::resolve::{
+    DepthProjection, FULLSCREEN_VERT, ResolveParams, ResolveRule, ResolveSettings,
+};
+use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions};
+use glow::HasContext;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+const FOV_Y: f32 = 0.9;
+const NEAR: f32 = 0.5;
+const FAR: f32 = 200.0;
+/// Distance of the background triangle.
+const BACKGROUND_Z: f32 = 120.0;
+
+/// The host's model shader: view-space position in, three G-buffer outputs.
+const MODEL_VERT: &str = "
+in vec3 a_position;
+in vec3 a_color;
+uniform mat4 u_projection;
+out vec3 v_view;
+out vec3 v_color;
+void main() {
+    v_view = a_position;
+    v_color = a_color;
+    gl_Position = u_projection * vec4(a_position, 1.0);
+}
+";
+const MODEL_FRAG: &str = "
+in vec3 v_view;
+in vec3 v_color;
+out vec4 o_color;
+out vec4 o_position;
+out vec4 o_normal;
+void main() {
+    o_color = vec4(v_color, 1.0);
+    o_position = vec4(v_view, 1.0);
+    o_normal = vec4(normalize(cross(dFdx(v_view), dFdy(v_view))), 0.5);
+}
+";
+/// The scale pass: a full-screen triangle writing constants to the three attachments.
+const TRIVIAL_FRAG: &str = "
+out vec4 o_color;
+out vec4 o_position;
+out vec4 o_normal;
+void main() {
+    o_color = vec4(0.25, 0.5, 0.75, 1.0);
+    o_position = vec4(0.0, 0.0, -1.0, 1.0);
+    o_normal = vec4(0.0, 0.0, 1.0, 0.5);
+}
+";
+
+struct Args {
+    width: u32,
+    height: u32,
+    samples: u32,
+    runs: usize,
+    warmup: usize,
+    triangles: usize,
+    seed: u64,
+    timer: TimerChoice,
+}
+
+/// Which timer's numbers are the headline (both are always taken).
+#[derive(Clone, Copy, PartialEq)]
+enum TimerChoice {
+    /// `GL_TIME_ELAPSED` where it is trustworthy, else wall time.
+    Auto,
+    /// `GL_TIME_ELAPSED`.
+    Query,
+    /// Wall time between `glFinish` calls.
+    Wall,
+}
+
+const USAGE: &str = "usage: resolve_vs_blit [--size WxH] [--samples N] [--runs K] [--warmup N] \
+                     [--triangles N] [--seed N] [--timer auto|query|wall]";
+
+/// `v` as a whole number of at least `min`.
+fn number<T>(name: &str, v: &str, min: T) -> Result<T, String>
+where
+    T: std::str::FromStr + PartialOrd + std::fmt::Display + Copy,
+{
+    match v.parse::<T>() {
+        Ok(n) if n >= min => Ok(n),
+        _ => Err(format!(
+            "{name}: expected a whole number of at least {min}, got `{v}`"
+        )),
+    }
+}
+
+fn parse_args() -> Result<Args, String> {
+    let mut args = Args {
+        width: 640,
+        height: 360,
+        samples: 4,
+        runs: 30,
+        warmup: 5,
+        triangles: 600,
+        seed: 1,
+        timer: TimerChoice::Auto,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(arg) = it.next() {
+        // `--name=value` and `--name value` both work.
+        let (name, inline) = match arg.split_once('=') {
+            Some((n, v)) if n.starts_with("--") => (n.to_string(), Some(v.to_string())),
+            _ => (arg.clone(), None),
+        };
+        let mut value = |what: &str| -> Result<String, String> {
+            inline
+                .clone()
+                .or_else(|| it.next())
+                .ok_or_else(|| format!("{name} needs {what}"))
+        };
+        match name.as_str() {
+            // cargo passes `--bench` to every bench target.
+            "--bench" => {}
+            "--size" => {
+                let v = value("WxH")?;
+                let (w, h) = v
+                    .split_once(['x', 'X'])
+                    .ok_or_else(|| format!("--size: expected WxH, got `{v}`"))?;
+                args.width = number("--size width", w, 1u32)?;
+                args.height = number("--size height", h, 1u32)?;
+            }
+            "--samples" => args.samples = number("--samples", &value("a count")?, 1u32)?,
+            "--runs" => args.runs = number("--runs", &value("a count")?, 1usize)?,
+            "--warmup" => args.warmup = number("--warmup", &value("a count")?, 0usize)?,
+            "--triangles" => args.triangles = number("--triangles", &value("a count")?, 0usize)?,
+            "--seed" => args.seed = number("--seed", &value("a number")?, 0u64)?,
+            "--timer" => {
+                args.timer = match value("auto|query|wall")?.as_str() {
+                    "auto" => TimerChoice::Auto,
+                    "query" => TimerChoice::Query,
+                    "wall" => TimerChoice::Wall,
+                    other => {
+                        return Err(format!(
+                            "--timer: expected auto, query or wall, got `{other}`"
+                        ));
+                    }
+                }
+            }
+            "--help" | "-h" => {
+                println!("{USAGE}");
+                std::process::exit(0);
+            }
+            other => return Err(format!("unknown argument `{other}`\n{USAGE}")),
+        }
+    }
+    Ok(args)
+}
+
+/// xorshift64*: a reproducible scene without a dependency.
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: u64) -> Self {
+        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+    fn unit(&mut self) -> f32 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+}
+
+/// GL's standard perspective projection, column-major.
+fn projection(aspect: f32) -> [f32; 16] {
+    let f = 1.0 / (FOV_Y / 2.0).tan();
+    #[rustfmt::skip]
+    let m = [
+        f / aspect, 0.0, 0.0, 0.0,
+        0.0, f, 0.0, 0.0,
+        0.0, 0.0, (FAR + NEAR) / (NEAR - FAR), -1.0,
+        0.0, 0.0, 2.0 * FAR * NEAR / (NEAR - FAR), 0.0,
+    ];
+    m
+}
+
+/// Interleaved `[x, y, z, r, g, b]` view-space vertices: one triangle that
+/// covers the whole view far away, then `count` random triangles, 2 % to 25 %
+/// of the screen height across (log-uniform, so most are small), at distances
+/// 3 to 100, mildly tilted, in random order.
+fn scene(args: &Args) -> Vec<f32> {
+    let mut rng = Rng::new(args.seed);
+    let aspect = args.width as f32 / args.height as f32;
+    let tan_half = (FOV_Y / 2.0).tan();
+    let mut v = Vec::with_capacity((args.triangles + 1) * 18);
+    let mut push = |p: [f32; 3], c: [f32; 3]| {
+        v.extend_from_slice(&p);
+        v.extend_from_slice(&c);
+    };
+    let (bx, by) = (BACKGROUND_Z * tan_half * aspect, BACKGROUND_Z * tan_half);
+    for p in [
+        [-4.0 * bx, -2.0 * by],
+        [4.0 * bx, -2.0 * by],
+        [0.0, 4.0 * by],
+    ] {
+        push([p[0], p[1], -BACKGROUND_Z], [0.3, 0.4, 0.6]);
+    }
+    for _ in 0..args.triangles {
+        let z = rng.range(3.0, 100.0);
+        // Screen-space centre (NDC, a little beyond the edges) and size.
+        let (cx, cy) = (rng.range(-1.1, 1.1), rng.range(-1.1, 1.1));
+        let size = 0.02 * (12.5f32).powf(rng.unit()); // fraction of the height
+        let half_h = z * tan_half; // view-space half height at distance z
+        let radius = size * half_h; // circumradius ≈ half the size across
+        let (ox, oy) = (cx * half_h * aspect, cy * half_h);
+        let phase = rng.range(0.0, std::f32::consts::TAU);
+        let color = [rng.unit(), rng.unit(), rng.unit()];
+        for k in 0..3 {
+            let a = phase + k as f32 * std::f32::consts::TAU / 3.0 + rng.range(-0.5, 0.5);
+            let r = radius * rng.range(0.5, 1.0);
+            let tilt = radius * rng.range(-0.3, 0.3);
+            push([ox + r * a.cos(), oy + r * a.sin(), -(z + tilt)], color);
+        }
+    }
+    v
+}
+
+/// The host engine: its own G-buffer FBO and model shader.
+struct Host {
+    color: Texture2d,
+    position: Texture2d,
+    normal: Texture2d,
+    depth: Texture2d,
+    fbo: Framebuffer,
+    program: Program,
+    vao: VertexArray,
+    vbo: Buffer,
+    vertices: i32,
+    width: u32,
+    height: u32,
+}
+
+impl Host {
+    fn new(gl: &glow::Context, args: &Args) -> deferred_msaa::Result<Host> {
+        let (w, h) = (args.width, args.height);
+        let color = Texture2d::new(gl, "host color", Format::Rgba16f, w, h)?;
+        let position = Texture2d::new(gl, "host position", Format::Rgba16f, w, h)?;
+        let normal = Texture2d::new(gl, "host normal", Format::Rgba16f, w, h)?;
+        let depth = Texture2d::new(gl, "host depth", Format::Depth32f, w, h)?;
+        let fbo = Framebuffer::new(
+            gl,
+            "host gbuffer",
+            &[
+                (Attachment::Color(0), TextureRef::from(&color)),
+                (Attachment::Color(1), TextureRef::from(&position)),
+                (Attachment::Color(2), TextureRef::from(&normal)),
+                (Attachment::Depth, TextureRef::from(&depth)),
+            ],
+            &[Some(0), Some(1), Some(2)],
+        )?;
+        let program = Program::build(
+            gl,
+            "host model",
+            &preamble(&[], &[]),
+            &[
+                (ShaderStage::Vertex, "model.vert", MODEL_VERT),
+                (ShaderStage::Fragment, "model.frag", MODEL_FRAG),
+            ],
+            &[("o_color", 0), ("o_position", 1), ("o_normal", 2)],
+        )?;
+        let data = scene(args);
+        let vbo = Buffer::with_data(
+            gl,
+            "host vertices",
+            glow::ARRAY_BUFFER,
+            bytemuck::cast_slice(&data),
+            glow::STATIC_DRAW,
+        )?;
+        let vao = VertexArray::new(gl, "host vao")?;
+        unsafe {
+            vao.bind(gl);
+            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo.raw));
+            for (name, offset) in [("a_position", 0), ("a_color", 12)] {
+                if let Some(loc) = gl.get_attrib_location(program.raw, name) {
+                    gl.enable_vertex_attrib_array(loc);
+                    gl.vertex_attrib_pointer_f32(loc, 3, glow::FLOAT, false, 24, offset);
+                }
+            }
+            gl.bind_vertex_array(None);
+            gl.bind_buffer(glow::ARRAY_BUFFER, None);
+        }
+        Ok(Host {
+            color,
+            position,
+            normal,
+            depth,
+            fbo,
+            program,
+            vao,
+            vbo,
+            vertices: (data.len() / 6) as i32,
+            width: w,
+            height: h,
+        })
+    }
+
+    /// The geometry pass, into whatever framebuffer is bound.
+    fn draw(&self, gl: &glow::Context) {
+        let aspect = self.width as f32 / self.height as f32;
+        unsafe {
+            gl.viewport(0, 0, self.width as i32, self.height as i32);
+            gl.enable(glow::DEPTH_TEST);
+            gl.depth_func(glow::LESS);
+            gl.depth_mask(true);
+            gl.clear_color(0.0, 0.0, 0.0, 0.0);
+            gl.clear_depth_f64(1.0);
+            gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
+            self.program.bind(gl);
+            self.program
+                .set_mat4(gl, "u_projection", &projection(aspect));
+            self.vao.bind(gl);
+            gl.draw_arrays(glow::TRIANGLES, 0, self.vertices);
+            gl.bind_vertex_array(None);
+            gl.use_program(None);
+        }
+    }
+
+    fn params(&self, settings: ResolveSettings) -> ResolveParams {
+        let p = projection(self.width as f32 / self.height as f32);
+        ResolveParams {
+            settings,
+            projection: DepthProjection {
+                p22: p[10] as f64,
+                p23: p[14] as f64,
+                zero_to_one: false,
+                clear_depth: 1.0,
+            },
+            fov_y: FOV_Y as f64,
+            height_px: self.height,
+        }
+    }
+
+    fn destroy(self, gl: &glow::Context) {
+        self.fbo.destroy(gl);
+        for t in [self.color, self.position, self.normal, self.depth] {
+            t.destroy(gl);
+        }
+        self.program.destroy(gl);
+        self.vao.destroy(gl);
+        self.vbo.destroy(gl);
+    }
+}
+
+/// The hardware resolve of the three colour attachments: one blit each.
+fn blit_resolve(gl: &glow::Context, twin: glow::Framebuffer, host: &Host) {
+    let (w, h) = (host.width as i32, host.height as i32);
+    unsafe {
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(twin));
+        gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(host.fbo.raw));
+        for k in 0..3 {
+            gl.read_buffer(glow::COLOR_ATTACHMENT0 + k);
+            gl.draw_buffers(&[glow::COLOR_ATTACHMENT0 + k]);
+            gl.blit_framebuffer(
+                0,
+                0,
+                w,
+                h,
+                0,
+                0,
+                w,
+                h,
+                glow::COLOR_BUFFER_BIT,
+                glow::NEAREST,
+            );
+        }
+        // Put both framebuffers' mappings back as their owners set them.
+        gl.draw_buffers(&[
+            glow::COLOR_ATTACHMENT0,
+            glow::COLOR_ATTACHMENT1,
+            glow::COLOR_ATTACHMENT2,
+        ]);
+        gl.read_buffer(glow::COLOR_ATTACHMENT0);
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+    }
+}
+
+/// A full-screen triangle writing constants into the host's three attachments.
+fn trivial_pass(gl: &glow::Context, program: &Program, vao: &VertexArray, host: &Host) {
+    unsafe {
+        host.fbo.bind(gl);
+        gl.disable(glow::DEPTH_TEST);
+        gl.disable(glow::BLEND);
+        program.bind(gl);
+        vao.bind(gl);
+        gl.draw_arrays(glow::TRIANGLES, 0, 3);
+        gl.bind_vertex_array(None);
+        gl.use_program(None);
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+    }
+}
+
+/// Pixels whose samples differ: by the resolve's own test (the depth key,
+/// through the CPU reference) and by the raw depth-buffer samples.
+struct Complexity {
+    pixels: u64,
+    complex_key: u64,
+    complex_depth: u64,
+}
+
+fn count_complex(
+    gl: &glow::Context,
+    msaa: &MsaaRetrofit,
+    params: &ResolveParams,
+) -> deferred_msaa::Result<Complexity> {
+    let mut readback = Readback::new(gl)?;
+    let (depth_ref, color_refs) = msaa.inputs()?;
+    let read = (|| {
+        let colors = color_refs
+            .iter()
+            .map(|t| readback.read(gl, *t, 1))
+            .collect::<deferred_msaa::Result<Vec<_>>>()?;
+        let depth = readback.read(gl, depth_ref, 1)?;
+        Ok::<_, deferred_msaa::Error>((colors, depth))
+    })();
+    readback.destroy(gl);
+    let (colors, depth) = read?;
+    let cpu = CpuResolve {
+        settings: params.settings,
+        rules: msaa.rules().to_vec(),
+        key_source: CpuKeySource::Position(1),
+        clear_depth: params.projection.clear_depth,
+        footprint: params.footprint(),
+    };
+    let n = depth.samples;
+    let mut c = Complexity {
+        pixels: 0,
+        complex_key: 0,
+        complex_depth: 0,
+    };
+    for y in 0..depth.height {
+        for x in 0..depth.width {
+            let px = PixelSamples {
+                depth: (0..n).map(|s| depth.get(s, x, y)[0] as f64).collect(),
+                attachments: colors
+                    .iter()
+                    .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
+                    .collect(),
+            };
+            c.pixels += 1;
+            c.complex_key += cpu.resolve_pixel(&px).complex as u64;
+            c.complex_depth +=
+                px.depth
+                    .iter()
+                    .any(|d| d.to_bits() != px.depth[0].to_bits()) as u64;
+        }
+    }
+    Ok(c)
+}
+
+/// Quantile `q` of sorted data, linear between order statistics.
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let pos = q * (sorted.len() - 1) as f64;
+    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
+    sorted[lo] + (sorted[hi] - sorted[lo]) * (pos - lo as f64)
+}
+
+struct Stats {
+    median: f64,
+    q1: f64,
+    q3: f64,
+    min: f64,
+    max: f64,
+}
+
+fn stats(times: &[f64]) -> Stats {
+    let mut s = times.to_vec();
+    s.sort_by(f64::total_cmp);
+    Stats {
+        median: quantile(&s, 0.5),
+        q1: quantile(&s, 0.25),
+        q3: quantile(&s, 0.75),
+        min: s.first().copied().unwrap_or(f64::NAN),
+        max: s.last().copied().unwrap_or(f64::NAN),
+    }
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Method {
+    ResolveFast,
+    ResolveNoFast,
+    Blit,
+    Trivial,
+}
+
+impl Method {
+    const ALL: [Method; 4] = [
+        Method::ResolveFast,
+        Method::ResolveNoFast,
+        Method::Blit,
+        Method::Trivial,
+    ];
+    fn key(self) -> &'static str {
+        match self {
+            Method::ResolveFast => "resolve_median_smooth_fast",
+            Method::ResolveNoFast => "resolve_median_smooth_nofast",
+            Method::Blit => "blit_x3",
+            Method::Trivial => "fullscreen_trivial",
+        }
+    }
+    fn label(self) -> &'static str {
+        match self {
+            Method::ResolveFast => "resolve median smooth, fast path on",
+            Method::ResolveNoFast => "resolve median smooth, fast path off",
+            Method::Blit => "3x glBlitFramebuffer (hardware resolve)",
+            Method::Trivial => "trivial full-screen pass (3 outputs)",
+        }
+    }
+}
+
+fn target_dir() -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target"))
+}
+
+fn run(args: &Args) -> Result<(), String> {
+    Backend::Egl.check_library().map_err(|e| e.to_string())?;
+    let ctx = HeadlessContext::new(Backend::Egl).map_err(|e| format!("EGL context: {e}"))?;
+    let gl = ctx.gl();
+    let version = ctx.version();
+    let e = |e: deferred_msaa::Error| e.to_string();
+
+    let host = Host::new(gl, args).map_err(e)?;
+    let options = RetrofitOptions {
+        samples: args.samples,
+        rules: vec![(2, ResolveRule::BlendNormal)],
+        position_attachment: Some(1),
+    };
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &options).map_err(e)?;
+    let samples = msaa.samples();
+    let twin = msaa.framebuffer();
+
+    // The host's geometry pass, once, into the multisampled twin.
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(twin)) };
+    host.draw(gl);
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, None) };
+    check_error(gl, "drawing the scene").map_err(e)?;
+
+    let fast = host.params(ResolveSettings::default());
+    let nofast = host.params(ResolveSettings {
+        fast_path: false,
+        ..ResolveSettings::default()
+    });
+    let complexity = count_complex(gl, &msaa, &fast).map_err(e)?;
+
+    let trivial = Program::build(
+        gl,
+        "trivial full-screen pass",
+        &preamble(&[], &[]),
+        &[
+            (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
+            (ShaderStage::Fragment, "trivial.frag", TRIVIAL_FRAG),
+        ],
+        &[("o_color", 0), ("o_position", 1), ("o_normal", 2)],
+    )
+    .map_err(e)?;
+    let empty_vao = VertexArray::new(gl, "trivial pass vao").map_err(e)?;
+    // Every run is timed twice at once: a GL_TIME_ELAPSED query (where the
+    // context has one) inside a glFinish-bracketed wall clock.
+    let mut wall = GpuTimer::new(gl, true).map_err(e)?;
+    let query = GpuTimer::new(gl, false).map_err(e)?;
+    let mut query = match query.kind() {
+        TimerKind::GlTimeElapsed => Some(query),
+        TimerKind::FinishWallClock => {
+            query.destroy(gl);
+            None
+        }
+    };
+    let software = ["llvmpipe", "softpipe", "swrast", "lavapipe"]
+        .iter()
+        .any(|name| version.renderer.to_lowercase().contains(name));
+    let (primary, reason) = match (args.timer, query.is_some()) {
+        (TimerChoice::Wall, _) => (TimerKind::FinishWallClock, "asked for with --timer wall"),
+        (TimerChoice::Query, true) => (TimerKind::GlTimeElapsed, "asked for with --timer query"),
+        (TimerChoice::Query, false) => {
+            return Err("--timer query: this context has no GL_TIME_ELAPSED queries".into());
+        }
+        (TimerChoice::Auto, false) => (
+            TimerKind::FinishWallClock,
+            "the context has no GL_TIME_ELAPSED queries",
+        ),
+        (TimerChoice::Auto, true) if software => (
+            TimerKind::FinishWallClock,
+            "software renderer: llvmpipe's GL_TIME_ELAPSED restarts at every tile a thread \
+             rasterises, so it spans only the last tiles, not the pass",
+        ),
+        (TimerChoice::Auto, true) => (TimerKind::GlTimeElapsed, "the context has GL_TIME_ELAPSED"),
+    };
+
+    let mut once = |m: Method| -> deferred_msaa::Result<(f64, Option<f64>)> {
+        wall.begin(gl);
+        if let Some(q) = query.as_mut() {
+            q.begin(gl);
+        }
+        match m {
+            Method::ResolveFast => msaa.resolve(gl, &fast)?,
+            Method::ResolveNoFast => msaa.resolve(gl, &nofast)?,
+            Method::Blit => blit_resolve(gl, twin, &host),
+            Method::Trivial => trivial_pass(gl, &trivial, &empty_vao, &host),
+        }
+        let q_ms = query.as_mut().map(|q| q.end(gl));
+        let w_ms = wall.end(gl);
+        check_error(gl, m.label())?;
+        Ok((w_ms, q_ms))
+    };
+
+    // Warm-up (compiles the resolve permutations too), then K interleaved
+    // rounds; each round starts one method later, so none always goes first.
+    for _ in 0..args.warmup {
+        for m in Method::ALL {
+            once(m).map_err(e)?;
+        }
+    }
+    let mut wall_ms: Vec<Vec<f64>> = vec![Vec::with_capacity(args.runs); Method::ALL.len()];
+    let mut query_ms: Vec<Vec<f64>> = vec![Vec::with_capacity(args.runs); Method::ALL.len()];
+    for round in 0..args.runs {
+        for i in 0..Method::ALL.len() {
+            let k = (round + i) % Method::ALL.len();
+            let (w, q) = once(Method::ALL[k]).map_err(e)?;
+            wall_ms[k].push(w);
+            if let Some(q) = q {
+                query_ms[k].push(q);
+            }
+        }
+    }
+    let have_query = query.is_some();
+    wall.destroy(gl);
+    if let Some(q) = query {
+        q.destroy(gl);
+    }
+    trivial.destroy(gl);
+    empty_vao.destroy(gl);
+    msaa.destroy(gl);
+    host.destroy(gl);
+
+    // Report: the primary timer's table and ratios, then the other timer's.
+    let (primary_ms, secondary_ms) = match primary {
+        TimerKind::FinishWallClock => (&wall_ms, have_query.then_some(&query_ms)),
+        TimerKind::GlTimeElapsed => (&query_ms, Some(&wall_ms)),
+    };
+    let secondary = match primary {
+        TimerKind::FinishWallClock => TimerKind::GlTimeElapsed,
+        TimerKind::GlTimeElapsed => TimerKind::FinishWallClock,
+    };
+    let primary_stats: Vec<Stats> = primary_ms.iter().map(|t| stats(t)).collect();
+    let secondary_stats: Option<Vec<Stats>> =
+        secondary_ms.map(|all| all.iter().map(|t| stats(t)).collect());
+    let ratios = |st: &[Stats]| {
+        let median = |m: Method| st[Method::ALL.iter().position(|x| *x == m).unwrap_or(0)].median;
+        let blit = median(Method::Blit);
+        (
+            median(Method::ResolveFast) / blit,
+            median(Method::ResolveNoFast) / blit,
+        )
+    };
+    let (ratio_fast, ratio_nofast) = ratios(&primary_stats);
+    let frac = |n: u64| n as f64 / complexity.pixels.max(1) as f64;
+    let describe = |k: TimerKind| match k {
+        TimerKind::GlTimeElapsed => "GL_TIME_ELAPSED query",
+        TimerKind::FinishWallClock => "wall time between glFinish calls",
+    };
+
+    println!(
+        "resolve_vs_blit: {}x{}, {}x MSAA (requested {}), G-buffer 3x RGBA16F + DEPTH32F, {} triangles + background",
+        args.width, args.height, samples, args.samples, args.triangles
+    );
+    println!(
+        "context: EGL, {} | GL {} | GLSL {}",
+        version.renderer, version.version_string, version.glsl_string
+    );
+    println!(
+        "timer: {} ({}); why: {reason}",
+        primary.name(),
+        describe(primary)
+    );
+    println!(
+        "complex pixels: {:.2}% ({} of {}; depth keys differ across samples, the fast path's test, via resolve::cpu)",
+        100.0 * frac(complexity.complex_key),
+        complexity.complex_key,
+        complexity.pixels
+    );
+    println!(
+        "                {:.2}% ({}; raw depth-buffer samples differ, tilted interiors included)",
+        100.0 * frac(complexity.complex_depth),
+        complexity.complex_depth
+    );
+    println!(
+        "{} warm-up rounds, then {} runs per method, interleaved round-robin",
+        args.warmup, args.runs
+    );
+    print_table(&primary_stats);
+    println!("ratio resolve/blit (medians, fast path on):  {ratio_fast:.3}");
+    println!("ratio resolve/blit (medians, fast path off): {ratio_nofast:.3}");
+    if let Some(st) = &secondary_stats {
+        let (f, n) = ratios(st);
+        println!(
+            "for comparison, the same runs by {} ({}):",
+            secondary.name(),
+            describe(secondary)
+        );
+        print_table(st);
+        println!("  ratios resolve/blit: fast path on {f:.3}, off {n:.3}");
+    }
+
+    let methods_json = |st: &[Stats], all: &[Vec<f64>]| -> Vec<serde_json::Value> {
+        Method::ALL
+            .iter()
+            .zip(st)
+            .zip(all)
+            .map(|((m, s), t)| {
+                serde_json::json!({
+                    "method": m.key(),
+                    "label": m.label(),
+                    "median_ms": s.median,
+                    "q1_ms": s.q1,
+                    "q3_ms": s.q3,
+                    "iqr_ms": s.q3 - s.q1,
+                    "min_ms": s.min,
+                    "max_ms": s.max,
+                    "runs_ms": t,
+                })
+            })
+            .collect()
+    };
+    let secondary_json = match (&secondary_stats, secondary_ms) {
+        (Some(st), Some(all)) => {
+            let (f, n) = ratios(st);
+            serde_json::json!({
+                "timer": secondary.name(),
+                "methods": methods_json(st, all),
+                "ratio_resolve_fast_over_blit": f,
+                "ratio_resolve_nofast_over_blit": n,
+            })
+        }
+        _ => serde_json::Value::Null,
+    };
+    let report = serde_json::json!({
+        "renderer": version.renderer,
+        "gl_version": version.version_string,
+        "glsl_version": version.glsl_string,
+        "backend": "egl",
+        "width": args.width,
+        "height": args.height,
+        "samples_requested": args.samples,
+        "samples": samples,
+        "gbuffer": ["RGBA16F color", "RGBA16F position", "RGBA16F normal", "DEPTH32F"],
+        "triangles": args.triangles,
+        "seed": args.seed,
+        "pixels": complexity.pixels,
+        "complex_pixels": complexity.complex_key,
+        "complex_fraction": frac(complexity.complex_key),
+        "depth_differs_pixels": complexity.complex_depth,
+        "depth_differs_fraction": frac(complexity.complex_depth),
+        "timer": primary.name(),
+        "timer_reason": reason,
+        "warmup": args.warmup,
+        "runs": args.runs,
+        "methods": methods_json(&primary_stats, primary_ms),
+        "ratio_resolve_fast_over_blit": ratio_fast,
+        "ratio_resolve_nofast_over_blit": ratio_nofast,
+        "other_timer": secondary_json,
+    });
+    let dir = target_dir();
+    let path = dir.join("resolve_vs_blit.json");
+    let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(&dir)
+        .and_then(|()| std::fs::write(&path, text + "\n"))
+        .map_err(|e| format!("writing {}: {e}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+fn print_table(st: &[Stats]) {
+    println!(
+        "  {:<40} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "method", "median ms", "q1", "q3", "IQR", "min", "max"
+    );
+    for (m, s) in Method::ALL.iter().zip(st) {
+        println!(
+            "  {:<40} {:>9.3} {:>8.3} {:>8.3} {:>8.3} {:>8.3} {:>8.3}",
+            m.label(),
+            s.median,
+            s.q1,
+            s.q3,
+            s.q3 - s.q1,
+            s.min,
+            s.max
+        );
+    }
+}
+
+fn main() -> ExitCode {
+    let args = match parse_args() {
+        Ok(a) => a,
+        Err(msg) => {
+            eprintln!("resolve_vs_blit: {msg}");
+            return ExitCode::from(2);
+        }
+    };
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(msg) => {
+            eprintln!("resolve_vs_blit: {msg}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,61 @@
+//! The FXAA-style post filter (`shaders_glsl/fxaa.frag`): luma-based edge
+//! smoothing of the tonemapped image into a second RGBA8 target.
+
+use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
+use super::targets::ColorTarget;
+use crate::Result;
+use crate::gl::{Program, Texture2d, VertexArray, check_error};
+use glow::HasContext;
+
+/// The filter's body.
+pub(crate) const FXAA_FRAG: &str = include_str!("../../shaders_glsl/fxaa.frag");
+
+/// The filter program.
+#[derive(Debug)]
+pub(crate) struct FxaaPass {
+    program: Program,
+}
+
+impl FxaaPass {
+    /// Build the program.
+    pub(crate) fn new(gl: &glow::Context) -> Result<Self> {
+        let program = fullscreen_program(gl, "fxaa", "fxaa.frag", FXAA_FRAG, &[], "o_color")?;
+        Ok(FxaaPass { program })
+    }
+
+    /// Filter `ldr` (linearly filtered, clamped) into `target`.
+    pub(crate) fn draw(
+        &self,
+        gl: &glow::Context,
+        target: &ColorTarget,
+        vao: &VertexArray,
+        ldr: &Texture2d,
+    ) -> Result<()> {
+        bind_target(
+            gl,
+            target.fbo.raw,
+            target.texture.width,
+            target.texture.height,
+        );
+        fullscreen_state(gl);
+        unsafe {
+            gl.active_texture(glow::TEXTURE0);
+            gl.bind_texture(glow::TEXTURE_2D, Some(ldr.raw));
+        }
+        let p = &self.program;
+        p.bind(gl);
+        p.set_i32(gl, "u_ldr", 0);
+        p.set_vec2(
+            gl,
+            "u_texel",
+            [1.0 / ldr.width as f32, 1.0 / ldr.height as f32],
+        );
+        draw_fullscreen(gl, vao);
+        check_error(gl, "the FXAA pass")
+    }
+
+    /// Free the program.
+    pub(crate) fn destroy(self, gl: &glow::Context) {
+        self.program.destroy(gl);
+    }
+}

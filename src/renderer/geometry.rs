@@ -1,0 +1,138 @@
+//! The G-buffer pass (`shaders_glsl/geometry.vert` + `geometry.frag`):
+//! opaque and alpha-tested objects into the G-buffer. Program and state are
+//! the same with and without MSAA; only the bound framebuffer differs (the
+//! retrofit's multisampled twin, or the single-sample G-buffer).
+
+use super::GBufferSlots;
+use super::mesh::{
+    AttribLocations, BASE_TEXTURE_UNIT, EMISSIVE_TEXTURE_UNIT, GpuScene, set_culling,
+};
+use super::pass::bind_target;
+use crate::Result;
+use crate::gl::{Program, ShaderStage, check_error, preamble};
+use glam::{DMat4, Mat4};
+use glow::HasContext;
+
+/// The model vertex shader's body (shared with the transparent pass).
+pub(crate) const GEOMETRY_VERT: &str = include_str!("../../shaders_glsl/geometry.vert");
+/// The model fragment shader's body.
+pub(crate) const GEOMETRY_FRAG: &str = include_str!("../../shaders_glsl/geometry.frag");
+
+/// The model program, its outputs bound to the layout's attachment numbers.
+#[derive(Debug)]
+pub(crate) struct GeometryPass {
+    program: Program,
+    slots: GBufferSlots,
+    locations: AttribLocations,
+}
+
+/// Where a G-buffer pass draws.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct GeometryTarget {
+    /// The framebuffer.
+    pub(crate) fbo: glow::Framebuffer,
+    /// Its width.
+    pub(crate) width: u32,
+    /// Its height.
+    pub(crate) height: u32,
+}
+
+impl GeometryPass {
+    /// Build the program with `o_color`, `o_position`, … bound to `slots`.
+    pub(crate) fn new(gl: &glow::Context, slots: GBufferSlots) -> Result<Self> {
+        let program = Program::build(
+            gl,
+            "geometry",
+            &Self::preamble(),
+            &[
+                (ShaderStage::Vertex, "geometry.vert", GEOMETRY_VERT),
+                (ShaderStage::Fragment, "geometry.frag", GEOMETRY_FRAG),
+            ],
+            &[
+                ("o_color", slots.color),
+                ("o_position", slots.position),
+                ("o_normal", slots.normal),
+                ("o_specular", slots.specular),
+                ("o_emissive", slots.emissive),
+            ],
+        )?;
+        let locations = AttribLocations::of(gl, &program);
+        Ok(GeometryPass {
+            program,
+            slots,
+            locations,
+        })
+    }
+
+    fn preamble() -> String {
+        preamble(&[], &[])
+    }
+
+    /// The fragment shader's full source as compiled.
+    pub(crate) fn fragment_source() -> String {
+        format!("{}{GEOMETRY_FRAG}", Self::preamble())
+    }
+
+    /// The attachment numbers the outputs are bound to.
+    pub(crate) fn slots(&self) -> GBufferSlots {
+        self.slots
+    }
+
+    /// Clear `target` (colour 0, depth 1.0).
+    pub(crate) fn clear(gl: &glow::Context, target: GeometryTarget) {
+        bind_target(gl, target.fbo, target.width, target.height);
+        unsafe {
+            gl.disable(glow::SCISSOR_TEST);
+            gl.color_mask(true, true, true, true);
+            gl.depth_mask(true);
+            gl.clear_color(0.0, 0.0, 0.0, 0.0);
+            gl.clear_depth_f64(1.0);
+            gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
+        }
+    }
+
+    /// Draw the scene's opaque and alpha-tested objects into `target`
+    /// (depth test LESS, depth written, back faces culled unless double-sided).
+    pub(crate) fn draw(
+        &self,
+        gl: &glow::Context,
+        target: GeometryTarget,
+        scene: &GpuScene,
+        view: &DMat4,
+        projection: &Mat4,
+    ) -> Result<()> {
+        bind_target(gl, target.fbo, target.width, target.height);
+        unsafe {
+            gl.enable(glow::DEPTH_TEST);
+            gl.depth_func(glow::LESS);
+            gl.depth_mask(true);
+            gl.disable(glow::BLEND);
+            gl.disable(glow::SCISSOR_TEST);
+            gl.disable(glow::STENCIL_TEST);
+            gl.disable(glow::FRAMEBUFFER_SRGB);
+            gl.disable(glow::SAMPLE_ALPHA_TO_COVERAGE);
+            gl.enable(glow::MULTISAMPLE);
+            gl.color_mask(true, true, true, true);
+        }
+        let p = &self.program;
+        p.bind(gl);
+        p.set_mat4(gl, "u_projection", &projection.to_cols_array());
+        p.set_i32(gl, "u_base_texture", BASE_TEXTURE_UNIT as i32);
+        p.set_i32(gl, "u_emissive_texture", EMISSIVE_TEXTURE_UNIT as i32);
+        for item in &scene.gbuffer_items {
+            let (model_view, normal) = item.matrices(view);
+            p.set_mat4(gl, "u_model_view", &model_view);
+            p.set_mat4(gl, "u_normal_matrix", &normal);
+            scene.bind_material(gl, p, &item.material);
+            set_culling(gl, &item.material);
+            scene.meshes[item.mesh].draw(gl, self.locations);
+        }
+        unsafe { gl.bind_vertex_array(None) };
+        check_error(gl, "the G-buffer pass")
+    }
+
+    /// Free the program.
+    pub(crate) fn destroy(self, gl: &glow::Context) {
+        self.program.destroy(gl);
+    }
+}

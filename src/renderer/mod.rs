@@ -1,0 +1,920 @@
+//! A small deferred renderer that mirrors FreeSpace Open's frame (DESIGN.md
+//! section 2), for demos, tests and benchmarks.
+//!
+//! It is written as a *host* of the retrofit: it owns an ordinary
+//! single-sample [`GBuffer`] like any engine, and multisampling comes only
+//! through [`MsaaRetrofit`] on that G-buffer's framebuffer — the two-line
+//! integration. With [`AaMode::None`] the G-buffer pass draws straight into
+//! the G-buffer; with [`AaMode::Resolve`] it draws into the retrofit's
+//! multisampled twin, which [`MsaaRetrofit::resolve`] then writes back into
+//! the G-buffer's own textures. Nothing else changes: the model shaders and
+//! the lighting shader are the same either way.
+//!
+//! # The frame ([`Renderer::render`])
+//!
+//! 1. **Clear** the G-buffer pass's framebuffer (colour 0, depth 1.0).
+//! 2. **Background**, drawn single-sampled into its own RGBA16F texture
+//!    (`background.frag`), then **copied** into the emissive attachment of
+//!    that framebuffer by a full-screen pass that writes every sample
+//!    (`background_copy.frag`; a blit cannot write a multisampled target).
+//! 3. **G-buffer pass** (`geometry.vert` + `geometry.frag`): opaque and
+//!    alpha-tested objects; depth test LESS, standard GL depth (−1..1).
+//! 4. **Resolve** ([`MsaaRetrofit::resolve`]) into the G-buffer's textures,
+//!    when multisampling.
+//! 5. **Decal hook** ([`Renderer::set_decal_hook`]) with the resolved
+//!    G-buffer bound.
+//! 6. **Lighting** (`lighting.frag`): per pixel, from the resolved G-buffer,
+//!    into an RGBA16F HDR target; background pixels (depth = clear depth)
+//!    get their emissive value only.
+//! 7. **Transparent objects** (`transparent.frag`), forward, single-sampled,
+//!    alpha-blended, depth-tested against the resolved depth without writing it.
+//! 8. **Tonemap** (`tonemap.frag`) into an RGBA8 sRGB-encoded image.
+//! 9. **FXAA** (`fxaa.frag`), optional, into a second RGBA8 image.
+//!
+//! Each pass sets all the GL state it relies on.
+
+mod background;
+mod background_copy;
+mod fxaa;
+mod geometry;
+mod lighting;
+mod mesh;
+mod pass;
+mod targets;
+mod tonemap;
+mod transparent;
+
+use crate::gbuffer::{GBuffer, GBufferLayout};
+use crate::gl::{
+    Attachment, Framebuffer, GpuTimer, Texture2d, TextureRef, TimerKind, VertexArray, check_error,
+    framebuffer_status_name,
+};
+use crate::resolve::{DepthProjection, KeySource, ResolveParams, ResolveSettings};
+use crate::retrofit::{MsaaRetrofit, RetrofitOptions};
+use crate::scene::{Background, Camera, Light, Scene};
+use crate::{Error, Result};
+use background::BackgroundPass;
+use background_copy::{BackgroundCopyPass, CopyTarget};
+use fxaa::FxaaPass;
+use geometry::{GeometryPass, GeometryTarget};
+use glam::Mat4;
+use glow::HasContext;
+use lighting::{LightingPass, light_batches};
+use mesh::GpuScene;
+use targets::Targets;
+use tonemap::TonemapPass;
+use transparent::TransparentPass;
+
+/// How the G-buffer is anti-aliased.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AaMode {
+    /// No multisampling: the G-buffer pass draws into the single-sample
+    /// G-buffer (method `none`).
+    None,
+    /// The G-buffer pass draws into the retrofit's multisampled twin, which
+    /// the depth-aware resolve writes back into the G-buffer.
+    Resolve(ResolveSettings),
+}
+
+impl AaMode {
+    /// `none`, or the resolve method's name (`average`, `front`, `median`, `back`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            AaMode::None => "none",
+            AaMode::Resolve(s) => s.method.name(),
+        }
+    }
+
+    /// The resolve settings, when multisampling.
+    pub fn settings(&self) -> Option<ResolveSettings> {
+        match self {
+            AaMode::None => None,
+            AaMode::Resolve(s) => Some(*s),
+        }
+    }
+}
+
+/// What to render at which size and how.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Requested samples per pixel with [`AaMode::Resolve`] (the driver's
+    /// real count is used; see [`Renderer::samples`]). Ignored with [`AaMode::None`].
+    pub samples: u32,
+    /// Anti-aliasing of the G-buffer.
+    pub aa: AaMode,
+    /// Run the FXAA-style post filter after tonemapping.
+    pub fxaa: bool,
+    /// The G-buffer layout. It must have colour attachments named `color`,
+    /// `position`, `normal`, `specular` and `emissive` (in any order; others
+    /// are allowed and left cleared). Default: [`GBufferLayout::recommended`].
+    pub layout: GBufferLayout,
+}
+
+impl Default for RenderOptions {
+    /// 640×360, 4x MSAA with the default (median, smooth) resolve, no FXAA,
+    /// the recommended layout.
+    fn default() -> Self {
+        RenderOptions {
+            width: 640,
+            height: 360,
+            samples: 4,
+            aa: AaMode::Resolve(ResolveSettings::default()),
+            fxaa: false,
+            layout: GBufferLayout::recommended(),
+        }
+    }
+}
+
+impl RenderOptions {
+    /// Check sizes, sample count, resolve settings and the layout.
+    pub fn validate(&self) -> Result<()> {
+        if self.width == 0 || self.height == 0 {
+            return Err(Error::invalid(format!(
+                "the image size must be at least 1x1, got {}x{}",
+                self.width, self.height
+            )));
+        }
+        if let AaMode::Resolve(settings) = &self.aa {
+            if self.samples == 0 {
+                return Err(Error::invalid(
+                    "a sample count of 0 is not a count; use 1 or more (or the `none` method)",
+                ));
+            }
+            settings.validate()?;
+        }
+        self.layout.validate()?;
+        GBufferSlots::of(&self.layout).map(|_| ())
+    }
+
+    /// The retrofit options for this layout and sample count: each
+    /// attachment's rule, and the position attachment as the depth key.
+    fn retrofit_options(&self) -> RetrofitOptions {
+        RetrofitOptions {
+            samples: self.samples,
+            rules: self
+                .layout
+                .colors
+                .iter()
+                .enumerate()
+                .map(|(k, a)| (k as u32, a.rule))
+                .collect(),
+            position_attachment: match self.layout.key {
+                KeySource::Position(k) => Some(k as u32),
+                KeySource::Depth => None,
+            },
+        }
+    }
+}
+
+/// The colour attachment numbers of the attachments the renderer writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct GBufferSlots {
+    pub(crate) color: u32,
+    pub(crate) position: u32,
+    pub(crate) normal: u32,
+    pub(crate) specular: u32,
+    pub(crate) emissive: u32,
+}
+
+impl GBufferSlots {
+    fn of(layout: &GBufferLayout) -> Result<Self> {
+        let find = |name: &str| {
+            layout.index_of(name).map(|k| k as u32).ok_or_else(|| {
+                Error::Layout(format!(
+                    "the renderer writes an attachment named `{name}`, which this layout lacks (it has: {})",
+                    layout
+                        .colors
+                        .iter()
+                        .map(|a| a.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })
+        };
+        Ok(GBufferSlots {
+            color: find("color")?,
+            position: find("position")?,
+            normal: find("normal")?,
+            specular: find("specular")?,
+            emissive: find("emissive")?,
+        })
+    }
+}
+
+/// Where one frame's time went, in milliseconds, measured pass by pass with
+/// [`GpuTimer`] (`total_ms` is the sum).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct FrameTimings {
+    /// The whole frame.
+    pub total_ms: f64,
+    /// Clear, background, background copy and the G-buffer pass.
+    pub geometry_ms: f64,
+    /// The resolve (0 without multisampling).
+    pub resolve_ms: f64,
+    /// The decal hook (0 without one).
+    pub decal_ms: f64,
+    /// Deferred lighting.
+    pub lighting_ms: f64,
+    /// Forward transparent objects.
+    pub transparent_ms: f64,
+    /// Tonemapping.
+    pub tonemap_ms: f64,
+    /// The FXAA pass (0 when off).
+    pub fxaa_ms: f64,
+    /// How the times were measured.
+    pub timer: TimerKind,
+}
+
+/// A decal hook; see [`Renderer::set_decal_hook`].
+pub type DecalHook = Box<dyn FnMut(&glow::Context, &GBuffer)>;
+
+/// Programs, the full-screen vertex array and the timer: built once.
+#[derive(Debug)]
+struct Passes {
+    background: BackgroundPass,
+    background_copy: BackgroundCopyPass,
+    geometry: GeometryPass,
+    lighting: LightingPass,
+    transparent: TransparentPass,
+    tonemap: TonemapPass,
+    fxaa: FxaaPass,
+    fullscreen: VertexArray,
+    timer: GpuTimer,
+}
+
+impl Passes {
+    fn new(gl: &glow::Context, slots: GBufferSlots) -> Result<Self> {
+        // On failure, free what was built so far.
+        macro_rules! step {
+            ($e:expr $(, $built:ident)*) => {
+                match $e {
+                    Ok(v) => v,
+                    Err(e) => {
+                        $( $built.destroy(gl); )*
+                        return Err(e);
+                    }
+                }
+            };
+        }
+        let background = BackgroundPass::new(gl)?;
+        let background_copy = step!(BackgroundCopyPass::new(gl), background);
+        let geometry = step!(GeometryPass::new(gl, slots), background, background_copy);
+        let lighting = step!(LightingPass::new(gl), background, background_copy, geometry);
+        let transparent = step!(
+            TransparentPass::new(gl),
+            background,
+            background_copy,
+            geometry,
+            lighting
+        );
+        let tonemap = step!(
+            TonemapPass::new(gl),
+            background,
+            background_copy,
+            geometry,
+            lighting,
+            transparent
+        );
+        let fxaa = step!(
+            FxaaPass::new(gl),
+            background,
+            background_copy,
+            geometry,
+            lighting,
+            transparent,
+            tonemap
+        );
+        let fullscreen = step!(
+            VertexArray::new(gl, "renderer full-screen triangle"),
+            background,
+            background_copy,
+            geometry,
+            lighting,
+            transparent,
+            tonemap,
+            fxaa
+        );
+        let timer = step!(
+            GpuTimer::new(gl, false),
+            background,
+            background_copy,
+            geometry,
+            lighting,
+            transparent,
+            tonemap,
+            fxaa,
+            fullscreen
+        );
+        Ok(Passes {
+            background,
+            background_copy,
+            geometry,
+            lighting,
+            transparent,
+            tonemap,
+            fxaa,
+            fullscreen,
+            timer,
+        })
+    }
+
+    fn destroy(self, gl: &glow::Context) {
+        self.background.destroy(gl);
+        self.background_copy.destroy(gl);
+        self.geometry.destroy(gl);
+        self.lighting.destroy(gl);
+        self.transparent.destroy(gl);
+        self.tonemap.destroy(gl);
+        self.fxaa.destroy(gl);
+        self.fullscreen.destroy(gl);
+        self.timer.destroy(gl);
+    }
+}
+
+/// The size- and layout-dependent resources: the host G-buffer, the
+/// retrofit on it, and the other targets.
+#[derive(Debug)]
+struct Frame {
+    gbuffer: GBuffer,
+    retrofit: Option<MsaaRetrofit>,
+    targets: Targets,
+}
+
+impl Frame {
+    fn new(gl: &glow::Context, options: &RenderOptions) -> Result<Self> {
+        let gbuffer = GBuffer::new(gl, &options.layout, options.width, options.height)?;
+        let retrofit = match options.aa {
+            AaMode::None => None,
+            AaMode::Resolve(_) => {
+                match MsaaRetrofit::new(gl, gbuffer.fbo.raw, &options.retrofit_options()) {
+                    Ok(r) => Some(r),
+                    Err(e) => {
+                        gbuffer.destroy(gl);
+                        return Err(e);
+                    }
+                }
+            }
+        };
+        match Targets::new(gl, &gbuffer.depth, options.fxaa) {
+            Ok(targets) => Ok(Frame {
+                gbuffer,
+                retrofit,
+                targets,
+            }),
+            Err(e) => {
+                if let Some(r) = retrofit {
+                    r.destroy(gl);
+                }
+                gbuffer.destroy(gl);
+                Err(e)
+            }
+        }
+    }
+
+    fn destroy(self, gl: &glow::Context) {
+        if let Some(r) = self.retrofit {
+            r.destroy(gl);
+        }
+        self.targets.destroy(gl);
+        self.gbuffer.destroy(gl);
+    }
+}
+
+/// Allocate single-sample textures for `layout` at `width`×`height`
+/// (labelled as [`GBuffer::new`] labels them).
+fn allocate_gbuffer_textures(
+    gl: &glow::Context,
+    layout: &GBufferLayout,
+    width: u32,
+    height: u32,
+) -> Result<(Vec<Texture2d>, Texture2d)> {
+    let mut colors = Vec::with_capacity(layout.colors.len());
+    for a in &layout.colors {
+        match Texture2d::new(gl, &format!("gbuffer {}", a.name), a.format, width, height) {
+            Ok(t) => colors.push(t),
+            Err(e) => {
+                free_textures(gl, colors, None);
+                return Err(e);
+            }
+        }
+    }
+    match Texture2d::new(gl, "gbuffer depth", layout.depth, width, height) {
+        Ok(depth) => Ok((colors, depth)),
+        Err(e) => {
+            free_textures(gl, colors, None);
+            Err(e)
+        }
+    }
+}
+
+fn free_textures(gl: &glow::Context, colors: Vec<Texture2d>, depth: Option<Texture2d>) {
+    for t in colors {
+        t.destroy(gl);
+    }
+    if let Some(t) = depth {
+        t.destroy(gl);
+    }
+}
+
+/// Attach `colors` (colour `k` at `GL_COLOR_ATTACHMENTk`) and `depth` to the
+/// existing framebuffer `fbo`, as an engine does when it re-allocates its
+/// G-buffer on resize, and check completeness.
+fn attach_gbuffer_textures(
+    gl: &glow::Context,
+    fbo: &mut Framebuffer,
+    colors: &[Texture2d],
+    depth: &Texture2d,
+) -> Result<()> {
+    let mut attachments: Vec<(Attachment, TextureRef)> = colors
+        .iter()
+        .enumerate()
+        .map(|(k, t)| (Attachment::Color(k as u32), TextureRef::from(t)))
+        .collect();
+    attachments.push((
+        Attachment::for_depth_format(depth.format),
+        TextureRef::from(depth),
+    ));
+    let status = unsafe {
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo.raw));
+        for (point, texture) in &attachments {
+            gl.framebuffer_texture_2d(
+                glow::FRAMEBUFFER,
+                point.gl_enum(),
+                glow::TEXTURE_2D,
+                Some(texture.raw),
+                0,
+            );
+        }
+        let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        status
+    };
+    check_error(
+        gl,
+        &format!("re-attaching the textures of framebuffer `{}`", fbo.label),
+    )?;
+    if status != glow::FRAMEBUFFER_COMPLETE {
+        return Err(Error::FramebufferIncomplete {
+            label: fbo.label.clone(),
+            status: framebuffer_status_name(status),
+        });
+    }
+    fbo.width = depth.width;
+    fbo.height = depth.height;
+    fbo.attachments = attachments;
+    Ok(())
+}
+
+/// Run `f` between a timer's begin and end; the milliseconds it took.
+fn timed(gl: &glow::Context, timer: &mut GpuTimer, f: impl FnOnce() -> Result<()>) -> Result<f64> {
+    timer.begin(gl);
+    let result = f();
+    let ms = timer.end(gl);
+    result.map(|()| ms)
+}
+
+/// The demo deferred renderer; see the [module documentation](self).
+pub struct Renderer {
+    options: RenderOptions,
+    camera: Camera,
+    background: Background,
+    lights: Vec<Light>,
+    scene: GpuScene,
+    passes: Passes,
+    frame: Frame,
+    decal_hook: Option<DecalHook>,
+}
+
+impl std::fmt::Debug for Renderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Renderer")
+            .field("options", &self.options)
+            .field("samples", &self.samples())
+            .field("objects", &self.scene.meshes.len())
+            .field("lights", &self.lights.len())
+            .field("decal_hook", &self.decal_hook.is_some())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Renderer {
+    /// Build every program, upload the scene's meshes and textures (once),
+    /// and allocate the targets for `options`.
+    pub fn new(gl: &glow::Context, scene: &Scene, options: &RenderOptions) -> Result<Self> {
+        options.validate()?;
+        let slots = GBufferSlots::of(&options.layout)?;
+        let passes = Passes::new(gl, slots)?;
+        let gpu_scene = match GpuScene::new(gl, scene) {
+            Ok(s) => s,
+            Err(e) => {
+                passes.destroy(gl);
+                return Err(e);
+            }
+        };
+        let frame = match Frame::new(gl, options) {
+            Ok(f) => f,
+            Err(e) => {
+                passes.destroy(gl);
+                gpu_scene.destroy(gl);
+                return Err(e);
+            }
+        };
+        Ok(Renderer {
+            options: options.clone(),
+            camera: scene.camera,
+            background: scene.background,
+            lights: scene.lights.clone(),
+            scene: gpu_scene,
+            passes,
+            frame,
+            decal_hook: None,
+        })
+    }
+
+    /// The options in effect.
+    pub fn options(&self) -> &RenderOptions {
+        &self.options
+    }
+
+    /// The scene camera the frame is rendered with.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// The real samples per pixel of the G-buffer pass (1 without multisampling).
+    pub fn samples(&self) -> u32 {
+        self.frame
+            .retrofit
+            .as_ref()
+            .map_or(1, MsaaRetrofit::samples)
+    }
+
+    /// Render one frame (see the [module documentation](self) for the passes).
+    pub fn render(&mut self, gl: &glow::Context) -> Result<FrameTimings> {
+        let (width, height) = (self.options.width, self.options.height);
+        let view = self.camera.view.as_dmat4();
+        let projection = self.projection();
+        let params = self.resolve_params();
+        let batches = light_batches(&self.lights, &view);
+        let Passes {
+            background,
+            background_copy,
+            geometry,
+            lighting,
+            transparent,
+            tonemap,
+            fxaa,
+            fullscreen,
+            timer,
+        } = &mut self.passes;
+        let Frame {
+            gbuffer,
+            retrofit,
+            targets,
+        } = &mut self.frame;
+        let slots = geometry.slots();
+        let mut t = FrameTimings {
+            total_ms: 0.0,
+            geometry_ms: 0.0,
+            resolve_ms: 0.0,
+            decal_ms: 0.0,
+            lighting_ms: 0.0,
+            transparent_ms: 0.0,
+            tonemap_ms: 0.0,
+            fxaa_ms: 0.0,
+            timer: timer.kind(),
+        };
+
+        // The G-buffer pass draws into the retrofit's multisampled twin when
+        // there is one (the first of the two integration lines), else into
+        // the G-buffer itself.
+        let (fbo, draw_buffers) = match retrofit.as_ref() {
+            Some(r) => (r.framebuffer(), r.host().draw_buffers.clone()),
+            None => (
+                gbuffer.fbo.raw,
+                (0..gbuffer.colors.len() as u32).map(Some).collect(),
+            ),
+        };
+        let target = GeometryTarget { fbo, width, height };
+        t.geometry_ms = timed(gl, timer, || {
+            GeometryPass::clear(gl, target);
+            background.draw(
+                gl,
+                &targets.background,
+                fullscreen,
+                &self.background,
+                &view,
+                &projection,
+            )?;
+            let copy = CopyTarget {
+                fbo,
+                width,
+                height,
+                emissive: slots.emissive,
+                draw_buffers: &draw_buffers,
+            };
+            background_copy.draw(gl, copy, fullscreen, &targets.background.texture)?;
+            geometry.draw(gl, target, &self.scene, &view, &projection)
+        })?;
+
+        // The second integration line: resolve into the G-buffer's own textures.
+        if let (Some(r), Some(params)) = (retrofit.as_mut(), params) {
+            t.resolve_ms = timed(gl, timer, || r.resolve(gl, &params))?;
+        }
+
+        if let Some(hook) = self.decal_hook.as_mut() {
+            t.decal_ms = timed(gl, timer, || {
+                gbuffer.fbo.bind(gl);
+                hook(gl, gbuffer);
+                check_error(gl, "the decal hook")
+            })?;
+        }
+
+        t.lighting_ms = timed(gl, timer, || {
+            lighting.draw(gl, &targets.hdr, fullscreen, gbuffer, slots, &batches)
+        })?;
+        t.transparent_ms = timed(gl, timer, || {
+            transparent.draw(
+                gl,
+                &targets.hdr_with_depth,
+                &self.scene,
+                &view,
+                &projection,
+                &batches,
+            )
+        })?;
+        t.tonemap_ms = timed(gl, timer, || {
+            tonemap.draw(gl, &targets.ldr, fullscreen, &targets.hdr.texture)
+        })?;
+        if let Some(out) = targets.fxaa.as_ref() {
+            t.fxaa_ms = timed(gl, timer, || {
+                fxaa.draw(gl, out, fullscreen, &targets.ldr.texture)
+            })?;
+        }
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            gl.bind_vertex_array(None);
+            gl.use_program(None);
+        }
+        t.total_ms = t.geometry_ms
+            + t.resolve_ms
+            + t.decal_ms
+            + t.lighting_ms
+            + t.transparent_ms
+            + t.tonemap_ms
+            + t.fxaa_ms;
+        Ok(t)
+    }
+
+    /// Install (or remove, with `None`) the decal hook.
+    ///
+    /// It is called once per frame after the resolve (without multisampling:
+    /// after the G-buffer pass) and before lighting, with the resolved
+    /// single-sample G-buffer's framebuffer bound to `GL_FRAMEBUFFER` (so for
+    /// both reading and drawing; all its colour attachments are draw
+    /// buffers, colour `k` on draw buffer `k`) and the viewport covering it.
+    /// The hook may read and write any attachment — draw decals into the
+    /// colour, normal or emissive attachments, read positions — with
+    /// whatever programs and state it needs, and need not restore GL state:
+    /// every later pass sets what it uses. It must not delete or re-attach
+    /// the G-buffer's objects, and must not begin a `GL_TIME_ELAPSED` query
+    /// (it runs inside the renderer's own). A GL error it leaves fails the frame.
+    pub fn set_decal_hook(&mut self, hook: Option<DecalHook>) {
+        self.decal_hook = hook;
+    }
+
+    /// Change size, sample count, anti-aliasing method, FXAA or layout at run
+    /// time, re-creating only what changed:
+    /// - a new size re-allocates the G-buffer's textures on the same
+    ///   framebuffer and lets the retrofit re-read it ([`MsaaRetrofit::set_samples`],
+    ///   which rebuilds from the host's framebuffer), then the other targets;
+    /// - a new sample count rebuilds the multisampled twins only;
+    /// - switching between `none` and a resolve creates or frees the retrofit;
+    /// - a new resolve method or window changes nothing on the GPU;
+    /// - a new layout builds a new G-buffer and retrofit.
+    ///
+    /// New objects are made before old ones are freed: on error the renderer
+    /// keeps rendering with its previous options.
+    pub fn set_options(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
+        options.validate()?;
+        if options.layout != self.options.layout {
+            self.rebuild_frame(gl, options)?;
+        } else if (options.width, options.height) != (self.options.width, self.options.height) {
+            self.resize(gl, options)?;
+        } else {
+            self.update_in_place(gl, options)?;
+        }
+        self.options = options.clone();
+        Ok(())
+    }
+
+    /// A new layout: a new G-buffer, retrofit and targets (and a new model
+    /// program when the attachment numbers moved).
+    fn rebuild_frame(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
+        let slots = GBufferSlots::of(&options.layout)?;
+        let frame = Frame::new(gl, options)?;
+        let geometry = if slots != self.passes.geometry.slots() {
+            match GeometryPass::new(gl, slots) {
+                Ok(g) => Some(g),
+                Err(e) => {
+                    frame.destroy(gl);
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
+        std::mem::replace(&mut self.frame, frame).destroy(gl);
+        if let Some(g) = geometry {
+            std::mem::replace(&mut self.passes.geometry, g).destroy(gl);
+        }
+        Ok(())
+    }
+
+    /// A new size with the same layout.
+    fn resize(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
+        let (colors, depth) =
+            allocate_gbuffer_textures(gl, &options.layout, options.width, options.height)?;
+        let targets = match Targets::new(gl, &depth, options.fxaa) {
+            Ok(t) => t,
+            Err(e) => {
+                free_textures(gl, colors, Some(depth));
+                return Err(e);
+            }
+        };
+        let gb = &mut self.frame.gbuffer;
+        if let Err(e) = attach_gbuffer_textures(gl, &mut gb.fbo, &colors, &depth) {
+            let _ = attach_gbuffer_textures(gl, &mut gb.fbo, &gb.colors, &gb.depth);
+            targets.destroy(gl);
+            free_textures(gl, colors, Some(depth));
+            return Err(e);
+        }
+        let old_colors = std::mem::replace(&mut gb.colors, colors);
+        let old_depth = std::mem::replace(&mut gb.depth, depth);
+        let old_size = (gb.width, gb.height);
+        (gb.width, gb.height) = (options.width, options.height);
+        if let Err(e) = self.update_retrofit(gl, options, true) {
+            // Put the old textures back: the retrofit still matches them.
+            let gb = &mut self.frame.gbuffer;
+            let colors = std::mem::replace(&mut gb.colors, old_colors);
+            let depth = std::mem::replace(&mut gb.depth, old_depth);
+            (gb.width, gb.height) = old_size;
+            let _ = attach_gbuffer_textures(gl, &mut gb.fbo, &gb.colors, &gb.depth);
+            targets.destroy(gl);
+            free_textures(gl, colors, Some(depth));
+            return Err(e);
+        }
+        free_textures(gl, old_colors, Some(old_depth));
+        std::mem::replace(&mut self.frame.targets, targets).destroy(gl);
+        Ok(())
+    }
+
+    /// Same size and layout: the retrofit and the FXAA target may change.
+    fn update_in_place(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
+        let (w, h) = (options.width, options.height);
+        let new_fxaa = if options.fxaa && self.frame.targets.fxaa.is_none() {
+            Some(Targets::ldr_target(gl, "fxaa", w, h)?)
+        } else {
+            None
+        };
+        if let Err(e) = self.update_retrofit(gl, options, false) {
+            if let Some(t) = new_fxaa {
+                t.destroy(gl);
+            }
+            return Err(e);
+        }
+        if new_fxaa.is_some() {
+            self.frame.targets.fxaa = new_fxaa;
+        } else if !options.fxaa {
+            if let Some(t) = self.frame.targets.fxaa.take() {
+                t.destroy(gl);
+            }
+        }
+        Ok(())
+    }
+
+    /// Bring the retrofit in line with `options` (each branch is all or
+    /// nothing). `host_changed`: the G-buffer's textures were re-allocated.
+    fn update_retrofit(
+        &mut self,
+        gl: &glow::Context,
+        options: &RenderOptions,
+        host_changed: bool,
+    ) -> Result<()> {
+        match (&mut self.frame.retrofit, &options.aa) {
+            (Some(r), AaMode::Resolve(_)) => {
+                if host_changed || options.samples != self.options.samples {
+                    // Rebuilds the twins from the host framebuffer as it is now.
+                    r.set_samples(gl, options.samples)?;
+                }
+            }
+            (None, AaMode::Resolve(_)) => {
+                let r =
+                    MsaaRetrofit::new(gl, self.frame.gbuffer.fbo.raw, &options.retrofit_options())?;
+                self.frame.retrofit = Some(r);
+            }
+            (Some(_), AaMode::None) => {
+                if let Some(r) = self.frame.retrofit.take() {
+                    r.destroy(gl);
+                }
+            }
+            (None, AaMode::None) => {}
+        }
+        Ok(())
+    }
+
+    /// The resolved single-sample G-buffer (the host G-buffer).
+    pub fn gbuffer(&self) -> &GBuffer {
+        &self.frame.gbuffer
+    }
+
+    /// The retrofit, when multisampling.
+    pub fn retrofit(&self) -> Option<&MsaaRetrofit> {
+        self.frame.retrofit.as_ref()
+    }
+
+    /// The camera's projection at this size (standard GL depth, −1..1).
+    pub fn projection(&self) -> Mat4 {
+        self.camera
+            .projection(self.options.width as f32 / self.options.height as f32)
+    }
+
+    /// What the resolve is given each frame, when multisampling.
+    pub fn resolve_params(&self) -> Option<ResolveParams> {
+        let settings = self.options.aa.settings()?;
+        Some(ResolveParams {
+            settings,
+            projection: DepthProjection::from_matrix(&self.projection().as_dmat4(), false, 1.0),
+            fov_y: self.camera.fov_y as f64,
+            height_px: self.options.height,
+        })
+    }
+
+    /// The lighting fragment shader exactly as compiled (preamble, defines
+    /// and body). It does not depend on the options: the same source lights
+    /// the G-buffer with and without MSAA.
+    pub fn lighting_program_source(&self) -> String {
+        LightingPass::source()
+    }
+
+    /// The model fragment shader exactly as compiled; like the lighting
+    /// source it does not change with MSAA.
+    pub fn geometry_program_source(&self) -> String {
+        GeometryPass::fragment_source()
+    }
+
+    /// Read the final image (after tonemapping and FXAA); row 0 is the top.
+    pub fn read_final(&self, gl: &glow::Context) -> Result<image::RgbaImage> {
+        let target = self.frame.targets.final_target();
+        let (w, h) = (target.texture.width, target.texture.height);
+        let row = w as usize * 4;
+        let mut data = vec![0u8; row * h as usize];
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(target.fbo.raw));
+            gl.read_buffer(glow::COLOR_ATTACHMENT0);
+            gl.bind_buffer(glow::PIXEL_PACK_BUFFER, None);
+            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
+            gl.pixel_store_i32(glow::PACK_ROW_LENGTH, 0);
+            gl.read_pixels(
+                0,
+                0,
+                w as i32,
+                h as i32,
+                glow::RGBA,
+                glow::UNSIGNED_BYTE,
+                glow::PixelPackData::Slice(Some(&mut data)),
+            );
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+        }
+        check_error(gl, "reading the final image")?;
+        // GL's rows run bottom-up.
+        let flipped: Vec<u8> = data.chunks_exact(row).rev().flatten().copied().collect();
+        image::RgbaImage::from_raw(w, h, flipped).ok_or_else(|| {
+            Error::invalid(format!(
+                "the final image's buffer does not hold {w}x{h} pixels"
+            ))
+        })
+    }
+
+    /// The final image's texture (RGBA8, sRGB-encoded values).
+    pub fn final_texture(&self) -> TextureRef {
+        TextureRef::from(&self.frame.targets.final_target().texture)
+    }
+
+    /// The HDR target's texture (RGBA16F, linear radiance after lighting and
+    /// transparent objects).
+    pub fn hdr_texture(&self) -> TextureRef {
+        TextureRef::from(&self.frame.targets.hdr.texture)
+    }
+
+    /// Free every GL object the renderer created.
+    pub fn destroy(self, gl: &glow::Context) {
+        self.passes.destroy(gl);
+        self.scene.destroy(gl);
+        self.frame.destroy(gl);
+    }
+}

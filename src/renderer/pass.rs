@@ -1,0 +1,60 @@
+//! What the full-screen passes share: program building, the full-screen
+//! state, and binding a target.
+
+use crate::Result;
+use crate::gl::{Program, ShaderStage, VertexArray, preamble};
+use crate::resolve::FULLSCREEN_VERT;
+use glow::HasContext;
+
+/// Build a full-screen program: `fullscreen.vert` and `frag_body`, with
+/// `defines`, its one output `output` on draw buffer 0.
+pub(crate) fn fullscreen_program(
+    gl: &glow::Context,
+    label: &str,
+    frag_name: &str,
+    frag_body: &str,
+    defines: &[(String, String)],
+    output: &str,
+) -> Result<Program> {
+    Program::build(
+        gl,
+        label,
+        &preamble(&[], defines),
+        &[
+            (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
+            (ShaderStage::Fragment, frag_name, frag_body),
+        ],
+        &[(output, 0)],
+    )
+}
+
+/// Bind `fbo` to `GL_FRAMEBUFFER` with a `width`×`height` viewport.
+pub(crate) fn bind_target(gl: &glow::Context, fbo: glow::Framebuffer, width: u32, height: u32) {
+    unsafe {
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+        gl.viewport(0, 0, width as i32, height as i32);
+    }
+}
+
+/// The state of a full-screen pass: no depth test or write, no blending,
+/// culling, scissor or stencil, all colour channels written, no sRGB
+/// conversion on write.
+pub(crate) fn fullscreen_state(gl: &glow::Context) {
+    unsafe {
+        gl.disable(glow::DEPTH_TEST);
+        gl.depth_mask(false);
+        gl.disable(glow::BLEND);
+        gl.disable(glow::CULL_FACE);
+        gl.disable(glow::SCISSOR_TEST);
+        gl.disable(glow::STENCIL_TEST);
+        gl.disable(glow::FRAMEBUFFER_SRGB);
+        gl.disable(glow::SAMPLE_ALPHA_TO_COVERAGE);
+        gl.color_mask(true, true, true, true);
+    }
+}
+
+/// Draw the full-screen triangle (an empty vertex array; positions come from `gl_VertexID`).
+pub(crate) fn draw_fullscreen(gl: &glow::Context, vao: &VertexArray) {
+    vao.bind(gl);
+    unsafe { gl.draw_arrays(glow::TRIANGLES, 0, 3) };
+}

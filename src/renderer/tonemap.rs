@@ -1,0 +1,64 @@
+//! The tonemap pass (`shaders_glsl/tonemap.frag`): linear HDR to sRGB-encoded
+//! RGBA8.
+
+use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
+use super::targets::ColorTarget;
+use crate::Result;
+use crate::gl::{Program, Texture2d, VertexArray, check_error};
+use glow::HasContext;
+
+/// The tonemap shader's body.
+pub(crate) const TONEMAP_FRAG: &str = include_str!("../../shaders_glsl/tonemap.frag");
+
+/// Exposure applied before the curve.
+pub(crate) const EXPOSURE: f32 = 1.0;
+/// The HDR value the curve maps to 1.0.
+pub(crate) const WHITE: f32 = 8.0;
+
+/// The tonemap program.
+#[derive(Debug)]
+pub(crate) struct TonemapPass {
+    program: Program,
+}
+
+impl TonemapPass {
+    /// Build the program.
+    pub(crate) fn new(gl: &glow::Context) -> Result<Self> {
+        let program =
+            fullscreen_program(gl, "tonemap", "tonemap.frag", TONEMAP_FRAG, &[], "o_color")?;
+        Ok(TonemapPass { program })
+    }
+
+    /// Tonemap `hdr` into `target`.
+    pub(crate) fn draw(
+        &self,
+        gl: &glow::Context,
+        target: &ColorTarget,
+        vao: &VertexArray,
+        hdr: &Texture2d,
+    ) -> Result<()> {
+        bind_target(
+            gl,
+            target.fbo.raw,
+            target.texture.width,
+            target.texture.height,
+        );
+        fullscreen_state(gl);
+        unsafe {
+            gl.active_texture(glow::TEXTURE0);
+            gl.bind_texture(glow::TEXTURE_2D, Some(hdr.raw));
+        }
+        let p = &self.program;
+        p.bind(gl);
+        p.set_i32(gl, "u_hdr", 0);
+        p.set_f32(gl, "u_exposure", EXPOSURE);
+        p.set_f32(gl, "u_white", WHITE);
+        draw_fullscreen(gl, vao);
+        check_error(gl, "the tonemap pass")
+    }
+
+    /// Free the program.
+    pub(crate) fn destroy(self, gl: &glow::Context) {
+        self.program.destroy(gl);
+    }
+}

@@ -1,0 +1,1120 @@
+//! The scene model: built-in scenes, the real glTF assets, and the broken-file
+//! corpus (`assimp-testmodels`), which must load or fail with one clear line,
+//! never panic.
+//!
+//! Assets that are not installed are skipped with `skipped: <reason>` on
+//! stderr. Run with `-- --nocapture` to see the corpus outcome table.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+
+use deferred_msaa::scene::{
+    AlphaMode, Background, Camera, DEFAULT_SCENE, LightKind, Object, Scene,
+};
+use glam::{Vec3, Vec4};
+use serde_json::{Value, json};
+
+const ASSIMP_GLTF2: &str = "/usr/share/assimp/models/glTF2";
+
+fn shared_assets() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets")
+}
+
+/// A fresh scratch directory for one test.
+fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "deferred-msaa-scene-test-{}-{tag}",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch dir");
+    dir
+}
+
+fn load_path(path: &Path) -> deferred_msaa::Result<Scene> {
+    Scene::load(path.to_str().expect("utf-8 path"))
+}
+
+/// Checks the invariants every loaded scene must hold.
+fn assert_sane(scene: &Scene) {
+    let what = &scene.name;
+    assert!(!scene.objects.is_empty(), "{what}: no objects");
+    assert!(scene.triangle_count() > 0, "{what}: no triangles");
+    for o in &scene.objects {
+        let n = o.positions.len();
+        assert_eq!(o.normals.len(), n, "{what}/{}: normals", o.name);
+        assert_eq!(o.uvs.len(), n, "{what}/{}: uvs", o.name);
+        assert_eq!(o.indices.len() % 3, 0, "{what}/{}: ragged", o.name);
+        assert!(
+            o.indices.iter().all(|&i| (i as usize) < n),
+            "{what}/{}: index out of range",
+            o.name
+        );
+        assert!(
+            o.positions.iter().flatten().all(|c| c.is_finite()),
+            "{what}/{}: non-finite position",
+            o.name
+        );
+        assert!(
+            o.uvs.iter().flatten().all(|c| c.is_finite()),
+            "{what}/{}: non-finite uv",
+            o.name
+        );
+        for nrm in &o.normals {
+            let l = Vec3::from(*nrm).length();
+            assert!(
+                (l - 1.0).abs() < 1e-3,
+                "{what}/{}: normal length {l}",
+                o.name
+            );
+        }
+        assert!(o.transform.is_finite(), "{what}/{}: transform", o.name);
+        assert!(
+            o.material < scene.materials.len(),
+            "{what}/{}: material index",
+            o.name
+        );
+    }
+    for m in &scene.materials {
+        for t in [m.base_color_texture, m.emissive_texture]
+            .into_iter()
+            .flatten()
+        {
+            let tex = scene.textures.get(t).expect("texture index in range");
+            assert_eq!(tex.rgba8.len(), (tex.width * tex.height * 4) as usize);
+        }
+        assert!(
+            m.base_color
+                .iter()
+                .chain(&m.emissive)
+                .all(|c| c.is_finite())
+        );
+    }
+    for l in &scene.lights {
+        assert!(l.position.is_finite() && l.color.is_finite() && l.intensity.is_finite());
+        assert!(
+            (l.direction.length() - 1.0).abs() < 1e-3,
+            "{what}: light direction {:?}",
+            l.direction
+        );
+    }
+    let cam = &scene.camera;
+    assert!(cam.view.is_finite(), "{what}: view");
+    assert!(cam.near > 0.0 && cam.fov_y > 0.0 && cam.fov_y < std::f32::consts::PI);
+    if let Some(far) = cam.far {
+        assert!(far > cam.near);
+    }
+    assert!(!scene.bounds.is_empty(), "{what}: empty bounds");
+    for w in &scene.warnings {
+        assert!(!w.contains('\n'), "{what}: multi-line warning {w:?}");
+    }
+}
+
+/// The bounds' centre lies inside the camera's clip volume at 16:9.
+fn assert_camera_sees_bounds(scene: &Scene) {
+    let clip =
+        scene.camera.projection(16.0 / 9.0) * scene.camera.view * scene.bounds.center().extend(1.0);
+    assert!(
+        clip.w > 0.0,
+        "{}: centre behind the camera ({clip:?})",
+        scene.name
+    );
+    let inside = clip.x.abs() <= clip.w && clip.y.abs() <= clip.w && clip.z.abs() <= clip.w;
+    assert!(
+        inside,
+        "{}: centre outside the clip volume ({clip:?})",
+        scene.name
+    );
+}
+
+/// World-space triangles are counter-clockwise seen from the side their
+/// normals point to (zero-area ones excepted).
+fn assert_winding_follows_normals(scene: &Scene, o: &Object) {
+    let normal_matrix = o.transform.inverse().transpose();
+    let mut wrong = 0;
+    let mut checked = 0;
+    for tri in o.indices.chunks_exact(3) {
+        let p = |k: usize| {
+            o.transform
+                .transform_point3(Vec3::from(o.positions[tri[k] as usize]))
+        };
+        let n = |k: usize| {
+            normal_matrix
+                .transform_vector3(Vec3::from(o.normals[tri[k] as usize]))
+                .normalize_or_zero()
+        };
+        let face = (p(1) - p(0)).cross(p(2) - p(0));
+        let scale = (p(1) - p(0)).length() * (p(2) - p(0)).length();
+        if face.length() <= 1e-4 * scale || scale == 0.0 {
+            continue; // degenerate or sliver-thin
+        }
+        checked += 1;
+        if face.dot(n(0) + n(1) + n(2)) <= 0.0 {
+            wrong += 1;
+        }
+    }
+    assert_eq!(
+        wrong, 0,
+        "{}/{}: {wrong} of {checked} triangles wound against their normals",
+        scene.name, o.name
+    );
+}
+
+// ---------------------------------------------------------------------------
+// Built-ins
+
+#[test]
+fn every_builtin_loads_and_is_sane() {
+    assert_eq!(Scene::builtin_names().first(), Some(&"greebles"));
+    assert_eq!(DEFAULT_SCENE, "builtin:greebles");
+    for name in Scene::builtin_names() {
+        let scene = Scene::load(&format!("builtin:{name}")).expect("built-in loads");
+        assert_eq!(&scene.name, name);
+        assert_sane(&scene);
+        assert_camera_sees_bounds(&scene);
+        assert!(scene.warnings.is_empty(), "{name}: {:?}", scene.warnings);
+        assert!(
+            scene.triangle_count() <= 5000,
+            "{name}: {} triangles is not small",
+            scene.triangle_count()
+        );
+        assert!(!scene.lights.is_empty(), "{name}: no lights");
+        for o in &scene.objects {
+            assert_winding_follows_normals(&scene, o);
+        }
+        let (near, far) = scene.depth_range();
+        assert!(
+            near > 0.0 && far >= near,
+            "{name}: depth range {near}..{far}"
+        );
+        eprintln!(
+            "builtin:{name:<12} {:>5} triangles {:>3} objects {} lights, depth {near:.3}..{far:.3}",
+            scene.triangle_count(),
+            scene.objects.len(),
+            scene.lights.len()
+        );
+    }
+}
+
+#[test]
+fn builtins_are_deterministic() {
+    for name in Scene::builtin_names() {
+        let a = Scene::load(&format!("builtin:{name}")).expect("loads");
+        let b = Scene::load(&format!("builtin:{name}")).expect("loads");
+        assert_eq!(a.objects.len(), b.objects.len());
+        for (x, y) in a.objects.iter().zip(&b.objects) {
+            assert_eq!(x.positions, y.positions, "{name}/{}", x.name);
+            assert_eq!(x.indices, y.indices, "{name}/{}", x.name);
+        }
+        assert_eq!(a.camera, b.camera);
+    }
+}
+
+#[test]
+fn builtins_exercise_what_they_claim() {
+    let load = |n: &str| Scene::load(&format!("builtin:{n}")).expect("loads");
+
+    let greebles = load("greebles");
+    let close_points = greebles
+        .lights
+        .iter()
+        .filter(|l| l.kind == LightKind::Point && l.range.is_some())
+        .count();
+    assert!(
+        close_points >= 3,
+        "greebles needs several ranged point lights"
+    );
+    assert!(matches!(greebles.background, Background::Gradient { .. }));
+    assert!(greebles.objects.iter().any(|o| o.name == "antennas"));
+    assert!(greebles.triangle_count() > 1000);
+
+    let far = load("far");
+    let distance = far.camera.position().distance(far.bounds.center());
+    assert!(
+        (distance - 200_000.0).abs() < 100.0,
+        "far: distance {distance}"
+    );
+    assert!((far.camera.fov_y.to_degrees() - 0.5).abs() < 1e-4);
+    assert_eq!(far.camera.near, 0.01);
+    assert_eq!(far.camera.far, None);
+    let (near, _) = far.depth_range();
+    assert!(
+        near > 65504.0,
+        "far: the model must overflow FP16 positions"
+    );
+    // Fills a good part of the view: the box spans a third of the height or more.
+    let proj = far.camera.projection(16.0 / 9.0) * far.camera.view;
+    let ys: Vec<f32> = far
+        .bounds
+        .corners()
+        .iter()
+        .map(|c| {
+            let p = proj * c.extend(1.0);
+            p.y / p.w
+        })
+        .collect();
+    let span =
+        ys.iter().cloned().fold(f32::MIN, f32::max) - ys.iter().cloned().fold(f32::MAX, f32::min);
+    assert!(
+        span > 0.66,
+        "far: the model spans only {span} of NDC height"
+    );
+
+    let emissive = load("emissive");
+    assert!(emissive.has_emissive());
+    assert!(emissive.max_emissive() >= 100.0);
+    assert!(
+        emissive
+            .objects
+            .iter()
+            .any(|o| !emissive.material_of(o).is_emissive())
+    );
+
+    let transparent = load("transparent");
+    assert!(transparent.has_transparent());
+    assert!(transparent.has_alpha_mask());
+    assert!(transparent.has_textures());
+    assert!(
+        transparent
+            .objects
+            .iter()
+            .any(|o| transparent.material_of(o).alpha_mode == AlphaMode::Opaque)
+    );
+    assert!(!load("box").has_transparent());
+    assert!(!load("box").has_emissive());
+    assert_eq!(load("box").uniform_specular(), None);
+
+    let zfight = load("zfight");
+    let degenerate = zfight
+        .objects
+        .iter()
+        .flat_map(|o| {
+            o.indices.chunks_exact(3).map(move |t| {
+                let p = |k: usize| Vec3::from(o.positions[t[k] as usize]);
+                (p(1) - p(0)).cross(p(2) - p(0)).length()
+            })
+        })
+        .filter(|&area| area == 0.0)
+        .count();
+    assert!(degenerate >= 1, "zfight needs a degenerate triangle");
+
+    let thin = load("thin");
+    match thin.background {
+        Background::Gradient { zenith, horizon } => {
+            assert!(
+                zenith.iter().chain(&horizon).all(|&c| c > 1.0),
+                "thin: bright HDR sky"
+            );
+        }
+        other => panic!("thin: background {other:?}"),
+    }
+}
+
+#[test]
+fn unknown_builtin_is_a_one_line_error() {
+    let err = Scene::load("builtin:nope")
+        .expect_err("no such built-in")
+        .to_string();
+    assert!(err.contains("nope") && err.contains("greebles"), "{err}");
+    assert!(!err.contains('\n'));
+    let err = Scene::load("greebles").expect_err("not a file").to_string();
+    assert!(err.contains("builtin:greebles"), "{err}");
+}
+
+#[test]
+fn projection_maps_near_and_far() {
+    let cam = Camera::look_at(Vec3::ZERO, Vec3::NEG_Z, 1.0, 0.5, Some(100.0));
+    let ndc_z = |cam: &Camera, d: f32| {
+        let c = cam.projection(1.5) * cam.view * Vec4::new(0.0, 0.0, -d, 1.0);
+        c.z / c.w
+    };
+    assert!((ndc_z(&cam, 0.5) + 1.0).abs() < 1e-5);
+    assert!((ndc_z(&cam, 100.0) - 1.0).abs() < 1e-5);
+    let inf = Camera { far: None, ..cam };
+    assert!((ndc_z(&inf, 0.5) + 1.0).abs() < 1e-5);
+    assert!(ndc_z(&inf, 1e6) < 1.0 && ndc_z(&inf, 1e6) > 0.9999);
+    // fov_y: a point on the top edge of the view lands on y = 1.
+    let top = cam.projection(1.0) * Vec4::new(0.0, (0.5f32).tan() * 10.0, -10.0, 1.0);
+    assert!((top.y / top.w - 1.0).abs() < 1e-5);
+    assert!(cam.position().length() < 1e-6);
+    let moved = Camera::look_at(Vec3::new(3.0, 4.0, 5.0), Vec3::ZERO, 1.0, 0.1, None);
+    assert!((moved.position() - Vec3::new(3.0, 4.0, 5.0)).length() < 1e-4);
+}
+
+// ---------------------------------------------------------------------------
+// Hand-written glTF files
+
+/// Builds a tiny glTF: accessors over one binary buffer.
+#[derive(Default)]
+struct Tiny {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl Tiny {
+    fn view(&mut self, bytes: &[u8]) -> usize {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        self.views
+            .push(json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()}));
+        self.bin.extend_from_slice(bytes);
+        self.views.len() - 1
+    }
+
+    /// A VEC3 float accessor with the min/max glTF requires for POSITION.
+    fn vec3(&mut self, data: &[[f32; 3]]) -> usize {
+        let i = self.vec3_unbounded(data);
+        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+        for v in data {
+            for k in 0..3 {
+                if v[k].is_finite() {
+                    lo[k] = lo[k].min(v[k]);
+                    hi[k] = hi[k].max(v[k]);
+                }
+            }
+        }
+        self.accessors[i]["min"] = json!(lo);
+        self.accessors[i]["max"] = json!(hi);
+        i
+    }
+
+    /// A VEC3 float accessor without min/max.
+    fn vec3_unbounded(&mut self, data: &[[f32; 3]]) -> usize {
+        let bytes: Vec<u8> = data
+            .iter()
+            .flatten()
+            .flat_map(|f| f.to_le_bytes())
+            .collect();
+        let view = self.view(&bytes);
+        self.accessors.push(
+            json!({"bufferView": view, "componentType": 5126, "count": data.len(), "type": "VEC3"}),
+        );
+        self.accessors.len() - 1
+    }
+
+    fn indices(&mut self, data: &[u32]) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|i| i.to_le_bytes()).collect();
+        let view = self.view(&bytes);
+        self.accessors.push(json!({"bufferView": view, "componentType": 5125, "count": data.len(), "type": "SCALAR"}));
+        self.accessors.len() - 1
+    }
+
+    /// The JSON document; `extra` fields are merged at the top level.
+    fn json(&self, uri: &str, extra: Value) -> Value {
+        let mut doc = json!({
+            "asset": {"version": "2.0"},
+            "buffers": [{"uri": uri, "byteLength": self.bin.len()}],
+            "bufferViews": self.views,
+            "accessors": self.accessors,
+        });
+        if let (Some(d), Value::Object(e)) = (doc.as_object_mut(), extra) {
+            d.extend(e);
+        }
+        doc
+    }
+
+    /// Writes `name.gltf` and `name.bin` into `dir`.
+    fn write(&self, dir: &Path, name: &str, extra: Value) -> PathBuf {
+        let gltf = dir.join(format!("{name}.gltf"));
+        std::fs::write(dir.join(format!("{name}.bin")), &self.bin).expect("write bin");
+        let doc = self.json(&format!("{name}.bin"), extra);
+        std::fs::write(&gltf, serde_json::to_vec_pretty(&doc).expect("json")).expect("write gltf");
+        gltf
+    }
+
+    /// A `.glb` holding the document and the buffer.
+    fn glb(&self, extra: Value) -> Vec<u8> {
+        let mut doc = self.json("", extra);
+        if let Some(b) = doc.pointer_mut("/buffers/0").and_then(Value::as_object_mut) {
+            b.remove("uri");
+        }
+        let mut json = serde_json::to_vec(&doc).expect("json");
+        while json.len() % 4 != 0 {
+            json.push(b' ');
+        }
+        let mut bin = self.bin.clone();
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        let total = 12 + 8 + json.len() + 8 + bin.len();
+        let mut out = Vec::new();
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&json);
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin);
+        out
+    }
+}
+
+/// A unit quad in z = 0 facing +z, as two triangles, with normals.
+fn quad() -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u32>) {
+    (
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ],
+        vec![[0.0, 0.0, 1.0]; 4],
+        vec![0, 1, 2, 0, 2, 3],
+    )
+}
+
+fn one_mesh_scene(primitive: Value, node: Value) -> Value {
+    let mut node = node;
+    if let Some(n) = node.as_object_mut() {
+        n.insert("mesh".into(), json!(0));
+    }
+    json!({
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [node],
+        "meshes": [{"name": "m", "primitives": [primitive]}],
+    })
+}
+
+fn err_line(result: deferred_msaa::Result<Scene>) -> String {
+    let msg = result.expect_err("expected an error").to_string();
+    assert!(!msg.contains('\n'), "multi-line error: {msg}");
+    msg
+}
+
+#[test]
+fn nan_vertices_and_bad_indices_are_dropped_with_warnings() {
+    let dir = scratch("sanitise");
+    let mut t = Tiny::default();
+    let nan = f32::NAN;
+    let positions = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [nan, 0.5, 0.0],
+        [2.0, f32::INFINITY, 0.0],
+    ];
+    let normals = [
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, 2.0], // not unit: rescaled
+        [0.0, 0.0, 0.0], // zero: recomputed
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let pos = t.vec3(&positions);
+    let nrm = t.vec3(&normals);
+    // Good, good, NaN vertex, infinite vertex, index 99, index 6.
+    let idx = t.indices(&[0, 1, 2, 0, 2, 3, 0, 4, 3, 1, 5, 2, 0, 99, 1, 6, 1, 2]);
+    let doc = one_mesh_scene(
+        json!({"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx}),
+        json!({"name": "panel", "extras": {"deferred_msaa": {"antialias": false}}}),
+    );
+    let path = t.write(&dir, "sanitise", doc);
+    let scene = load_path(&path).expect("loads despite the damage");
+    assert_sane(&scene);
+    assert_eq!(scene.triangle_count(), 2);
+    let o = &scene.objects[0];
+    assert_eq!(o.positions.len(), 4, "unused NaN vertices compacted away");
+    assert!(!o.antialias, "node extras turn AA off");
+    assert!(scene.has_selective_aa());
+    let all = scene.warnings.join("\n");
+    assert!(
+        all.contains("dropped 2 of 6 triangles with indices out of range"),
+        "{all}"
+    );
+    assert!(
+        all.contains("dropped 2 of 6 triangles touching NaN/infinite"),
+        "{all}"
+    );
+    assert!(all.contains("recomputed 1 zero-length normals"), "{all}");
+    assert!(all.contains("rescaled 1 normals"), "{all}");
+    // The default rig stands in for missing lights; the box is framed.
+    assert_eq!(scene.lights.len(), 4);
+    assert_camera_sees_bounds(&scene);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn non_finite_normals_drop_triangles() {
+    let dir = scratch("nan-normals");
+    let mut t = Tiny::default();
+    let (p, mut n, i) = quad();
+    n[3] = [f32::NAN, 0.0, 1.0];
+    let doc = one_mesh_scene(
+        json!({"attributes": {"POSITION": t.vec3(&p), "NORMAL": t.vec3(&n)}, "indices": t.indices(&i)}),
+        json!({}),
+    );
+    let scene = load_path(&t.write(&dir, "nn", doc)).expect("loads");
+    assert_eq!(scene.triangle_count(), 1);
+    assert_sane(&scene);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn strips_fans_and_missing_normals() {
+    let dir = scratch("modes");
+    let mut t = Tiny::default();
+    let (p, _, _) = quad();
+    let pos = t.vec3(&p);
+    // Strip 0-1-3-2 and fan 0-1-2-3 both make the quad, counter-clockwise.
+    let strip = t.indices(&[0, 1, 3, 2]);
+    let fan = t.indices(&[0, 1, 2, 3]);
+    let doc = json!({
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [{"mesh": 0}, {"mesh": 1}, {"mesh": 2}],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": pos}, "indices": strip, "mode": 5}]},
+            {"primitives": [{"attributes": {"POSITION": pos}, "indices": fan, "mode": 6}]},
+            {"primitives": [{"attributes": {"POSITION": pos}, "mode": 1}]},
+        ],
+    });
+    let scene = load_path(&t.write(&dir, "modes", doc)).expect("loads");
+    assert_sane(&scene);
+    assert_eq!(scene.objects.len(), 2);
+    for o in &scene.objects {
+        assert_eq!(o.triangle_count(), 2);
+        // Flat normals: unindexed, each facing +z.
+        assert_eq!(o.positions.len(), 6);
+        assert!(
+            o.normals
+                .iter()
+                .all(|n| (Vec3::from(*n) - Vec3::Z).length() < 1e-6)
+        );
+        assert_winding_follows_normals(&scene, o);
+    }
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("mode LINES skipped")),
+        "{:?}",
+        scene.warnings
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn only_points_is_an_error() {
+    let dir = scratch("points");
+    let mut t = Tiny::default();
+    let (p, _, _) = quad();
+    let doc = one_mesh_scene(
+        json!({"attributes": {"POSITION": t.vec3(&p)}, "mode": 0}),
+        json!({}),
+    );
+    let path = t.write(&dir, "points", doc);
+    let msg = err_line(load_path(&path));
+    assert!(
+        msg.contains("points.gltf") && msg.contains("no triangles"),
+        "{msg}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn camera_lights_mirroring_and_mesh_extras() {
+    let dir = scratch("camlights");
+    let mut t = Tiny::default();
+    let (p, n, i) = quad();
+    let (pos, nrm, idx) = (t.vec3(&p), t.vec3(&n), t.indices(&i));
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    let doc = json!({
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"type": "point", "color": [1.0, 0.5, 0.25], "intensity": 20.0, "range": 7.5},
+            {"type": "spot", "intensity": 5.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}},
+            {"type": "directional", "intensity": 3.0},
+        ]}},
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.05}}],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2, 3, 4, 5]}],
+        "nodes": [
+            {"mesh": 0, "name": "plain"},
+            {"mesh": 1, "name": "mirrored", "scale": [-1.0, 1.0, 1.0], "translation": [3.0, 0.0, 0.0]},
+            {"camera": 0, "translation": [0.5, 0.5, 4.0]},
+            {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [1.0, 2.0, 3.0]},
+            // Rotated -90° about x: -z (the light's axis) turns to -y.
+            {"extensions": {"KHR_lights_punctual": {"light": 1}}, "rotation": [-s, 0.0, 0.0, s]},
+            {"extensions": {"KHR_lights_punctual": {"light": 2}}},
+        ],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx}]},
+            {"primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx}],
+             "extras": {"deferred_msaa": {"antialias": false}}},
+        ],
+    });
+    let scene = load_path(&t.write(&dir, "camlights", doc)).expect("loads");
+    assert_sane(&scene);
+    // The camera node's transform and perspective are used; no zfar = infinite.
+    assert!((scene.camera.position() - Vec3::new(0.5, 0.5, 4.0)).length() < 1e-5);
+    assert_eq!(scene.camera.fov_y, 0.8);
+    assert_eq!(scene.camera.near, 0.05);
+    assert_eq!(scene.camera.far, None);
+    assert_eq!(scene.lights.len(), 3);
+    let point = scene.lights[0];
+    assert_eq!(point.kind, LightKind::Point);
+    assert!((point.position - Vec3::new(1.0, 2.0, 3.0)).length() < 1e-6);
+    assert_eq!(point.range, Some(7.5));
+    assert_eq!(point.color, Vec3::new(1.0, 0.5, 0.25));
+    let spot = scene.lights[1];
+    assert_eq!(
+        spot.kind,
+        LightKind::Spot {
+            inner_cone: 0.2,
+            outer_cone: 0.5
+        }
+    );
+    assert!(
+        (spot.direction - Vec3::NEG_Y).length() < 1e-5,
+        "{:?}",
+        spot.direction
+    );
+    assert_eq!(scene.lights[2].kind, LightKind::Directional);
+    assert!((scene.lights[2].direction - Vec3::NEG_Z).length() < 1e-6);
+    // Mirroring: the winding is swapped so world-space CCW still faces the normal.
+    let plain = scene
+        .objects
+        .iter()
+        .find(|o| o.name == "plain")
+        .expect("plain");
+    let mirrored = scene
+        .objects
+        .iter()
+        .find(|o| o.name == "mirrored")
+        .expect("mirrored");
+    assert!(plain.antialias);
+    assert!(!mirrored.antialias, "mesh extras turn AA off");
+    assert!(mirrored.transform.determinant() < 0.0);
+    assert_ne!(plain.indices, mirrored.indices);
+    assert_winding_follows_normals(&scene, plain);
+    assert_winding_follows_normals(&scene, mirrored);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn position_bounds_and_missing_positions_are_tolerated() {
+    let dir = scratch("bounds");
+    let mut t = Tiny::default();
+    let (p, n, i) = quad();
+    let (pos, nrm, idx) = (t.vec3_unbounded(&p), t.vec3(&n), t.indices(&i));
+    let mut doc = one_mesh_scene(
+        json!({"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx}),
+        json!({}),
+    );
+    // A second primitive with no POSITION at all.
+    doc["meshes"][0]["primitives"]
+        .as_array_mut()
+        .expect("primitives")
+        .push(json!({"attributes": {"NORMAL": nrm}}));
+    let scene = load_path(&t.write(&dir, "bounds", doc.clone())).expect("loads");
+    assert_sane(&scene);
+    assert_eq!(scene.triangle_count(), 2);
+    let all = scene.warnings.join("\n");
+    assert!(all.contains("lack the min/max"), "{all}");
+    assert!(all.contains("without a POSITION"), "{all}");
+
+    // POSITION naming an accessor that does not exist: an error, not a panic
+    // (the glTF crate's validator would index it unchecked).
+    doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(57);
+    let path = t.write(&dir, "dangling", doc);
+    let outcome = catch_unwind(AssertUnwindSafe(|| load_path(&path)));
+    let msg = err_line(outcome.expect("no panic"));
+    assert!(msg.contains("dangling.gltf") && msg.contains("57"), "{msg}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn recursive_node_graph_is_cut() {
+    let dir = scratch("recursive");
+    let mut t = Tiny::default();
+    let (p, n, i) = quad();
+    let (pos, nrm, idx) = (t.vec3(&p), t.vec3(&n), t.indices(&i));
+    let doc = json!({
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"children": [1], "mesh": 0}, {"children": [0], "mesh": 0, "translation": [2.0, 0.0, 0.0]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx}]}],
+    });
+    let scene = load_path(&t.write(&dir, "recursive", doc)).expect("loads");
+    assert_eq!(scene.objects.len(), 2);
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("cycle")),
+        "{:?}",
+        scene.warnings
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn embedded_base64_buffer_loads() {
+    let dir = scratch("base64");
+    let mut t = Tiny::default();
+    let (p, n, i) = quad();
+    let (pos, nrm, idx) = (t.vec3(&p), t.vec3(&n), t.indices(&i));
+    let uri = format!("data:application/octet-stream;base64,{}", base64(&t.bin));
+    let doc = t.json(
+        &uri,
+        one_mesh_scene(
+            json!({"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx}),
+            json!({}),
+        ),
+    );
+    let path = dir.join("embedded.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).expect("json")).expect("write");
+    let scene = load_path(&path).expect("loads");
+    assert_eq!(scene.objects[0].positions, p);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn base64(bytes: &[u8]) -> String {
+    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::new();
+    for c in bytes.chunks(3) {
+        let v = (u32::from(c[0]) << 16)
+            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
+            | u32::from(*c.get(2).unwrap_or(&0));
+        for k in 0..4 {
+            if k <= c.len() {
+                s.push(A[(v >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                s.push('=');
+            }
+        }
+    }
+    s
+}
+
+#[test]
+fn glb_loads_and_truncated_glb_fails() {
+    let dir = scratch("glb");
+    let mut t = Tiny::default();
+    let (p, n, i) = quad();
+    let (pos, nrm, idx) = (t.vec3(&p), t.vec3(&n), t.indices(&i));
+    let glb = t.glb(one_mesh_scene(
+        json!({"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx}),
+        json!({}),
+    ));
+    let whole = dir.join("whole.glb");
+    std::fs::write(&whole, &glb).expect("write");
+    let scene = load_path(&whole).expect("the intact .glb loads");
+    assert_eq!(scene.triangle_count(), 2);
+
+    for cut in [6, 30, glb.len() - 10] {
+        let path = dir.join(format!("cut{cut}.glb"));
+        std::fs::write(&path, &glb[..cut]).expect("write");
+        let msg = err_line(load_path(&path));
+        assert!(msg.contains(&format!("cut{cut}.glb")), "{msg}");
+        assert!(msg.contains("truncated"), "{msg}");
+    }
+    // A real .glb from the corpus, cut in half.
+    let real = Path::new(ASSIMP_GLTF2).join("BoxTextured-glTF-Binary/BoxTextured.glb");
+    match std::fs::read(&real) {
+        Ok(bytes) => {
+            let path = dir.join("BoxTextured-half.glb");
+            std::fs::write(&path, &bytes[..bytes.len() / 2]).expect("write");
+            let msg = err_line(load_path(&path));
+            assert!(
+                msg.contains("BoxTextured-half.glb") && msg.contains("truncated"),
+                "{msg}"
+            );
+        }
+        Err(e) => eprintln!("skipped: {}: {e}", real.display()),
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn not_gltf_files_fail_clearly() {
+    let dir = scratch("notgltf");
+    let text = dir.join("notes.gltf");
+    std::fs::write(&text, "this is not a glTF file\n").expect("write");
+    let msg = err_line(load_path(&text));
+    assert!(
+        msg.contains("notes.gltf") && msg.contains("not a glTF"),
+        "{msg}"
+    );
+
+    let png = dir.join("picture.glb");
+    std::fs::write(&png, b"\x89PNG\r\n\x1a\n0000000000000000").expect("write");
+    let msg = err_line(load_path(&png));
+    assert!(
+        msg.contains("picture.glb") && msg.contains("magic"),
+        "{msg}"
+    );
+
+    let bad_json = dir.join("broken.gltf");
+    std::fs::write(
+        &bad_json,
+        "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [",
+    )
+    .expect("write");
+    let msg = err_line(load_path(&bad_json));
+    assert!(msg.contains("broken.gltf") && msg.contains("JSON"), "{msg}");
+
+    let v1 = dir.join("old.gltf");
+    std::fs::write(
+        &v1,
+        "{\"asset\": {\"version\": \"1.0\"}, \"scene\": \"defaultScene\"}",
+    )
+    .expect("write");
+    let msg = err_line(load_path(&v1));
+    assert!(msg.contains("old.gltf") && msg.contains("1.0"), "{msg}");
+
+    let missing = dir.join("absent.gltf");
+    let msg = err_line(load_path(&missing));
+    assert!(msg.contains("absent.gltf"), "{msg}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn missing_bin_and_missing_texture() {
+    let dir = scratch("missing");
+    let mut t = Tiny::default();
+    let (p, n, i) = quad();
+    let (pos, nrm, idx) = (t.vec3(&p), t.vec3(&n), t.indices(&i));
+    let mut doc = one_mesh_scene(
+        json!({"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx, "material": 0}),
+        json!({}),
+    );
+    if let Some(d) = doc.as_object_mut() {
+        d.insert("materials".into(), json!([{
+            "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.25, 1.0, 1.0], "baseColorTexture": {"index": 0}},
+            "emissiveFactor": [1.0, 0.5, 0.0],
+            "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 40.0}}
+        }]));
+        d.insert("textures".into(), json!([{"source": 0}]));
+        d.insert("images".into(), json!([{"uri": "gone.png"}]));
+        d.insert(
+            "extensionsUsed".into(),
+            json!(["KHR_materials_emissive_strength"]),
+        );
+    }
+    let path = t.write(&dir, "textured", doc);
+    let scene = load_path(&path).expect("a missing texture is only a warning");
+    let m = scene.material_of(&scene.objects[0]);
+    assert_eq!(m.base_color_texture, None);
+    assert_eq!(m.base_color, [0.5, 0.25, 1.0, 1.0]);
+    assert_eq!(m.emissive, [40.0, 20.0, 0.0]);
+    assert!(scene.has_emissive());
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("gone.png")),
+        "{:?}",
+        scene.warnings
+    );
+
+    std::fs::remove_file(dir.join("textured.bin")).expect("remove bin");
+    let msg = err_line(load_path(&path));
+    assert!(
+        msg.contains("textured.gltf") && msg.contains("textured.bin"),
+        "{msg}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn invalid_accessor_is_an_error() {
+    let dir = scratch("accessor");
+    let mut t = Tiny::default();
+    let (p, n, i) = quad();
+    let (pos, nrm, idx) = (t.vec3(&p), t.vec3(&n), t.indices(&i));
+    // Claim more positions than the view holds.
+    if let Some(a) = t.accessors.get_mut(pos) {
+        a["count"] = json!(400);
+    }
+    let doc = one_mesh_scene(
+        json!({"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx}),
+        json!({}),
+    );
+    let msg = err_line(load_path(&t.write(&dir, "overrun", doc)));
+    assert!(
+        msg.contains("overrun.gltf") && msg.contains("accessor"),
+        "{msg}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+// ---------------------------------------------------------------------------
+// Real assets
+
+fn find_model(dir: &Path) -> Option<PathBuf> {
+    let mut found: Vec<PathBuf> = std::fs::read_dir(dir)
+        .ok()?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+        })
+        .collect();
+    found.sort();
+    found.into_iter().next()
+}
+
+fn load_asset(dir: &Path) -> Option<Scene> {
+    let Some(path) = find_model(dir) else {
+        eprintln!("skipped: no .gltf/.glb in {}", dir.display());
+        return None;
+    };
+    let start = std::time::Instant::now();
+    let scene = load_path(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_sane(&scene);
+    eprintln!(
+        "{:<60} {:>7} triangles {:>4} objects {:>2} textures {:>2} lights {:>3} warnings, {:.0} ms",
+        path.display(),
+        scene.triangle_count(),
+        scene.objects.len(),
+        scene.textures.len(),
+        scene.lights.len(),
+        scene.warnings.len(),
+        start.elapsed().as_secs_f64() * 1e3
+    );
+    for w in &scene.warnings {
+        eprintln!("    warning: {w}");
+    }
+    Some(scene)
+}
+
+#[test]
+fn shared_box_loads() {
+    let Some(scene) = load_asset(&shared_assets().join("Box")) else {
+        return;
+    };
+    assert_eq!(scene.triangle_count(), 12);
+    assert_camera_sees_bounds(&scene);
+}
+
+#[test]
+fn shared_flight_helmet_loads() {
+    let Some(scene) = load_asset(&shared_assets().join("FlightHelmet")) else {
+        return;
+    };
+    assert!(scene.has_textures(), "the helmet's base colour maps decode");
+    assert!(scene.has_transparent() || scene.has_alpha_mask() || !scene.textures.is_empty());
+    assert!(scene.triangle_count() > 10_000);
+    assert_camera_sees_bounds(&scene);
+}
+
+#[test]
+fn shared_retro_ufo_loads() {
+    let Some(scene) = load_asset(&shared_assets().join("RetroUFO")) else {
+        return;
+    };
+    assert!(scene.triangle_count() > 100);
+}
+
+#[test]
+fn two_cylinder_engine_loads() {
+    let path = Path::new(ASSIMP_GLTF2).join("2CylinderEngine-glTF-Binary");
+    if !path.exists() {
+        eprintln!(
+            "skipped: {} is absent (install assimp-testmodels)",
+            path.display()
+        );
+        return;
+    }
+    let Some(scene) = load_asset(&path) else {
+        return;
+    };
+    let n = scene.triangle_count();
+    assert!(
+        (100_000..150_000).contains(&n),
+        "2CylinderEngine: {n} triangles"
+    );
+    assert_camera_sees_bounds(&scene);
+}
+
+// ---------------------------------------------------------------------------
+// The broken-file corpus
+
+fn gltf_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            gltf_files(&path, out);
+        } else if path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+        {
+            out.push(path);
+        }
+    }
+}
+
+#[test]
+fn assimp_corpus_never_panics() {
+    let root = Path::new(ASSIMP_GLTF2);
+    if !root.exists() {
+        eprintln!("skipped: {ASSIMP_GLTF2} is absent (install assimp-testmodels)");
+        return;
+    }
+    let mut files = Vec::new();
+    gltf_files(root, &mut files);
+    files.sort();
+    assert!(!files.is_empty());
+
+    let mut panics = Vec::new();
+    let mut bad_errors = Vec::new();
+    let (mut loaded, mut failed) = (0, 0);
+    eprintln!("{:<72} outcome", "file");
+    for path in &files {
+        let rel = path
+            .strip_prefix(root)
+            .unwrap_or(path)
+            .display()
+            .to_string();
+        let outcome = catch_unwind(AssertUnwindSafe(|| load_path(path)));
+        let line = match outcome {
+            Err(_) => {
+                panics.push(rel.clone());
+                "PANIC".to_string()
+            }
+            Ok(Ok(scene)) => {
+                loaded += 1;
+                assert_sane(&scene);
+                format!(
+                    "ok: {} triangles, {} warnings{}",
+                    scene.triangle_count(),
+                    scene.warnings.len(),
+                    scene
+                        .warnings
+                        .first()
+                        .map(|w| format!(" (first: {w})"))
+                        .unwrap_or_default()
+                )
+            }
+            Ok(Err(e)) => {
+                failed += 1;
+                let msg = e.to_string();
+                let name = path
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                if msg.contains('\n') || !msg.contains(&name) {
+                    bad_errors.push(format!("{rel}: {msg:?}"));
+                }
+                let reason = msg.split_once(": ").map_or(msg.as_str(), |(_, r)| r);
+                format!("error: {reason}")
+            }
+        };
+        eprintln!("{rel:<72} {line}");
+    }
+    eprintln!(
+        "{} files: {loaded} loaded, {failed} refused, {} panicked",
+        files.len(),
+        panics.len()
+    );
+    assert!(panics.is_empty(), "panicked on {panics:?}");
+    assert!(
+        bad_errors.is_empty(),
+        "errors not one line naming the file: {bad_errors:?}"
+    );
+}
