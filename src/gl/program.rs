@@ -38,8 +38,9 @@ impl ShaderStage {
 }
 
 /// The text prepended to every shader body: `#version 150 core` (the floor),
-/// the requested extensions, then one `#define` per entry, then `#line 1` so
-/// the driver's line numbers refer to the body file.
+/// the requested extensions, then one `#define` per entry, then a `#line` so
+/// the driver's line numbers refer to the body file. (GLSL before 3.30 numbers
+/// the line after `#line N` as N + 1, hence `#line 0`.)
 pub fn preamble(extensions: &[&str], defines: &[(String, String)]) -> String {
     let mut text = String::from("#version 150 core\n");
     for ext in extensions {
@@ -48,7 +49,7 @@ pub fn preamble(extensions: &[&str], defines: &[(String, String)]) -> String {
     for (name, value) in defines {
         text.push_str(&format!("#define {name} {value}\n"));
     }
-    text.push_str("#line 1\n");
+    text.push_str("#line 0\n");
     text
 }
 
