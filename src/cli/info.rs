@@ -5,6 +5,7 @@ use crate::context::{Backend, HeadlessContext};
 use crate::gl::{Capabilities, ExtraFns, Format, sample_positions};
 use crate::Result;
 use serde_json::{Map, Value, json};
+use std::io::Write;
 
 /// Arguments of `info`.
 #[derive(Debug, Clone, clap::Args)]
@@ -82,7 +83,9 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     let ctx = HeadlessContext::new(args.common.backend)?;
     let r = report(&ctx)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default());
+        let text = serde_json::to_string_pretty(&r).map_err(|e| crate::Error::invalid(e.to_string()))?;
+        // A closed pipe (`| head`) is not an error worth a message.
+        let _ = writeln!(std::io::stdout(), "{text}");
         return Ok(());
     }
     println!("backend       {}", r["backend"].as_str().unwrap_or(""));

@@ -58,10 +58,17 @@ pub fn main() -> i32 {
         .init();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
-        Err(e) => {
-            let code = if e.use_stderr() { 2 } else { 0 };
+        Err(e) if !e.use_stderr() => {
+            // --help and --version.
             let _ = e.print();
-            return code;
+            return 0;
+        }
+        Err(e) => {
+            // Usage errors as one line, like every other refusal.
+            let text = e.render().to_string();
+            let line = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("error: bad arguments");
+            eprintln!("{} (see --help)", line.trim_end());
+            return 2;
         }
     };
     match std::panic::catch_unwind(|| run(cli)) {
