@@ -196,6 +196,10 @@ impl Resolver {
         complex_output: bool,
     ) -> Result<()> {
         params.settings.validate()?;
+        // An error the host left pending is not the resolve's: report it apart.
+        if let Err(e) = check_error(gl, "the host's GL calls before the resolve") {
+            log::warn!("{e}");
+        }
         if inputs.colors.len() != inputs.rules.len() {
             return Err(Error::Layout(format!(
                 "{} colour inputs but {} rules",
