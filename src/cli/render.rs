@@ -5,7 +5,7 @@ use crate::context::HeadlessContext;
 use crate::gbuffer::GBufferLayout;
 use crate::gl::TextureRef;
 use crate::readback::{Readback, SampleImage};
-use crate::renderer::{AaMode, RenderOptions, Renderer};
+use crate::renderer::{AaMode, DepthMode, RenderOptions, Renderer};
 use crate::resolve::{ResolveMethod, ResolveSettings, Window};
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -135,6 +135,7 @@ impl RenderArgs {
             } else {
                 GBufferLayout::recommended()
             },
+            depth_mode: DepthMode::Auto,
         })
     }
 }
@@ -153,7 +154,9 @@ impl Session {
             log::warn!("{}: {w}", args.scene);
         }
         let ctx = HeadlessContext::new(args.common.backend)?;
-        let mut renderer = Renderer::new(ctx.gl(), &scene, &options)?;
+        // The renderer logs its precision warnings (log::warn!) itself.
+        let loader = |name: &str| ctx.get_proc_address(name);
+        let mut renderer = Renderer::new(ctx.gl(), loader, &scene, &options)?;
         renderer.render(ctx.gl())?;
         Ok(Session {
             ctx,
@@ -318,8 +321,13 @@ pub fn run_dump(cmd: &DumpCmd) -> Result<()> {
             "fov_y": camera.fov_y,
             "near": camera.near,
             "far": camera.far,
-            "projection": if camera.far.is_some() { "standard" } else { "infinite" },
-            "clear_depth": 1.0,
+            "projection": match (renderer.depth_mode(), camera.far.is_some()) {
+                (DepthMode::Reversed, true) => "reversed",
+                (DepthMode::Reversed, false) => "reversed-infinite",
+                (_, true) => "standard",
+                (_, false) => "infinite",
+            },
+            "clear_depth": renderer.clear_depth(),
             "method": cmd.render.method,
             "window": settings.window.name(),
             "c": settings.c,

@@ -75,7 +75,7 @@ pub fn precision_warnings(
     } else if resolution > detail {
         warnings.push(format!(
             "depth {} cannot separate surfaces closer than {resolution:.3} units at {max_distance:.0} units \
-             (detail of {detail} units merges); use 32-bit float depth with reversed-Z (the recommended layout)",
+             (detail of {detail:.3} units merges); use 32-bit float depth with reversed-Z (the recommended layout)",
             layout.depth
         ));
     }

@@ -13,10 +13,17 @@ use crate::gl::{Program, ShaderStage, check_error, preamble};
 use glam::{DMat4, Mat4};
 use glow::HasContext;
 
-/// The model vertex shader's body (shared with the transparent pass).
-pub(crate) const GEOMETRY_VERT: &str = include_str!("../../shaders_glsl/geometry.vert");
-/// The model fragment shader's body.
-pub(crate) const GEOMETRY_FRAG: &str = include_str!("../../shaders_glsl/geometry.frag");
+/// The model vertex shader's body (`shaders_glsl/geometry.vert`, shared
+/// with the transparent pass): attributes `a_position`, `a_normal`, `a_uv`;
+/// uniforms `u_model_view`, `u_normal_matrix`, `u_projection`. Compiled
+/// after [`preamble`](crate::gl::preamble) with no extensions or defines.
+pub const GEOMETRY_VERT: &str = include_str!("../../shaders_glsl/geometry.vert");
+/// The model fragment shader's body (`shaders_glsl/geometry.frag`): outputs
+/// `o_color`, `o_position`, `o_normal`, `o_specular`, `o_emissive`, bound by
+/// name to the layout's attachment numbers; material uniforms as set by the
+/// renderer. Compiled after [`preamble`](crate::gl::preamble) with no
+/// extensions or defines, with and without MSAA alike.
+pub const GEOMETRY_FRAG: &str = include_str!("../../shaders_glsl/geometry.frag");
 
 /// The model program, its outputs bound to the layout's attachment numbers.
 #[derive(Debug)]
@@ -78,21 +85,22 @@ impl GeometryPass {
         self.slots
     }
 
-    /// Clear `target` (colour 0, depth 1.0).
-    pub(crate) fn clear(gl: &glow::Context, target: GeometryTarget) {
+    /// Clear `target` (colour 0, depth to `clear_depth`).
+    pub(crate) fn clear(gl: &glow::Context, target: GeometryTarget, clear_depth: f32) {
         bind_target(gl, target.fbo, target.width, target.height);
         unsafe {
             gl.disable(glow::SCISSOR_TEST);
             gl.color_mask(true, true, true, true);
             gl.depth_mask(true);
             gl.clear_color(0.0, 0.0, 0.0, 0.0);
-            gl.clear_depth_f64(1.0);
+            gl.clear_depth_f64(f64::from(clear_depth));
             gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
         }
     }
 
     /// Draw the scene's opaque and alpha-tested objects into `target`
-    /// (depth test LESS, depth written, back faces culled unless double-sided).
+    /// (depth test `depth_func`: LESS, or GREATER for reversed-Z; depth
+    /// written; back faces culled unless double-sided).
     pub(crate) fn draw(
         &self,
         gl: &glow::Context,
@@ -100,11 +108,12 @@ impl GeometryPass {
         scene: &GpuScene,
         view: &DMat4,
         projection: &Mat4,
+        depth_func: u32,
     ) -> Result<()> {
         bind_target(gl, target.fbo, target.width, target.height);
         unsafe {
             gl.enable(glow::DEPTH_TEST);
-            gl.depth_func(glow::LESS);
+            gl.depth_func(depth_func);
             gl.depth_mask(true);
             gl.disable(glow::BLEND);
             gl.disable(glow::SCISSOR_TEST);

@@ -12,19 +12,25 @@ use crate::scene::{Light, LightKind};
 use glam::DMat4;
 use glow::HasContext;
 
-/// The lighting shader's body (its first part is shared with the transparent pass).
-pub(crate) const LIGHTING_FRAG: &str = include_str!("../../shaders_glsl/lighting.frag");
+/// The deferred lighting fragment shader's body (`shaders_glsl/lighting.frag`;
+/// its first part is shared with the transparent pass). Compiled after
+/// [`preamble`](crate::gl::preamble) with [`lighting_defines`]; it reads the
+/// resolved G-buffer through `u_color`, `u_position`, `u_normal`,
+/// `u_specular`, `u_emissive` and `u_depth` with `texelFetch` at
+/// `gl_FragCoord`, treats pixels whose depth equals `u_clear_depth` as
+/// background, and writes `o_color`.
+pub const LIGHTING_FRAG: &str = include_str!("../../shaders_glsl/lighting.frag");
 
 /// Lights per batch (one draw each); sized to fit GL 3.2's minimum of 1024
 /// fragment uniform components with room to spare.
-pub(crate) const LIGHTS_PER_BATCH: usize = 16;
+pub const LIGHTS_PER_BATCH: usize = 16;
 
-/// Constant ambient radiance, scaled by the surface's diffuse colour and F0.
-pub(crate) const AMBIENT: [f32; 3] = [0.03, 0.03, 0.035];
+/// Constant ambient radiance (`u_ambient`), scaled by the surface's diffuse colour and F0.
+pub const AMBIENT: [f32; 3] = [0.03, 0.03, 0.035];
 
 /// The `#define`s the lighting code is compiled with (the same for every
-/// renderer option).
-pub(crate) fn lighting_defines() -> Vec<(String, String)> {
+/// renderer option): `MAX_LIGHTS` = [`LIGHTS_PER_BATCH`].
+pub fn lighting_defines() -> Vec<(String, String)> {
     vec![("MAX_LIGHTS".to_string(), LIGHTS_PER_BATCH.to_string())]
 }
 
@@ -151,7 +157,9 @@ impl LightingPass {
         format!("{}{LIGHTING_FRAG}", preamble(&[], &lighting_defines()))
     }
 
-    /// Light the resolved `gbuffer` into `target`, one draw per light batch.
+    /// Light the resolved `gbuffer` into `target`, one draw per light batch;
+    /// pixels whose depth is `clear_depth` are background.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn draw(
         &self,
         gl: &glow::Context,
@@ -160,6 +168,7 @@ impl LightingPass {
         gbuffer: &GBuffer,
         slots: GBufferSlots,
         batches: &[LightBatch],
+        clear_depth: f32,
     ) -> Result<()> {
         bind_target(
             gl,
@@ -185,7 +194,7 @@ impl LightingPass {
             }
             p.set_i32(gl, name, unit as i32);
         }
-        p.set_f32(gl, "u_clear_depth", 1.0);
+        p.set_f32(gl, "u_clear_depth", clear_depth);
         for (index, batch) in batches.iter().enumerate() {
             set_batch_blend(gl, index, false);
             batch.apply(gl, p, index == 0);

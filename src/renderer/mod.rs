@@ -12,13 +12,15 @@
 //!
 //! # The frame ([`Renderer::render`])
 //!
-//! 1. **Clear** the G-buffer pass's framebuffer (colour 0, depth 1.0).
+//! 1. **Clear** the G-buffer pass's framebuffer (colour 0, depth to the
+//!    clear depth: 1.0, or 0.0 with reversed-Z).
 //! 2. **Background**, drawn single-sampled into its own RGBA16F texture
 //!    (`background.frag`), then **copied** into the emissive attachment of
 //!    that framebuffer by a full-screen pass that writes every sample
 //!    (`background_copy.frag`; a blit cannot write a multisampled target).
 //! 3. **G-buffer pass** (`geometry.vert` + `geometry.frag`): opaque and
-//!    alpha-tested objects; depth test LESS, standard GL depth (−1..1).
+//!    alpha-tested objects; depth test LESS with standard GL depth (−1..1),
+//!    or GREATER with reversed-Z ([`DepthMode`]).
 //! 4. **Resolve** ([`MsaaRetrofit::resolve`]) into the G-buffer's textures,
 //!    when multisampling.
 //! 5. **Decal hook** ([`Renderer::set_decal_hook`]) with the resolved
@@ -32,9 +34,20 @@
 //! 9. **FXAA** (`fxaa.frag`), optional, into a second RGBA8 image.
 //!
 //! Each pass sets all the GL state it relies on.
+//!
+//! # Depth
+//!
+//! [`DepthMode::Auto`] (the default) renders with reversed-Z — near → 1,
+//! far → 0, `glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE)`, cleared to 0.0 —
+//! when the context has `glClipControl` and the layout's depth is floating
+//! point, and with GL's standard depth otherwise. The clip control is set
+//! for the frame and put back as the host had it afterwards, as are the
+//! depth function and the clear depth. Before allocating, the layout is
+//! checked against the scene's depth range ([`Renderer::warnings`]).
 
 mod background;
 mod background_copy;
+mod depth;
 mod fxaa;
 mod geometry;
 mod lighting;
@@ -46,8 +59,8 @@ mod transparent;
 
 use crate::gbuffer::{GBuffer, GBufferLayout};
 use crate::gl::{
-    Attachment, Framebuffer, GpuTimer, Texture2d, TextureRef, TimerKind, VertexArray, check_error,
-    framebuffer_status_name,
+    Attachment, Capabilities, Framebuffer, GpuTimer, Texture2d, TextureRef, TimerKind, VertexArray,
+    check_error, framebuffer_status_name,
 };
 use crate::resolve::{DepthProjection, KeySource, ResolveParams, ResolveSettings};
 use crate::retrofit::{MsaaRetrofit, RetrofitOptions};
@@ -55,15 +68,25 @@ use crate::scene::{Background, Camera, Light, Scene};
 use crate::{Error, Result};
 use background::BackgroundPass;
 use background_copy::{BackgroundCopyPass, CopyTarget};
+pub use depth::DepthMode;
+use depth::{ClipControl, SceneExtent};
 use fxaa::FxaaPass;
 use geometry::{GeometryPass, GeometryTarget};
 use glam::Mat4;
 use glow::HasContext;
 use lighting::{LightingPass, light_batches};
 use mesh::GpuScene;
+use std::ffi::c_void;
 use targets::Targets;
 use tonemap::TonemapPass;
 use transparent::TransparentPass;
+
+/// The sources of the renderer's model and lighting shaders, for a host (or
+/// a test) that builds the very same programs around its own G-buffer.
+pub mod shaders {
+    pub use super::geometry::{GEOMETRY_FRAG, GEOMETRY_VERT};
+    pub use super::lighting::{AMBIENT, LIGHTING_FRAG, LIGHTS_PER_BATCH, lighting_defines};
+}
 
 /// How the G-buffer is anti-aliased.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -112,11 +135,15 @@ pub struct RenderOptions {
     /// `position`, `normal`, `specular` and `emissive` (in any order; others
     /// are allowed and left cleared). Default: [`GBufferLayout::recommended`].
     pub layout: GBufferLayout,
+    /// Standard depth or reversed-Z. Default: [`DepthMode::Auto`] (reversed-Z
+    /// where the context and the layout's depth format allow it); see
+    /// [`Renderer::depth_mode`] for what it became.
+    pub depth_mode: DepthMode,
 }
 
 impl Default for RenderOptions {
     /// 640×360, 4x MSAA with the default (median, smooth) resolve, no FXAA,
-    /// the recommended layout.
+    /// the recommended layout, [`DepthMode::Auto`].
     fn default() -> Self {
         RenderOptions {
             width: 640,
@@ -125,6 +152,7 @@ impl Default for RenderOptions {
             aa: AaMode::Resolve(ResolveSettings::default()),
             fxaa: false,
             layout: GBufferLayout::recommended(),
+            depth_mode: DepthMode::Auto,
         }
     }
 }
@@ -480,6 +508,12 @@ fn timed(gl: &glow::Context, timer: &mut GpuTimer, f: impl FnOnce() -> Result<()
 /// The demo deferred renderer; see the [module documentation](self).
 pub struct Renderer {
     options: RenderOptions,
+    /// `options.depth_mode` as decided for this context and layout (never `Auto`).
+    depth_mode: DepthMode,
+    clip: ClipControl,
+    scene_name: String,
+    extent: Option<SceneExtent>,
+    warnings: Vec<String>,
     camera: Camera,
     background: Background,
     lights: Vec<Light>,
@@ -493,6 +527,7 @@ impl std::fmt::Debug for Renderer {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Renderer")
             .field("options", &self.options)
+            .field("depth_mode", &self.depth_mode)
             .field("samples", &self.samples())
             .field("objects", &self.scene.meshes.len())
             .field("lights", &self.lights.len())
@@ -504,9 +539,33 @@ impl std::fmt::Debug for Renderer {
 impl Renderer {
     /// Build every program, upload the scene's meshes and textures (once),
     /// and allocate the targets for `options`.
-    pub fn new(gl: &glow::Context, scene: &Scene, options: &RenderOptions) -> Result<Self> {
+    ///
+    /// `loader` looks up GL entry points glow does not wrap (`glClipControl`,
+    /// for reversed-Z) for the current context: the host's
+    /// `eglGetProcAddress` or equivalent, e.g.
+    /// `|name| ctx.get_proc_address(name)` with a
+    /// [`HeadlessContext`](crate::context::HeadlessContext).
+    ///
+    /// Before allocating, the layout is checked against how far the scene
+    /// reaches from the camera; each finding is logged with `log::warn!` and
+    /// kept ([`Renderer::warnings`]). Errors: invalid options, and
+    /// [`Error::Unsupported`] for [`DepthMode::Reversed`] on a context
+    /// without `glClipControl`.
+    pub fn new(
+        gl: &glow::Context,
+        loader: impl Fn(&str) -> *const c_void,
+        scene: &Scene,
+        options: &RenderOptions,
+    ) -> Result<Self> {
         options.validate()?;
         let slots = GBufferSlots::of(&options.layout)?;
+        let clip = ClipControl::load(&loader, Capabilities::query(gl).clip_control);
+        let depth_mode = depth::resolve_mode(gl, options.depth_mode, &clip, options.layout.depth)?;
+        let extent = SceneExtent::of(scene);
+        let warnings = depth::warnings(&options.layout, &scene.camera, depth_mode, extent);
+        for w in &warnings {
+            log::warn!("scene `{}` ({depth_mode} depth): {w}", scene.name);
+        }
         let passes = Passes::new(gl, slots)?;
         let gpu_scene = match GpuScene::new(gl, scene) {
             Ok(s) => s,
@@ -525,6 +584,11 @@ impl Renderer {
         };
         Ok(Renderer {
             options: options.clone(),
+            depth_mode,
+            clip,
+            scene_name: scene.name.clone(),
+            extent,
+            warnings,
             camera: scene.camera,
             background: scene.background,
             lights: scene.lights.clone(),
@@ -545,6 +609,27 @@ impl Renderer {
         &self.camera
     }
 
+    /// The depth convention in effect: [`RenderOptions::depth_mode`] as
+    /// decided for this context and layout, never [`DepthMode::Auto`].
+    pub fn depth_mode(&self) -> DepthMode {
+        self.depth_mode
+    }
+
+    /// The depth the G-buffer is cleared to and background pixels keep:
+    /// 1.0, or 0.0 with reversed-Z.
+    pub fn clear_depth(&self) -> f32 {
+        self.depth_mode.clear_depth()
+    }
+
+    /// What the precision check found for the current layout and depth
+    /// mode: FP16 positions overflowing, or depth too coarse for the scene's
+    /// detail at its farthest distance (see
+    /// [`precision_warnings`](crate::gbuffer::precision_warnings)). Empty
+    /// when the layout holds the scene.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
     /// The real samples per pixel of the G-buffer pass (1 without multisampling).
     pub fn samples(&self) -> u32 {
         self.frame
@@ -554,8 +639,20 @@ impl Renderer {
     }
 
     /// Render one frame (see the [module documentation](self) for the passes).
+    ///
+    /// The clip control the depth mode needs is set for the frame; the
+    /// host's clip control, depth function and clear depth are put back
+    /// afterwards, on error too.
     pub fn render(&mut self, gl: &glow::Context) -> Result<FrameTimings> {
+        let saved = self.clip.enter(gl, self.depth_mode);
+        let result = self.render_passes(gl);
+        self.clip.leave(gl, saved);
+        result
+    }
+
+    fn render_passes(&mut self, gl: &glow::Context) -> Result<FrameTimings> {
         let (width, height) = (self.options.width, self.options.height);
+        let depth_mode = self.depth_mode;
         let view = self.camera.view.as_dmat4();
         let projection = self.projection();
         let params = self.resolve_params();
@@ -601,7 +698,7 @@ impl Renderer {
         };
         let target = GeometryTarget { fbo, width, height };
         t.geometry_ms = timed(gl, timer, || {
-            GeometryPass::clear(gl, target);
+            GeometryPass::clear(gl, target, depth_mode.clear_depth());
             background.draw(
                 gl,
                 &targets.background,
@@ -618,7 +715,14 @@ impl Renderer {
                 draw_buffers: &draw_buffers,
             };
             background_copy.draw(gl, copy, fullscreen, &targets.background.texture)?;
-            geometry.draw(gl, target, &self.scene, &view, &projection)
+            geometry.draw(
+                gl,
+                target,
+                &self.scene,
+                &view,
+                &projection,
+                depth_mode.nearer_func(),
+            )
         })?;
 
         // The second integration line: resolve into the G-buffer's own textures.
@@ -635,7 +739,15 @@ impl Renderer {
         }
 
         t.lighting_ms = timed(gl, timer, || {
-            lighting.draw(gl, &targets.hdr, fullscreen, gbuffer, slots, &batches)
+            lighting.draw(
+                gl,
+                &targets.hdr,
+                fullscreen,
+                gbuffer,
+                slots,
+                &batches,
+                depth_mode.clear_depth(),
+            )
         })?;
         t.transparent_ms = timed(gl, timer, || {
             transparent.draw(
@@ -645,6 +757,7 @@ impl Renderer {
                 &view,
                 &projection,
                 &batches,
+                depth_mode.nearer_func(),
             )
         })?;
         t.tonemap_ms = timed(gl, timer, || {
@@ -683,6 +796,10 @@ impl Renderer {
     /// every later pass sets what it uses. It must not delete or re-attach
     /// the G-buffer's objects, and must not begin a `GL_TIME_ELAPSED` query
     /// (it runs inside the renderer's own). A GL error it leaves fails the frame.
+    /// Depth follows [`Renderer::depth_mode`]: with reversed-Z the clip
+    /// control is `GL_ZERO_TO_ONE` during the hook, the nearer fragment
+    /// passes GREATER and the background's depth is 0.0
+    /// ([`Renderer::projection`] is the matrix to draw with).
     pub fn set_decal_hook(&mut self, hook: Option<DecalHook>) {
         self.decal_hook = hook;
     }
@@ -695,12 +812,23 @@ impl Renderer {
     /// - a new sample count rebuilds the multisampled twins only;
     /// - switching between `none` and a resolve creates or frees the retrofit;
     /// - a new resolve method or window changes nothing on the GPU;
-    /// - a new layout builds a new G-buffer and retrofit.
+    /// - a new layout builds a new G-buffer and retrofit;
+    /// - a new depth mode changes nothing on the GPU (it is decided again
+    ///   with a new layout too, see [`DepthMode::Auto`]).
     ///
-    /// New objects are made before old ones are freed: on error the renderer
-    /// keeps rendering with its previous options.
+    /// The precision check runs again before allocating; new findings are
+    /// logged. New objects are made before old ones are freed: on error the
+    /// renderer keeps rendering with its previous options.
     pub fn set_options(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
         options.validate()?;
+        let depth_mode =
+            depth::resolve_mode(gl, options.depth_mode, &self.clip, options.layout.depth)?;
+        let warnings = depth::warnings(&options.layout, &self.camera, depth_mode, self.extent);
+        if warnings != self.warnings {
+            for w in &warnings {
+                log::warn!("scene `{}` ({depth_mode} depth): {w}", self.scene_name);
+            }
+        }
         if options.layout != self.options.layout {
             self.rebuild_frame(gl, options)?;
         } else if (options.width, options.height) != (self.options.width, self.options.height) {
@@ -709,6 +837,8 @@ impl Renderer {
             self.update_in_place(gl, options)?;
         }
         self.options = options.clone();
+        self.depth_mode = depth_mode;
+        self.warnings = warnings;
         Ok(())
     }
 
@@ -837,10 +967,12 @@ impl Renderer {
         self.frame.retrofit.as_ref()
     }
 
-    /// The camera's projection at this size (standard GL depth, −1..1).
+    /// The camera's projection at this size in the frame's depth mode:
+    /// standard GL depth (−1..1, [`Camera::projection`]), or reversed-Z for
+    /// `GL_ZERO_TO_ONE` (near → 1; far → 0, or 0 at infinity).
     pub fn projection(&self) -> Mat4 {
-        self.camera
-            .projection(self.options.width as f32 / self.options.height as f32)
+        let aspect = self.options.width as f32 / self.options.height as f32;
+        depth::projection(&self.camera, aspect, self.depth_mode)
     }
 
     /// What the resolve is given each frame, when multisampling.
@@ -848,7 +980,11 @@ impl Renderer {
         let settings = self.options.aa.settings()?;
         Some(ResolveParams {
             settings,
-            projection: DepthProjection::from_matrix(&self.projection().as_dmat4(), false, 1.0),
+            projection: DepthProjection::from_matrix(
+                &self.projection().as_dmat4(),
+                self.depth_mode.is_reversed(),
+                f64::from(self.clear_depth()),
+            ),
             fov_y: self.camera.fov_y as f64,
             height_px: self.options.height,
         })

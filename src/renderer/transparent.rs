@@ -51,7 +51,9 @@ impl TransparentPass {
     }
 
     /// Draw the scene's transparent objects into `target` (the HDR colour
-    /// with the resolved depth attached), farthest first.
+    /// with the resolved depth attached), farthest first, depth-tested with
+    /// `depth_func` (LESS, or GREATER for reversed-Z).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn draw(
         &self,
         gl: &glow::Context,
@@ -60,6 +62,7 @@ impl TransparentPass {
         view: &DMat4,
         projection: &Mat4,
         batches: &[LightBatch],
+        depth_func: u32,
     ) -> Result<()> {
         if scene.transparent_items.is_empty() {
             return Ok(());
@@ -76,7 +79,7 @@ impl TransparentPass {
         bind_target(gl, target.raw, target.width, target.height);
         unsafe {
             gl.enable(glow::DEPTH_TEST);
-            gl.depth_func(glow::LESS);
+            gl.depth_func(depth_func);
             gl.depth_mask(false);
             gl.disable(glow::SCISSOR_TEST);
             gl.disable(glow::STENCIL_TEST);

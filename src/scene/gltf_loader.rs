@@ -70,9 +70,31 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    load_bytes(&bytes, Some(&base), is_glb_name, name)
+}
+
+/// Load a glTF or GLB held in memory. External files are refused: only
+/// embedded (GLB or data-URI) buffers and images are read.
+pub(crate) fn load_from_memory(bytes: &[u8], name: &str) -> crate::Result<Scene> {
+    load_bytes(bytes, None, false, name.to_string()).map_err(|reason| crate::Error::Scene {
+        path: name.into(),
+        reason: one_line(&reason),
+    })
+}
+
+fn load_bytes(
+    bytes: &[u8],
+    base: Option<&Path>,
+    is_glb_name: bool,
+    name: String,
+) -> Result<Scene, String> {
 
     let (json, bin) = if bytes.starts_with(b"glTF") {
-        let glb = parse_glb(&bytes)?;
+        let glb = parse_glb(bytes)?;
         (glb.json, glb.bin)
     } else if is_glb_name {
         let magic: String = bytes
@@ -84,7 +106,7 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
             "not a binary glTF file: the magic is '{magic}', expected 'glTF'"
         ));
     } else {
-        (bytes.as_slice(), None)
+        (bytes, None)
     };
 
     let (document, notes) = parse_document(json)?;
@@ -93,11 +115,11 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         warnings.push(note);
     }
     check_extensions(&document, &mut warnings);
-    let buffers = load_buffers(&document, &base, bin)?;
+    let buffers = load_buffers(&document, base, bin)?;
 
     let mut loader = Loader {
         document: &document,
-        base: &base,
+        base,
         buffers: &buffers,
         warnings,
         materials: Vec::new(),
@@ -115,11 +137,6 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         triangle_cap_reported: false,
     };
     loader.walk_scene()?;
-
-    let name = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
     loader.finish(name)
 }
 
@@ -331,7 +348,7 @@ enum UriSource {
     File(PathBuf),
 }
 
-fn resolve_uri(uri: &str, base: &Path) -> Result<UriSource, String> {
+fn resolve_uri(uri: &str, base: Option<&Path>) -> Result<UriSource, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let Some((_, payload)) = rest.split_once(',') else {
             return Err("malformed data URI (no ',')".into());
@@ -345,6 +362,12 @@ fn resolve_uri(uri: &str, base: &Path) -> Result<UriSource, String> {
             Ok(UriSource::Bytes(percent_decode(payload)))
         };
     }
+    let Some(base) = base else {
+        return Err(format!(
+            "external file '{}' cannot be read when loading from memory",
+            display_uri(uri)
+        ));
+    };
     if let Some(rest) = uri
         .strip_prefix("file://")
         .or_else(|| uri.strip_prefix("file:"))
@@ -426,7 +449,7 @@ fn decode_base64(s: &str) -> Result<Vec<u8>, String> {
 
 fn load_buffers(
     doc: &gltf::Document,
-    base: &Path,
+    base: Option<&Path>,
     bin: Option<&[u8]>,
 ) -> Result<Vec<Vec<u8>>, String> {
     let mut out = Vec::new();
@@ -739,7 +762,7 @@ fn triangulate(mode: Mode, idx: Vec<u32>) -> Result<Vec<u32>, &'static str> {
 
 struct Loader<'a> {
     document: &'a gltf::Document,
-    base: &'a Path,
+    base: Option<&'a Path>,
     buffers: &'a [Vec<u8>],
     warnings: Warnings,
     materials: Vec<Material>,

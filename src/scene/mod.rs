@@ -421,6 +421,12 @@ impl Scene {
         gltf_loader::load(path)
     }
 
+    /// Load a glTF (JSON) or GLB file held in memory; `name` labels errors.
+    /// Only embedded data is read: references to external files are refused.
+    pub fn from_bytes(bytes: &[u8], name: &str) -> crate::Result<Scene> {
+        gltf_loader::load_from_memory(bytes, name)
+    }
+
     /// The names accepted after `builtin:`, the default (`greebles`) first.
     pub fn builtin_names() -> &'static [&'static str] {
         builtin::NAMES
