@@ -29,6 +29,73 @@ fn delete_texture(gl: &glow::Context, raw: glow::Texture) {
     counters::destroyed(Kind::Texture);
 }
 
+/// Create a `TEXTURE_2D` (or, with `layers`, a `TEXTURE_2D_ARRAY`) with
+/// nearest filtering and clamped edges, upload `data`, check for errors and
+/// label it. On failure nothing is left allocated.
+fn allocate(
+    gl: &glow::Context,
+    label: &str,
+    format: Format,
+    width: u32,
+    height: u32,
+    layers: Option<u32>,
+    data: Option<&[u8]>,
+) -> Result<glow::Texture> {
+    validate_size(gl, label, width, height)?;
+    let raw = new_texture(gl, label)?;
+    let target = if layers.is_some() {
+        glow::TEXTURE_2D_ARRAY
+    } else {
+        glow::TEXTURE_2D
+    };
+    unsafe {
+        gl.bind_texture(target, Some(raw));
+        gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 1);
+        let (internal, pf, pt) = (
+            format.internal_format() as i32,
+            format.pixel_format(),
+            format.pixel_type(),
+        );
+        match layers {
+            Some(n) => gl.tex_image_3d(
+                target,
+                0,
+                internal,
+                width as i32,
+                height as i32,
+                n as i32,
+                0,
+                pf,
+                pt,
+                glow::PixelUnpackData::Slice(data),
+            ),
+            None => gl.tex_image_2d(
+                target,
+                0,
+                internal,
+                width as i32,
+                height as i32,
+                0,
+                pf,
+                pt,
+                glow::PixelUnpackData::Slice(data),
+            ),
+        }
+        gl.tex_parameter_i32(target, glow::TEXTURE_MIN_FILTER, glow::NEAREST as i32);
+        gl.tex_parameter_i32(target, glow::TEXTURE_MAG_FILTER, glow::NEAREST as i32);
+        gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE as i32);
+        gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE as i32);
+        gl.bind_texture(target, None);
+    }
+    let stage = format!("allocating texture `{label}` ({format}, {width}x{height})");
+    if let Err(e) = check_error(gl, &stage) {
+        delete_texture(gl, raw);
+        return Err(e);
+    }
+    label_object(gl, glow::TEXTURE, raw.0.get(), label);
+    Ok(raw)
+}
+
 /// A single-sample 2D texture.
 #[derive(Debug)]
 pub struct Texture2d {
@@ -63,40 +130,13 @@ impl Texture2d {
         height: u32,
         data: Option<&[u8]>,
     ) -> Result<Self> {
-        validate_size(gl, label, width, height)?;
-        let raw = new_texture(gl, label)?;
-        let texture = Texture2d {
+        let raw = allocate(gl, label, format, width, height, None, data)?;
+        Ok(Texture2d {
             raw,
             width,
             height,
             format,
-        };
-        unsafe {
-            gl.bind_texture(glow::TEXTURE_2D, Some(raw));
-            gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 1);
-            gl.tex_image_2d(
-                glow::TEXTURE_2D,
-                0,
-                format.internal_format() as i32,
-                width as i32,
-                height as i32,
-                0,
-                format.pixel_format(),
-                format.pixel_type(),
-                glow::PixelUnpackData::Slice(data),
-            );
-            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_MIN_FILTER, glow::NEAREST as i32);
-            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_MAG_FILTER, glow::NEAREST as i32);
-            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE as i32);
-            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE as i32);
-            gl.bind_texture(glow::TEXTURE_2D, None);
-        }
-        if let Err(e) = check_error(gl, &format!("allocating texture `{label}` ({format}, {width}x{height})")) {
-            texture.destroy(gl);
-            return Err(e);
-        }
-        label_object(gl, glow::TEXTURE, raw.0.get(), label);
-        Ok(texture)
+        })
     }
 
     /// Set the minification and magnification filters.
@@ -145,7 +185,9 @@ impl Texture2dMultisample {
     ) -> Result<Self> {
         validate_size(gl, label, width, height)?;
         if samples == 0 {
-            return Err(Error::invalid(format!("{label}: a sample count of 0 is not a count")));
+            return Err(Error::invalid(format!(
+                "{label}: a sample count of 0 is not a count"
+            )));
         }
         let raw = new_texture(gl, label)?;
         unsafe {
@@ -159,7 +201,10 @@ impl Texture2dMultisample {
                 true,
             );
         }
-        let allocated = check_error(gl, &format!("allocating {samples}x multisample texture `{label}`"));
+        let allocated = check_error(
+            gl,
+            &format!("allocating {samples}x multisample texture `{label}`"),
+        );
         let real = unsafe {
             gl.get_tex_level_parameter_i32(glow::TEXTURE_2D_MULTISAMPLE, 0, glow::TEXTURE_SAMPLES)
         };
@@ -198,7 +243,10 @@ impl Texture2dMultisample {
 
     /// Bytes of storage: width × height × samples × bytes per sample.
     pub fn bytes(&self) -> u64 {
-        self.width as u64 * self.height as u64 * self.samples as u64 * self.format.bytes_per_texel() as u64
+        self.width as u64
+            * self.height as u64
+            * self.samples as u64
+            * self.format.bytes_per_texel() as u64
     }
 
     /// Free the texture.
@@ -233,40 +281,14 @@ impl Texture2dArray {
         layers: u32,
         data: Option<&[u8]>,
     ) -> Result<Self> {
-        validate_size(gl, label, width, height)?;
-        let raw = new_texture(gl, label)?;
-        let texture = Texture2dArray {
+        let raw = allocate(gl, label, format, width, height, Some(layers), data)?;
+        Ok(Texture2dArray {
             raw,
             width,
             height,
             layers,
             format,
-        };
-        unsafe {
-            gl.bind_texture(glow::TEXTURE_2D_ARRAY, Some(raw));
-            gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 1);
-            gl.tex_image_3d(
-                glow::TEXTURE_2D_ARRAY,
-                0,
-                format.internal_format() as i32,
-                width as i32,
-                height as i32,
-                layers as i32,
-                0,
-                format.pixel_format(),
-                format.pixel_type(),
-                glow::PixelUnpackData::Slice(data),
-            );
-            gl.tex_parameter_i32(glow::TEXTURE_2D_ARRAY, glow::TEXTURE_MIN_FILTER, glow::NEAREST as i32);
-            gl.tex_parameter_i32(glow::TEXTURE_2D_ARRAY, glow::TEXTURE_MAG_FILTER, glow::NEAREST as i32);
-            gl.bind_texture(glow::TEXTURE_2D_ARRAY, None);
-        }
-        if let Err(e) = check_error(gl, &format!("allocating array texture `{label}`")) {
-            texture.destroy(gl);
-            return Err(e);
-        }
-        label_object(gl, glow::TEXTURE, raw.0.get(), label);
-        Ok(texture)
+        })
     }
 
     /// Free the texture.
