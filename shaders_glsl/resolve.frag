@@ -8,7 +8,8 @@
 //   NUM_ATTACHMENTS        colour attachments 0..7
 //   ATTk_SAMPLER, ATTk_VEC sampler and value type of attachment k
 //   ATTk_RULE              RULE_BLEND, RULE_BLEND_NORMAL, RULE_BLEND_HDR or RULE_SELECT
-//   KEY_SAMPLER            the position attachment's sampler, when the key comes from it
+//   KEY_SAMPLER, KEY_INDEX the position attachment's sampler and number, when
+//                          the key comes from it (its samples are fetched once)
 //   METHOD                 METHOD_AVERAGE, METHOD_FRONT, METHOD_MEDIAN or METHOD_BACK
 //   WINDOW_HARD            hard window (smooth otherwise)
 //   FAST_PATH              uniform pixels copy sample 0
@@ -82,6 +83,9 @@ bool g_bg[NUM_SAMPLES];        // background: clear depth, or a non-finite key
 float g_raw_depth[NUM_SAMPLES];
 float g_w[NUM_SAMPLES];        // closeness weights, g_w[ref] == 1
 vec4 g_vals[NUM_SAMPLES];      // scratch: one attachment's samples
+#ifdef KEY_SAMPLER
+vec4 g_key_vals[NUM_SAMPLES];  // the key attachment's samples, fetched once
+#endif
 
 bool is_finite(vec4 x) {
     return !any(isnan(x)) && !any(isinf(x));
@@ -209,6 +213,7 @@ vec4 resolve_rule(int rule, int r) {
 #define FETCH_ALL(S) for (int i = 0; i < NUM_SAMPLES; ++i) g_vals[i] = vec4(FETCH(S, p, i));
 #define RESOLVE_SELECT(S, O) O = FETCH(S, p, uniform_pixel ? 0 : r);
 #define RESOLVE_BLEND(S, O, RULE) if (uniform_pixel) { O = FETCH(S, p, 0); } else { FETCH_ALL(S) O = resolve_rule(RULE, r); }
+#define RESOLVE_KEY(O, RULE) if (uniform_pixel) { O = g_key_vals[0]; } else if (RULE == RULE_SELECT) { O = g_key_vals[r]; } else { for (int i = 0; i < NUM_SAMPLES; ++i) g_vals[i] = g_key_vals[i]; O = resolve_rule(RULE, r); }
 
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
@@ -217,7 +222,8 @@ void main() {
         float depth = FETCH(u_depth, p, i).r;
         g_raw_depth[i] = depth;
 #ifdef KEY_SAMPLER
-        float z = -FETCH(KEY_SAMPLER, p, i).z;
+        g_key_vals[i] = FETCH(KEY_SAMPLER, p, i);
+        float z = -g_key_vals[i].z;
 #else
         float z = u_projection.y / (depth * u_depth_to_ndc.x + u_depth_to_ndc.y + u_projection.x);
 #endif
@@ -241,56 +247,72 @@ void main() {
     }
 
 #if NUM_ATTACHMENTS > 0
-#if ATT0_RULE == RULE_SELECT
+#if defined(KEY_INDEX) && KEY_INDEX == 0
+    RESOLVE_KEY(o_att0, ATT0_RULE)
+#elif ATT0_RULE == RULE_SELECT
     RESOLVE_SELECT(u_att0, o_att0)
 #else
     RESOLVE_BLEND(u_att0, o_att0, ATT0_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 1
-#if ATT1_RULE == RULE_SELECT
+#if defined(KEY_INDEX) && KEY_INDEX == 1
+    RESOLVE_KEY(o_att1, ATT1_RULE)
+#elif ATT1_RULE == RULE_SELECT
     RESOLVE_SELECT(u_att1, o_att1)
 #else
     RESOLVE_BLEND(u_att1, o_att1, ATT1_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 2
-#if ATT2_RULE == RULE_SELECT
+#if defined(KEY_INDEX) && KEY_INDEX == 2
+    RESOLVE_KEY(o_att2, ATT2_RULE)
+#elif ATT2_RULE == RULE_SELECT
     RESOLVE_SELECT(u_att2, o_att2)
 #else
     RESOLVE_BLEND(u_att2, o_att2, ATT2_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 3
-#if ATT3_RULE == RULE_SELECT
+#if defined(KEY_INDEX) && KEY_INDEX == 3
+    RESOLVE_KEY(o_att3, ATT3_RULE)
+#elif ATT3_RULE == RULE_SELECT
     RESOLVE_SELECT(u_att3, o_att3)
 #else
     RESOLVE_BLEND(u_att3, o_att3, ATT3_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 4
-#if ATT4_RULE == RULE_SELECT
+#if defined(KEY_INDEX) && KEY_INDEX == 4
+    RESOLVE_KEY(o_att4, ATT4_RULE)
+#elif ATT4_RULE == RULE_SELECT
     RESOLVE_SELECT(u_att4, o_att4)
 #else
     RESOLVE_BLEND(u_att4, o_att4, ATT4_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 5
-#if ATT5_RULE == RULE_SELECT
+#if defined(KEY_INDEX) && KEY_INDEX == 5
+    RESOLVE_KEY(o_att5, ATT5_RULE)
+#elif ATT5_RULE == RULE_SELECT
     RESOLVE_SELECT(u_att5, o_att5)
 #else
     RESOLVE_BLEND(u_att5, o_att5, ATT5_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 6
-#if ATT6_RULE == RULE_SELECT
+#if defined(KEY_INDEX) && KEY_INDEX == 6
+    RESOLVE_KEY(o_att6, ATT6_RULE)
+#elif ATT6_RULE == RULE_SELECT
     RESOLVE_SELECT(u_att6, o_att6)
 #else
     RESOLVE_BLEND(u_att6, o_att6, ATT6_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 7
-#if ATT7_RULE == RULE_SELECT
+#if defined(KEY_INDEX) && KEY_INDEX == 7
+    RESOLVE_KEY(o_att7, ATT7_RULE)
+#elif ATT7_RULE == RULE_SELECT
     RESOLVE_SELECT(u_att7, o_att7)
 #else
     RESOLVE_BLEND(u_att7, o_att7, ATT7_RULE)

@@ -92,6 +92,7 @@ impl ResolveProgramKey {
         }
         if let KeySource::Position(k) = self.key {
             def("KEY_SAMPLER", format!("u_att{k}"));
+            def("KEY_INDEX", k.to_string());
         }
         let method = match self.method {
             ResolveMethod::Average => "METHOD_AVERAGE",
