@@ -71,7 +71,8 @@ fn encode(planes: &[Plane]) -> Vec<u8> {
     let mut enc = DeflateEncoder::new(Vec::new(), Compression::best());
     for p in planes {
         for v in &p.data {
-            enc.write_all(&half::f16::from_f32(*v).to_le_bytes()).expect("deflate");
+            enc.write_all(&half::f16::from_f32(*v).to_le_bytes())
+                .expect("deflate");
         }
     }
     out.extend(enc.finish().expect("deflate"));
@@ -79,11 +80,19 @@ fn encode(planes: &[Plane]) -> Vec<u8> {
 }
 
 fn decode(bytes: &[u8]) -> Vec<Plane> {
-    let split = bytes.iter().position(|&b| b == b'\n').expect("golden header line");
-    let header: Vec<serde_json::Value> = serde_json::from_slice(&bytes[..split]).expect("golden header");
+    let split = bytes
+        .iter()
+        .position(|&b| b == b'\n')
+        .expect("golden header line");
+    let header: Vec<serde_json::Value> =
+        serde_json::from_slice(&bytes[..split]).expect("golden header");
     let mut raw = Vec::new();
-    DeflateDecoder::new(&bytes[split + 1..]).read_to_end(&mut raw).expect("inflate");
-    let mut values = raw.chunks_exact(2).map(|c| half::f16::from_le_bytes([c[0], c[1]]).to_f32());
+    DeflateDecoder::new(&bytes[split + 1..])
+        .read_to_end(&mut raw)
+        .expect("inflate");
+    let mut values = raw
+        .chunks_exact(2)
+        .map(|c| half::f16::from_le_bytes([c[0], c[1]]).to_f32());
     header
         .iter()
         .map(|h| {
@@ -125,14 +134,26 @@ pub fn check_samples(name: &str, planes: &[Plane], tol: SampleTolerance) {
         return;
     }
     let Ok(bytes) = std::fs::read(&path) else {
-        missing(name, &file, |p| std::fs::write(p, encode(planes)).expect("writing candidate"));
+        missing(name, &file, |p| {
+            std::fs::write(p, encode(planes)).expect("writing candidate")
+        });
     };
     let golden = decode(&bytes);
-    assert_eq!(golden.len(), planes.len(), "{name}: the golden has {} planes, the test {}", golden.len(), planes.len());
+    assert_eq!(
+        golden.len(),
+        planes.len(),
+        "{name}: the golden has {} planes, the test {}",
+        golden.len(),
+        planes.len()
+    );
     let mut report = Vec::new();
     let mut worst_plane: Option<(usize, Vec<f32>)> = None;
     for (pi, (g, p)) in golden.iter().zip(planes).enumerate() {
-        assert_eq!((g.name.as_str(), g.shape), (p.name.as_str(), p.shape), "{name}: plane layout changed");
+        assert_eq!(
+            (g.name.as_str(), g.shape),
+            (p.name.as_str(), p.shape),
+            "{name}: plane layout changed"
+        );
         let mut bad = 0usize;
         let mut diff = vec![0.0f32; p.shape[1] * p.shape[2]];
         let per_sample = p.shape[1] * p.shape[2] * p.shape[3];
@@ -141,12 +162,20 @@ pub fn check_samples(name: &str, planes: &[Plane], tol: SampleTolerance) {
             if !same(pv, gv, tol) {
                 bad += 1;
                 let pixel = (i % per_sample) / p.shape[3];
-                diff[pixel] = diff[pixel].max(if pv.is_finite() && gv.is_finite() { (pv - gv).abs() } else { f32::INFINITY });
+                diff[pixel] = diff[pixel].max(if pv.is_finite() && gv.is_finite() {
+                    (pv - gv).abs()
+                } else {
+                    f32::INFINITY
+                });
             }
         }
         let allowed = (tol.outlier_fraction * p.data.len() as f32).floor() as usize;
         if bad > allowed {
-            report.push(format!("{}: {bad} of {} values differ (allowed {allowed})", p.name, p.data.len()));
+            report.push(format!(
+                "{}: {bad} of {} values differ (allowed {allowed})",
+                p.name,
+                p.data.len()
+            ));
             if worst_plane.is_none() {
                 worst_plane = Some((pi, diff));
             }
@@ -157,12 +186,23 @@ pub fn check_samples(name: &str, planes: &[Plane], tol: SampleTolerance) {
         let (w, h, c) = (p.shape[2] as u32, p.shape[1] as u32, p.shape[3]);
         let actual = RgbaImage::from_fn(w, h, |x, y| {
             let i = ((y * w + x) as usize) * c;
-            let v = |k: usize| (p.data.get(i + k.min(c - 1)).copied().unwrap_or(0.0).clamp(0.0, 1.0) * 255.0) as u8;
+            let v = |k: usize| {
+                (p.data
+                    .get(i + k.min(c - 1))
+                    .copied()
+                    .unwrap_or(0.0)
+                    .clamp(0.0, 1.0)
+                    * 255.0) as u8
+            };
             image::Rgba([v(0), v(1), v(2), 255])
         });
         let difference = RgbaImage::from_fn(w, h, |x, y| {
             let d = diff[(y * w + x) as usize];
-            let t = if d.is_finite() { (d / (tol.abs + 1e-6)).min(255.0) as u8 } else { 255 };
+            let t = if d.is_finite() {
+                (d / (tol.abs + 1e-6)).min(255.0) as u8
+            } else {
+                255
+            };
             image::Rgba([t, 0, if d > 0.0 { 64 } else { 0 }, 255])
         });
         let _ = actual.save(golden_dir().join(format!("{name}-actual.png")));
@@ -195,11 +235,18 @@ pub fn check_image(name: &str, image: &RgbaImage, tol: FlipTolerance) {
         missing(name, &file, |p| image.save(p).expect("writing candidate"));
     };
     let golden = golden.to_rgba8();
-    let stats = deferred_msaa::compare::flip(&golden, image)
-        .unwrap_or_else(|| panic!("{name}: size {:?} differs from the golden's {:?}", image.dimensions(), golden.dimensions()));
+    let stats = deferred_msaa::compare::flip(&golden, image).unwrap_or_else(|| {
+        panic!(
+            "{name}: size {:?} differs from the golden's {:?}",
+            image.dimensions(),
+            golden.dimensions()
+        )
+    });
     if stats.mean > tol.mean || stats.p99 > tol.p99 {
         let _ = image.save(golden_dir().join(format!("{name}-actual.png")));
-        let _ = stats.map.save(golden_dir().join(format!("{name}-difference.png")));
+        let _ = stats
+            .map
+            .save(golden_dir().join(format!("{name}-difference.png")));
         panic!(
             "{name}: FLIP mean {:.4} (allowed {}), p99 {:.4} (allowed {}); images: tests/golden/{name}-actual.png, {name}-difference.png",
             stats.mean, tol.mean, stats.p99, tol.p99

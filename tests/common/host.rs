@@ -43,7 +43,24 @@ pub fn perspective(fov_y: f64, aspect: f64, near: f64, far: Option<f64>) -> [f64
         Some(far) => ((far + near) / (near - far), 2.0 * far * near / (near - far)),
         None => (-1.0, -2.0 * near),
     };
-    [f / aspect, 0.0, 0.0, 0.0, 0.0, f, 0.0, 0.0, 0.0, 0.0, p22, -1.0, 0.0, 0.0, p23, 0.0]
+    [
+        f / aspect,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        f,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        p22,
+        -1.0,
+        0.0,
+        0.0,
+        p23,
+        0.0,
+    ]
 }
 
 /// Reversed-Z for `GL_ZERO_TO_ONE` depth: near → 1, far → 0; `far = None` is infinite.
@@ -53,7 +70,24 @@ pub fn perspective_reversed(fov_y: f64, aspect: f64, near: f64, far: Option<f64>
         Some(far) => (near / (far - near), far * near / (far - near)),
         None => (0.0, near),
     };
-    [f / aspect, 0.0, 0.0, 0.0, 0.0, f, 0.0, 0.0, 0.0, 0.0, p22, -1.0, 0.0, 0.0, p23, 0.0]
+    [
+        f / aspect,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        f,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        p22,
+        -1.0,
+        0.0,
+        0.0,
+        p23,
+        0.0,
+    ]
 }
 
 pub struct Host {
@@ -71,7 +105,13 @@ pub struct Host {
 }
 
 impl Host {
-    pub fn new(gl: &glow::Context, width: u32, height: u32, position: Format, depth: Format) -> Host {
+    pub fn new(
+        gl: &glow::Context,
+        width: u32,
+        height: u32,
+        position: Format,
+        depth: Format,
+    ) -> Host {
         let albedo = Texture2d::new(gl, "host albedo", Format::Rgba16f, width, height).unwrap();
         let position = Texture2d::new(gl, "host position", position, width, height).unwrap();
         let normal = Texture2d::new(gl, "host normal", Format::Rgba16f, width, height).unwrap();
@@ -83,7 +123,10 @@ impl Host {
                 (Attachment::Color(0), TextureRef::from(&albedo)),
                 (Attachment::Color(1), TextureRef::from(&position)),
                 (Attachment::Color(2), TextureRef::from(&normal)),
-                (Attachment::for_depth_format(depth.format), TextureRef::from(&depth)),
+                (
+                    Attachment::for_depth_format(depth.format),
+                    TextureRef::from(&depth),
+                ),
             ],
             &[Some(0), Some(1), Some(2)],
         )
@@ -92,12 +135,27 @@ impl Host {
             gl,
             "host model",
             &preamble(&[], &[]),
-            &[(ShaderStage::Vertex, "host.vert", HOST_VERT), (ShaderStage::Fragment, "host.frag", HOST_FRAG)],
+            &[
+                (ShaderStage::Vertex, "host.vert", HOST_VERT),
+                (ShaderStage::Fragment, "host.frag", HOST_FRAG),
+            ],
             &[("o_albedo", 0), ("o_position", 1), ("o_normal", 2)],
         )
         .unwrap();
         let vao = VertexArray::new(gl, "host vao").unwrap();
-        Host { albedo, position, normal, depth, fbo, program, vao, vbo: None, vertices: 0, width, height }
+        Host {
+            albedo,
+            position,
+            normal,
+            depth,
+            fbo,
+            program,
+            vao,
+            vbo: None,
+            vertices: 0,
+            width,
+            height,
+        }
     }
 
     /// Upload triangles: per vertex a view-space position and a colour.
@@ -105,11 +163,20 @@ impl Host {
         if let Some(old) = self.vbo.take() {
             old.destroy(gl);
         }
-        let vbo = Buffer::with_data(gl, "host vertices", glow::ARRAY_BUFFER, bytemuck::cast_slice(data), glow::STATIC_DRAW).unwrap();
+        let vbo = Buffer::with_data(
+            gl,
+            "host vertices",
+            glow::ARRAY_BUFFER,
+            bytemuck::cast_slice(data),
+            glow::STATIC_DRAW,
+        )
+        .unwrap();
         unsafe {
             self.vao.bind(gl);
             gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo.raw));
-            let pos = gl.get_attrib_location(self.program.raw, "a_position").unwrap();
+            let pos = gl
+                .get_attrib_location(self.program.raw, "a_position")
+                .unwrap();
             let col = gl.get_attrib_location(self.program.raw, "a_color").unwrap();
             gl.enable_vertex_attrib_array(pos);
             gl.vertex_attrib_pointer_f32(pos, 3, glow::FLOAT, false, 24, 0);
