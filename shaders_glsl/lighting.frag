@@ -3,12 +3,16 @@
 // defines are the same with and without MSAA: the retrofit hands it an
 // ordinary G-buffer either way.
 //
-// The first part (lights and the BRDF) is shared with the forward
-// transparent pass, which compiles this file with LIGHTING_FUNCTIONS_ONLY
-// defined, followed by transparent.frag.
+// The first part (lights, the BRDF, and the shading of one G-buffer texel
+// or sample) is shared with the forward transparent pass and the per-sample
+// lighting pass, which compile this file with LIGHTING_FUNCTIONS_ONLY
+// defined, followed by transparent.frag or lighting_per_sample.frag.
 //
 // Lights come in batches of at most MAX_LIGHTS; the first batch also adds
-// emission and the ambient term, later batches are added on top.
+// emission and the ambient term, later batches are added on top. With
+// LIGHT_BLOCK defined (the per-sample pass) the light arrays live in the
+// uniform block LightBlock (std140) instead, so that MAX_LIGHTS can be large
+// enough for one draw to light a sample with every light.
 //
 // Material model (metallic-roughness, fed by the G-buffer):
 //   base colour = color.rgb, F0 = specular.rgb, metallic = specular.a,
@@ -22,10 +26,19 @@
 #define LIGHT_DIRECTIONAL 2
 
 uniform int u_light_count;
+#ifdef LIGHT_BLOCK
+layout(std140) uniform LightBlock {
+    vec4 u_light_position[MAX_LIGHTS];
+    vec4 u_light_direction[MAX_LIGHTS];
+    vec4 u_light_color[MAX_LIGHTS];
+    vec4 u_light_cone[MAX_LIGHTS];
+};
+#else
 uniform vec4 u_light_position[MAX_LIGHTS];   // view-space position, range (0: unlimited)
 uniform vec4 u_light_direction[MAX_LIGHTS];  // view-space unit direction of travel, kind
 uniform vec4 u_light_color[MAX_LIGHTS];      // linear colour x intensity
 uniform vec4 u_light_cone[MAX_LIGHTS];       // spot: cos(outer cone), cos(inner cone)
+#endif
 uniform vec3 u_ambient;                      // constant ambient radiance
 uniform int u_first_batch;                   // 1: add emission and ambient
 
@@ -94,6 +107,28 @@ vec3 ambient_light(vec3 base, float metallic, vec3 f0) {
     return u_ambient * (base * (1.0 - metallic) + f0);
 }
 
+// The radiance of a background texel or sample (depth = clear depth): only
+// what the background copy left in the emissive attachment, in the first batch.
+vec3 shade_background(vec3 emissive) {
+    return u_first_batch != 0 ? emissive : vec3(0.0);
+}
+
+// The radiance of one opaque G-buffer texel or sample towards the camera:
+// the current batch of lights, plus emission and ambient light in the first
+// batch. The inputs are the G-buffer's attachments as geometry.frag writes them.
+vec3 shade_surface(vec3 base, vec3 p, vec4 normal_gloss, vec4 specular, vec3 emissive) {
+    float len = length(normal_gloss.xyz);
+    vec3 n = len > 1e-6 ? normal_gloss.xyz / len : vec3(0.0, 0.0, 1.0);
+    float p_len = length(p);
+    vec3 v = p_len > 0.0 ? -p / p_len : vec3(0.0, 0.0, 1.0);
+    float metallic = clamp(specular.a, 0.0, 1.0);
+    vec3 radiance = direct_light(p, n, v, base, metallic, specular.rgb, normal_gloss.w);
+    if (u_first_batch != 0) {
+        radiance += emissive + ambient_light(base, metallic, specular.rgb);
+    }
+    return radiance;
+}
+
 #ifndef LIGHTING_FUNCTIONS_ONLY
 
 uniform sampler2D u_color;
@@ -109,26 +144,16 @@ out vec4 o_color;
 void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
     vec3 emissive = texelFetch(u_emissive, pixel, 0).rgb;
-    vec3 first = u_first_batch != 0 ? emissive : vec3(0.0);
-    float depth = texelFetch(u_depth, pixel, 0).r;
-    if (depth == u_clear_depth) {
-        // Background: only what the background copy left in the emissive attachment.
-        o_color = vec4(first, 1.0);
+    if (texelFetch(u_depth, pixel, 0).r == u_clear_depth) {
+        o_color = vec4(shade_background(emissive), 1.0);
         return;
     }
-    vec3 base = texelFetch(u_color, pixel, 0).rgb;
-    vec3 p = texelFetch(u_position, pixel, 0).xyz;
-    vec4 normal_gloss = texelFetch(u_normal, pixel, 0);
-    vec4 specular = texelFetch(u_specular, pixel, 0);
-    float len = length(normal_gloss.xyz);
-    vec3 n = len > 1e-6 ? normal_gloss.xyz / len : vec3(0.0, 0.0, 1.0);
-    float p_len = length(p);
-    vec3 v = p_len > 0.0 ? -p / p_len : vec3(0.0, 0.0, 1.0);
-    float metallic = clamp(specular.a, 0.0, 1.0);
-    vec3 radiance = direct_light(p, n, v, base, metallic, specular.rgb, normal_gloss.w);
-    if (u_first_batch != 0) {
-        radiance += first + ambient_light(base, metallic, specular.rgb);
-    }
+    vec3 radiance = shade_surface(
+        texelFetch(u_color, pixel, 0).rgb,
+        texelFetch(u_position, pixel, 0).xyz,
+        texelFetch(u_normal, pixel, 0),
+        texelFetch(u_specular, pixel, 0),
+        emissive);
     o_color = vec4(radiance, 1.0);
 }
 

@@ -26,10 +26,17 @@ fn rgb8(img: &RgbaImage) -> nv_flip::FlipImageRgb8 {
 /// FLIP of `test` against `reference` at the default viewing distance.
 /// `None` when the sizes differ.
 pub fn flip(reference: &RgbaImage, test: &RgbaImage) -> Option<FlipStats> {
-    if reference.dimensions() != test.dimensions() || reference.width() == 0 || reference.height() == 0 {
+    if reference.dimensions() != test.dimensions()
+        || reference.width() == 0
+        || reference.height() == 0
+    {
         return None;
     }
-    let error = nv_flip::flip(rgb8(reference), rgb8(test), nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    let error = nv_flip::flip(
+        rgb8(reference),
+        rgb8(test),
+        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
+    );
     let mut pool = nv_flip::FlipPool::from_image(&error);
     let coloured = error.apply_color_lut(&nv_flip::magma_lut()).to_vec();
     let map = RgbaImage::from_fn(reference.width(), reference.height(), |x, y| {
@@ -84,7 +91,9 @@ mod tests {
 
     #[test]
     fn identical_images_have_no_error() {
-        let a = RgbaImage::from_fn(16, 16, |x, y| image::Rgba([(x * 16) as u8, (y * 16) as u8, 77, 255]));
+        let a = RgbaImage::from_fn(16, 16, |x, y| {
+            image::Rgba([(x * 16) as u8, (y * 16) as u8, 77, 255])
+        });
         let s = flip(&a, &a).unwrap();
         assert_eq!(s.mean, 0.0);
         assert!(psnr(&a, &a).is_infinite());

@@ -53,9 +53,15 @@ mod tests {
         let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
         assert_eq!((10 + hlen) % 64, 0);
         let header = std::str::from_utf8(&bytes[10..10 + hlen]).unwrap();
-        assert!(header.contains("'shape': (2, 3, 1)") && header.ends_with('\n'), "{header}");
+        assert!(
+            header.contains("'shape': (2, 3, 1)") && header.ends_with('\n'),
+            "{header}"
+        );
         assert_eq!(bytes.len(), 10 + hlen + 24);
-        assert_eq!(f32::from_le_bytes(bytes[10 + hlen + 20..].try_into().unwrap()), 5.0);
+        assert_eq!(
+            f32::from_le_bytes(bytes[10 + hlen + 20..].try_into().unwrap()),
+            5.0
+        );
         assert!(write_npy(&path, &[4], &[1.0]).is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -24,7 +24,9 @@ pub enum Error {
     },
 
     /// The context offers less than the OpenGL 3.2 core floor.
-    #[error("OpenGL {found} is below the supported floor: OpenGL 3.2 core profile and GLSL 1.50 are required")]
+    #[error(
+        "OpenGL {found} is below the supported floor: OpenGL 3.2 core profile and GLSL 1.50 are required"
+    )]
     GlVersionTooLow {
         /// The version string the driver reported.
         found: String,
@@ -42,7 +44,10 @@ pub enum Error {
     },
 
     /// A sample count the driver does not offer for a format.
-    #[error("{requested}x MSAA is not supported for {format}; the driver offers {}", fmt_counts(supported))]
+    #[error(
+        "{requested}x MSAA is not supported for {format}; the driver offers {}",
+        fmt_counts(supported)
+    )]
     UnsupportedSampleCount {
         /// The count that was asked for.
         requested: u32,

@@ -2,6 +2,7 @@
 //! included (`glGetTexImage` cannot read those): a full-screen pass copies
 //! one sample at a time into an RGBA32F texture, which is then read.
 
+use crate::Result;
 use crate::gl::format::SampleKind;
 use crate::gl::{
     Attachment, Format, Framebuffer, Program, ShaderStage, Texture2d, TextureRef, VertexArray,
@@ -9,7 +10,6 @@ use crate::gl::{
 };
 use crate::resolve::FULLSCREEN_VERT;
 use crate::resolve::SavedState;
-use crate::Result;
 use glow::HasContext;
 use std::collections::HashMap;
 
@@ -32,7 +32,12 @@ impl SampleImage {
     /// The RGBA value of sample `s` at (`x`, `y`), `y` counted from the top.
     pub fn get(&self, s: u32, x: u32, y: u32) -> [f32; 4] {
         let i = (((s * self.height + y) * self.width + x) * 4) as usize;
-        [self.data[i], self.data[i + 1], self.data[i + 2], self.data[i + 3]]
+        [
+            self.data[i],
+            self.data[i + 1],
+            self.data[i + 2],
+            self.data[i + 3],
+        ]
     }
 
     /// One sample's plane as `[height][width][4]`.
@@ -91,7 +96,12 @@ impl Readback {
     }
 
     /// Read every sample (or layer) of `texture`.
-    pub fn read(&mut self, gl: &glow::Context, texture: TextureRef, layers: u32) -> Result<SampleImage> {
+    pub fn read(
+        &mut self,
+        gl: &glow::Context,
+        texture: TextureRef,
+        layers: u32,
+    ) -> Result<SampleImage> {
         let count = match texture.target {
             glow::TEXTURE_2D_MULTISAMPLE => texture.samples,
             glow::TEXTURE_2D_ARRAY => layers.max(1),
@@ -117,7 +127,13 @@ impl Readback {
         result
     }
 
-    fn read_into(&mut self, gl: &glow::Context, texture: TextureRef, count: u32, fbo: &Framebuffer) -> Result<SampleImage> {
+    fn read_into(
+        &mut self,
+        gl: &glow::Context,
+        texture: TextureRef,
+        count: u32,
+        fbo: &Framebuffer,
+    ) -> Result<SampleImage> {
         let (w, h) = (texture.width as usize, texture.height as usize);
         let vao = self.vao.raw;
         let state = SavedState::capture(gl);
@@ -154,7 +170,8 @@ impl Readback {
                 let base = s as usize * w * h * 4;
                 for y in 0..h {
                     let src = (h - 1 - y) * w * 4;
-                    data[base + y * w * 4..base + (y + 1) * w * 4].copy_from_slice(&plane[src..src + w * 4]);
+                    data[base + y * w * 4..base + (y + 1) * w * 4]
+                        .copy_from_slice(&plane[src..src + w * 4]);
                 }
             }
             gl.bind_texture(texture.target, None);

@@ -122,8 +122,10 @@ fn introspect_point(gl: &glow::Context, point: Attachment) -> Result<Option<Host
     if level != 0 || layered != 0 {
         return Err(Error::Retrofit {
             attachment: name,
-            reason: format!("texture {raw} is attached at level {level}{}; only level 0 of a 2D texture is supported",
-                if layered != 0 { " and layered" } else { "" }),
+            reason: format!(
+                "texture {raw} is attached at level {level}{}; only level 0 of a 2D texture is supported",
+                if layered != 0 { " and layered" } else { "" }
+            ),
         });
     }
     // Binding to TEXTURE_2D fails for any other target: that is how a 2D texture is told apart.
@@ -140,19 +142,26 @@ fn introspect_point(gl: &glow::Context, point: Attachment) -> Result<Option<Host
         if !ok {
             return Err(Error::Retrofit {
                 attachment: name,
-                reason: format!("texture {raw} is not a GL_TEXTURE_2D (multisampled, array or cube textures cannot be retrofitted)"),
+                reason: format!(
+                    "texture {raw} is not a GL_TEXTURE_2D (multisampled, array or cube textures cannot be retrofitted)"
+                ),
             });
         }
         v
     };
-    let format = Format::from_internal_format(internal as u32).ok_or_else(|| Error::UnsupportedFormat {
-        attachment: name.clone(),
-        format: format!("0x{internal:04X}"),
-        reason: format!(
-            "not a format the resolve knows; supported: {}",
-            Format::ALL.iter().map(|f| f.name()).collect::<Vec<_>>().join(", ")
-        ),
-    })?;
+    let format =
+        Format::from_internal_format(internal as u32).ok_or_else(|| Error::UnsupportedFormat {
+            attachment: name.clone(),
+            format: format!("0x{internal:04X}"),
+            reason: format!(
+                "not a format the resolve knows; supported: {}",
+                Format::ALL
+                    .iter()
+                    .map(|f| f.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        })?;
     Ok(Some(HostAttachment {
         point,
         texture,
@@ -183,7 +192,8 @@ pub fn introspect(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFram
 }
 
 fn introspect_bound(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFramebuffer> {
-    let max_colors = unsafe { gl.get_parameter_i32(glow::MAX_COLOR_ATTACHMENTS) }.clamp(1, 32) as u32;
+    let max_colors =
+        unsafe { gl.get_parameter_i32(glow::MAX_COLOR_ATTACHMENTS) }.clamp(1, 32) as u32;
     let max_draw = unsafe { gl.get_parameter_i32(glow::MAX_DRAW_BUFFERS) }.clamp(1, 32) as u32;
     let mut colors = Vec::new();
     for i in 0..max_colors {
@@ -191,13 +201,24 @@ fn introspect_bound(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFr
             colors.push(a);
         }
     }
-    let depth = match introspect_point(gl, Attachment::DepthStencil) {
-        Ok(Some(a)) if a.format.has_stencil() => Some(a),
-        _ => introspect_point(gl, Attachment::Depth)?,
-    };
+    // Querying GL_DEPTH_STENCIL_ATTACHMENT is an error when depth and stencil
+    // differ; read the depth point, and call it depth-stencil when the same
+    // texture also sits at the stencil point.
+    let depth = introspect_point(gl, Attachment::Depth)?.map(|mut a| {
+        let stencil_name = attachment_param(
+            gl,
+            glow::STENCIL_ATTACHMENT,
+            glow::FRAMEBUFFER_ATTACHMENT_OBJECT_NAME,
+        );
+        if a.format.has_stencil() && stencil_name as u32 == a.texture.0.get() {
+            a.point = Attachment::DepthStencil;
+        }
+        a
+    });
     let depth = depth.ok_or_else(|| Error::Retrofit {
         attachment: "GL_DEPTH_ATTACHMENT".into(),
-        reason: "the host framebuffer has no depth attachment; the resolve needs per-sample depth".into(),
+        reason: "the host framebuffer has no depth attachment; the resolve needs per-sample depth"
+            .into(),
     })?;
     if !depth.format.is_depth() {
         return Err(Error::UnsupportedFormat {
@@ -215,7 +236,10 @@ fn introspect_bound(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFr
     if colors.len() > crate::resolve::MAX_ATTACHMENTS {
         return Err(Error::Retrofit {
             attachment: colors[crate::resolve::MAX_ATTACHMENTS].point.name(),
-            reason: format!("at most {} colour attachments are supported", crate::resolve::MAX_ATTACHMENTS),
+            reason: format!(
+                "at most {} colour attachments are supported",
+                crate::resolve::MAX_ATTACHMENTS
+            ),
         });
     }
     for a in &colors {
@@ -272,7 +296,11 @@ pub struct MsaaRetrofit {
 
 impl MsaaRetrofit {
     /// Introspect `host_fbo` and build its multisampled twin.
-    pub fn new(gl: &glow::Context, host_fbo: glow::Framebuffer, options: &RetrofitOptions) -> Result<Self> {
+    pub fn new(
+        gl: &glow::Context,
+        host_fbo: glow::Framebuffer,
+        options: &RetrofitOptions,
+    ) -> Result<Self> {
         let resolver = Resolver::new(gl)?;
         match Self::build(gl, host_fbo, options) {
             Ok((host, twin, target, rules, key)) => Ok(MsaaRetrofit {
@@ -296,11 +324,19 @@ impl MsaaRetrofit {
         gl: &glow::Context,
         host_fbo: glow::Framebuffer,
         options: &RetrofitOptions,
-    ) -> Result<(HostFramebuffer, MultisampleTwin, Framebuffer, Vec<ResolveRule>, KeySource)> {
+    ) -> Result<(
+        HostFramebuffer,
+        MultisampleTwin,
+        Framebuffer,
+        Vec<ResolveRule>,
+        KeySource,
+    )> {
         let host = introspect(gl, host_fbo)?;
         let mut rules = Vec::with_capacity(host.colors.len());
         for a in &host.colors {
-            let Attachment::Color(i) = a.point else { continue };
+            let Attachment::Color(i) = a.point else {
+                continue;
+            };
             let rule = options
                 .rules
                 .iter()
@@ -310,7 +346,9 @@ impl MsaaRetrofit {
                 return Err(Error::UnsupportedFormat {
                     attachment: a.point.name(),
                     format: a.format.name().into(),
-                    reason: format!("integer values can only be selected, not resolved by `{rule}`"),
+                    reason: format!(
+                        "integer values can only be selected, not resolved by `{rule}`"
+                    ),
                 });
             }
             rules.push(rule);
@@ -319,7 +357,9 @@ impl MsaaRetrofit {
             if !host.colors.iter().any(|a| a.point == Attachment::Color(*n)) {
                 return Err(Error::Retrofit {
                     attachment: Attachment::Color(*n).name(),
-                    reason: "a rule is given for it but the host framebuffer has nothing attached there".into(),
+                    reason:
+                        "a rule is given for it but the host framebuffer has nothing attached there"
+                            .into(),
                 });
             }
         }
@@ -332,7 +372,8 @@ impl MsaaRetrofit {
                     .position(|a| a.point == Attachment::Color(n))
                     .ok_or_else(|| Error::Retrofit {
                         attachment: Attachment::Color(n).name(),
-                        reason: "named as the position attachment but nothing is attached there".into(),
+                        reason: "named as the position attachment but nothing is attached there"
+                            .into(),
                     })?;
                 if host.colors[k].format.default_rule() == ResolveRule::Select {
                     return Err(Error::UnsupportedFormat {
@@ -369,13 +410,14 @@ impl MsaaRetrofit {
             .collect();
         attachments.push((host.depth.point, host.depth.texture_ref()));
         let draw: Vec<Option<u32>> = (0..host.colors.len() as u32).map(Some).collect();
-        let target = match Framebuffer::new(gl, "resolve target (host textures)", &attachments, &draw) {
-            Ok(f) => f,
-            Err(e) => {
-                twin.destroy(gl);
-                return Err(e);
-            }
-        };
+        let target =
+            match Framebuffer::new(gl, "resolve target (host textures)", &attachments, &draw) {
+                Ok(f) => f,
+                Err(e) => {
+                    twin.destroy(gl);
+                    return Err(e);
+                }
+            };
         Ok((host, twin, target, rules, key))
     }
 
@@ -411,10 +453,14 @@ impl MsaaRetrofit {
 
     /// The resolve's inputs: the twins in host colour order, and depth.
     pub fn inputs(&self) -> Result<(TextureRef, Vec<TextureRef>)> {
-        let depth = self.twin.depth().map(TextureRef::from).ok_or_else(|| Error::Retrofit {
-            attachment: self.host.depth.point.name(),
-            reason: "its multisampled twin is missing".into(),
-        })?;
+        let depth = self
+            .twin
+            .depth()
+            .map(TextureRef::from)
+            .ok_or_else(|| Error::Retrofit {
+                attachment: self.host.depth.point.name(),
+                reason: "its multisampled twin is missing".into(),
+            })?;
         let colors = self
             .host
             .colors
@@ -455,7 +501,8 @@ impl MsaaRetrofit {
             key: self.key,
             samples: self.twin.samples,
         };
-        self.resolver.run(gl, &inputs, target, params, complex_output)
+        self.resolver
+            .run(gl, &inputs, target, params, complex_output)
     }
 
     /// Re-read the host framebuffer (after the host resized or re-allocated

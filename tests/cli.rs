@@ -25,14 +25,21 @@ fn json(o: &Output) -> serde_json::Value {
 fn check_info(info: &serde_json::Value, backend: &str) {
     assert_eq!(info["backend"], backend);
     for key in ["gl_version", "glsl_version", "renderer"] {
-        assert!(!info[key].as_str().unwrap_or("").is_empty(), "{key} missing: {info}");
+        assert!(
+            !info[key].as_str().unwrap_or("").is_empty(),
+            "{key} missing: {info}"
+        );
     }
     assert!(info["max_samples"].as_u64().unwrap_or(0) >= 1);
-    let counts = info["sample_counts"]["RGBA16F"].as_array().expect("RGBA16F counts");
+    let counts = info["sample_counts"]["RGBA16F"]
+        .as_array()
+        .expect("RGBA16F counts");
     assert!(!counts.is_empty());
     for n in counts {
         let key = n.as_u64().unwrap().to_string();
-        let positions = info["sample_positions"][&key].as_array().expect("positions per count");
+        let positions = info["sample_positions"][&key]
+            .as_array()
+            .expect("positions per count");
         assert_eq!(positions.len() as u64, n.as_u64().unwrap(), "{info}");
     }
 }
@@ -43,7 +50,10 @@ fn info_reports_the_real_context_on_both_backends() {
         check_info(&json(&cli(&["info", "--json"])), "egl");
     }
     if common::context(deferred_msaa::context::Backend::OsMesa).is_some() {
-        check_info(&json(&cli(&["info", "--json", "--backend", "osmesa"])), "osmesa");
+        check_info(
+            &json(&cli(&["info", "--json", "--backend", "osmesa"])),
+            "osmesa",
+        );
     }
 }
 
@@ -60,8 +70,14 @@ fn info_on_the_gl_3_2_floor() {
             .output()
             .unwrap();
         let info = json(&out);
-        assert!(info["gl_version"].as_str().unwrap().starts_with("3.2"), "{info}");
-        assert!(info["glsl_version"].as_str().unwrap().starts_with("1.50"), "{info}");
+        assert!(
+            info["gl_version"].as_str().unwrap().starts_with("3.2"),
+            "{info}"
+        );
+        assert!(
+            info["glsl_version"].as_str().unwrap().starts_with("1.50"),
+            "{info}"
+        );
     }
 }
 
@@ -77,22 +93,60 @@ fn render_and_dump_write_what_they_say() {
     let img = image::open(&png).unwrap();
     assert_eq!((img.width(), img.height()), (96, 54));
     for view in ["normal", "position", "depth", "emissive"] {
-        let o = cli(&["render", "--size", "32x18", "--view", view, "--out", png.to_str().unwrap()]);
+        let o = cli(&[
+            "render",
+            "--size",
+            "32x18",
+            "--view",
+            view,
+            "--out",
+            png.to_str().unwrap(),
+        ]);
         assert!(o.status.success(), "{view}: {}", stderr(&o));
     }
 
     let dump = dir.join("dump");
-    let o = cli(&["dump", "--size", "40x24", "--method", "front", "--window", "hard", "--out", dump.to_str().unwrap()]);
+    let o = cli(&[
+        "dump",
+        "--size",
+        "40x24",
+        "--method",
+        "front",
+        "--window",
+        "hard",
+        "--out",
+        dump.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let meta: serde_json::Value = serde_json::from_slice(&std::fs::read(dump.join("meta.json")).unwrap()).unwrap();
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dump.join("meta.json")).unwrap()).unwrap();
     for key in [
-        "width", "height", "samples", "fov_y", "near", "far", "projection", "clear_depth", "method", "window", "c",
-        "c_in", "fast_path", "key_source", "attachments",
+        "width",
+        "height",
+        "samples",
+        "fov_y",
+        "near",
+        "far",
+        "projection",
+        "clear_depth",
+        "method",
+        "window",
+        "c",
+        "c_in",
+        "fast_path",
+        "key_source",
+        "attachments",
     ] {
         assert!(meta.get(key).is_some(), "meta.json lacks {key}: {meta}");
     }
-    assert_eq!((meta["width"].as_u64(), meta["height"].as_u64()), (Some(40), Some(24)));
-    assert_eq!((meta["method"].as_str(), meta["window"].as_str()), (Some("front"), Some("hard")));
+    assert_eq!(
+        (meta["width"].as_u64(), meta["height"].as_u64()),
+        (Some(40), Some(24))
+    );
+    assert_eq!(
+        (meta["method"].as_str(), meta["window"].as_str()),
+        (Some("front"), Some("hard"))
+    );
     let n = meta["samples"].as_u64().unwrap() as usize;
     let header = |name: &str| -> String {
         let bytes = std::fs::read(dump.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -116,7 +170,10 @@ fn render_and_dump_write_what_they_say() {
 fn refusals_are_one_line_with_a_non_zero_exit() {
     let cases: &[(&[&str], &str)] = &[
         (&["info", "--backend", "glx"], "glx"),
-        (&["render", "--scene", "/no/such/file.glb"], "/no/such/file.glb"),
+        (
+            &["render", "--scene", "/no/such/file.glb"],
+            "/no/such/file.glb",
+        ),
         (&["render", "--scene", "builtin:nothing"], "nothing"),
         (&["render", "--size", "0x0"], "0x0"),
         (&["render", "--size", "big"], "big"),
@@ -131,8 +188,15 @@ fn refusals_are_one_line_with_a_non_zero_exit() {
         let o = cli(args);
         let err = stderr(&o);
         assert!(!o.status.success(), "{args:?} succeeded");
-        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: not one line:\n{err}");
-        assert!(err.contains(needle), "{args:?}: `{err}` does not mention {needle}");
+        assert_eq!(
+            err.trim_end().lines().count(),
+            1,
+            "{args:?}: not one line:\n{err}"
+        );
+        assert!(
+            err.contains(needle),
+            "{args:?}: `{err}` does not mention {needle}"
+        );
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
 }

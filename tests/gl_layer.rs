@@ -14,7 +14,10 @@ use deferred_msaa::readback::Readback;
 use glow::HasContext;
 
 fn contexts() -> Vec<HeadlessContext> {
-    Backend::all().iter().filter_map(|&b| common::context(b)).collect()
+    Backend::all()
+        .iter()
+        .filter_map(|&b| common::context(b))
+        .collect()
 }
 
 #[test]
@@ -23,7 +26,8 @@ fn multisample_framebuffers_with_float_colour_and_depth_textures_are_complete() 
         let gl = ctx.gl();
         let before = live_objects();
         for depth_format in [Format::Depth24, Format::Depth32f, Format::Depth24Stencil8] {
-            let colour = Texture2dMultisample::new(gl, "colour", Format::Rgba16f, 32, 16, 4).unwrap();
+            let colour =
+                Texture2dMultisample::new(gl, "colour", Format::Rgba16f, 32, 16, 4).unwrap();
             let depth = Texture2dMultisample::new(gl, "depth", depth_format, 32, 16, 4).unwrap();
             assert!(colour.samples >= 4 && colour.samples == depth.samples);
             let fbo = Framebuffer::new(
@@ -31,7 +35,10 @@ fn multisample_framebuffers_with_float_colour_and_depth_textures_are_complete() 
                 "ms",
                 &[
                     (Attachment::Color(0), TextureRef::from(&colour)),
-                    (Attachment::for_depth_format(depth_format), TextureRef::from(&depth)),
+                    (
+                        Attachment::for_depth_format(depth_format),
+                        TextureRef::from(&depth),
+                    ),
                 ],
                 &[Some(0)],
             )
@@ -54,7 +61,11 @@ fn the_real_sample_count_is_read_back() {
             let t = Texture2dMultisample::new(gl, "t", Format::Rgba16f, 4, 4, requested).unwrap();
             let real = unsafe {
                 gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, Some(t.raw));
-                gl.get_tex_level_parameter_i32(glow::TEXTURE_2D_MULTISAMPLE, 0, glow::TEXTURE_SAMPLES)
+                gl.get_tex_level_parameter_i32(
+                    glow::TEXTURE_2D_MULTISAMPLE,
+                    0,
+                    glow::TEXTURE_SAMPLES,
+                )
             };
             assert_eq!(t.samples, real as u32);
             assert!(t.samples >= requested, "{requested} became {}", t.samples);
@@ -68,9 +79,14 @@ fn the_real_sample_count_is_read_back() {
             other => panic!("{other}"),
         }
         assert!(e.to_string().contains("offers"), "{e}");
-        let (n, positions) = sample_positions(gl, &ExtraFns::load(gl, |s| ctx.get_proc_address(s)), 4).unwrap();
+        let (n, positions) =
+            sample_positions(gl, &ExtraFns::load(gl, |s| ctx.get_proc_address(s)), 4).unwrap();
         assert_eq!(positions.len(), n as usize);
-        assert!(positions.iter().all(|p| (0.0..=1.0).contains(&p[0]) && (0.0..=1.0).contains(&p[1])));
+        assert!(
+            positions
+                .iter()
+                .all(|p| (0.0..=1.0).contains(&p[0]) && (0.0..=1.0).contains(&p[1]))
+        );
     }
 }
 
@@ -91,12 +107,21 @@ fn single_samples_read_with_texel_fetch_differ_along_a_triangle_edge() {
         let gl = ctx.gl();
         let before = live_objects();
         let colour = Texture2dMultisample::new(gl, "colour", Format::Rgba16f, 24, 24, 4).unwrap();
-        let fbo = Framebuffer::new(gl, "ms", &[(Attachment::Color(0), TextureRef::from(&colour))], &[Some(0)]).unwrap();
+        let fbo = Framebuffer::new(
+            gl,
+            "ms",
+            &[(Attachment::Color(0), TextureRef::from(&colour))],
+            &[Some(0)],
+        )
+        .unwrap();
         let program = Program::build(
             gl,
             "triangle",
             &preamble(&[], &[]),
-            &[(ShaderStage::Vertex, "triangle.vert", TRIANGLE_VERT), (ShaderStage::Fragment, "white.frag", WHITE_FRAG)],
+            &[
+                (ShaderStage::Vertex, "triangle.vert", TRIANGLE_VERT),
+                (ShaderStage::Fragment, "white.frag", WHITE_FRAG),
+            ],
             &[("o_colour", 0)],
         )
         .unwrap();
@@ -123,20 +148,31 @@ fn single_samples_read_with_texel_fetch_differ_along_a_triangle_edge() {
                 }
             }
         }
-        assert!(mixed > 10 && inside > 50 && outside > 50, "{}: mixed {mixed} inside {inside} outside {outside}", ctx.backend());
+        assert!(
+            mixed > 10 && inside > 50 && outside > 50,
+            "{}: mixed {mixed} inside {inside} outside {outside}",
+            ctx.backend()
+        );
         readback.destroy(gl);
         vao.destroy(gl);
         program.destroy(gl);
         fbo.destroy(gl);
         colour.destroy(gl);
-        assert_eq!(live_objects(), before, "{}: live objects after destroy", ctx.backend());
+        assert_eq!(
+            live_objects(),
+            before,
+            "{}: live objects after destroy",
+            ctx.backend()
+        );
         assert_eq!(live_objects().total(), 0);
     }
 }
 
 #[test]
 fn a_broken_shader_names_its_stage_and_line() {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let gl = ctx.gl();
     let before = live_objects();
     let body = "out vec4 o_colour;\nvoid main() {\n    o_colour = vec4(undeclared_thing);\n}\n";
@@ -144,14 +180,25 @@ fn a_broken_shader_names_its_stage_and_line() {
         gl,
         "broken",
         &preamble(&[], &[("SOMETHING".into(), "1".into())]),
-        &[(ShaderStage::Vertex, "triangle.vert", TRIANGLE_VERT), (ShaderStage::Fragment, "broken.frag", body)],
+        &[
+            (ShaderStage::Vertex, "triangle.vert", TRIANGLE_VERT),
+            (ShaderStage::Fragment, "broken.frag", body),
+        ],
         &[("o_colour", 0)],
     )
     .unwrap_err();
     match &e {
-        Error::ShaderCompile { stage, name, excerpt, log } => {
+        Error::ShaderCompile {
+            stage,
+            name,
+            excerpt,
+            log,
+        } => {
             assert_eq!((*stage, name.as_str()), ("fragment", "broken.frag"));
-            assert!(excerpt.contains("> broken.frag:   3 |     o_colour = vec4(undeclared_thing);"), "{excerpt}\n{log}");
+            assert!(
+                excerpt.contains("> broken.frag:   3 |     o_colour = vec4(undeclared_thing);"),
+                "{excerpt}\n{log}"
+            );
         }
         other => panic!("{other}"),
     }
@@ -160,7 +207,9 @@ fn a_broken_shader_names_its_stage_and_line() {
 
 #[test]
 fn incomplete_framebuffers_and_bad_sizes_are_typed_errors() {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let gl = ctx.gl();
     let before = live_objects();
     let ms = Texture2dMultisample::new(gl, "ms", Format::Rgba16f, 16, 16, 4).unwrap();
@@ -168,11 +217,19 @@ fn incomplete_framebuffers_and_bad_sizes_are_typed_errors() {
     let e = Framebuffer::new(
         gl,
         "mixed",
-        &[(Attachment::Color(0), TextureRef::from(&ms)), (Attachment::Color(1), TextureRef::from(&single))],
+        &[
+            (Attachment::Color(0), TextureRef::from(&ms)),
+            (Attachment::Color(1), TextureRef::from(&single)),
+        ],
         &[Some(0), Some(1)],
     )
     .unwrap_err();
-    assert!(e.to_string().contains("GL_FRAMEBUFFER_INCOMPLETE_MULTISAMPLE") && e.to_string().contains("mixed"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("GL_FRAMEBUFFER_INCOMPLETE_MULTISAMPLE")
+            && e.to_string().contains("mixed"),
+        "{e}"
+    );
     ms.destroy(gl);
     single.destroy(gl);
     let max = Capabilities::query(gl).max_texture_size;
@@ -186,7 +243,9 @@ fn incomplete_framebuffers_and_bad_sizes_are_typed_errors() {
 
 #[test]
 fn timers_measure_something() {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let gl = ctx.gl();
     let mut timer = GpuTimer::new(gl, false).unwrap();
     timer.begin(gl);

@@ -20,25 +20,51 @@ const H: u32 = 36;
 /// Half-float storage is exact to 11 bits; a Mesa update may move a few edge
 /// samples from one triangle to its neighbour, so up to 0.5% of the values
 /// may differ by more.
-const SAMPLES: SampleTolerance = SampleTolerance { abs: 2e-3, rel: 2e-3, outlier_fraction: 0.005 };
+const SAMPLES: SampleTolerance = SampleTolerance {
+    abs: 2e-3,
+    rel: 2e-3,
+    outlier_fraction: 0.005,
+};
 /// Final images: what a rasteriser update may change, far below what a wrong
 /// resolve (halos, lost edges) or a wrong light costs.
-const FINAL: FlipTolerance = FlipTolerance { mean: 0.01, p99: 0.25 };
+const FINAL: FlipTolerance = FlipTolerance {
+    mean: 0.01,
+    p99: 0.25,
+};
 
 fn plane(name: &str, img: &SampleImage, channels: usize) -> Plane {
     Plane {
         name: name.to_string(),
-        shape: [img.samples as usize, img.height as usize, img.width as usize, channels],
-        data: img.data.chunks_exact(4).flat_map(|px| px[..channels].to_vec()).collect(),
+        shape: [
+            img.samples as usize,
+            img.height as usize,
+            img.width as usize,
+            channels,
+        ],
+        data: img
+            .data
+            .chunks_exact(4)
+            .flat_map(|px| px[..channels].to_vec())
+            .collect(),
     }
 }
 
 fn options(aa: AaMode, fxaa: bool) -> RenderOptions {
-    RenderOptions { width: W, height: H, samples: 4, aa, fxaa, layout: GBufferLayout::recommended(), ..RenderOptions::default() }
+    RenderOptions {
+        width: W,
+        height: H,
+        samples: 4,
+        aa,
+        fxaa,
+        layout: GBufferLayout::recommended(),
+        ..RenderOptions::default()
+    }
 }
 
 fn per_sample_golden(scene_name: &str) {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let gl = ctx.gl();
     let before = live_objects();
     let scene = Scene::load(&format!("builtin:{scene_name}")).unwrap();
@@ -52,16 +78,32 @@ fn per_sample_golden(scene_name: &str) {
     let mut planes = Vec::new();
     for (k, a) in opts.layout.colors.iter().enumerate() {
         let c = a.format.channels() as usize;
-        planes.push(plane(&format!("{}_samples", a.name), &readback.read(gl, colors[k], 1).unwrap(), c));
-        let resolved = readback.read(gl, TextureRef::from(&renderer.gbuffer().colors[k]), 1).unwrap();
+        planes.push(plane(
+            &format!("{}_samples", a.name),
+            &readback.read(gl, colors[k], 1).unwrap(),
+            c,
+        ));
+        let resolved = readback
+            .read(gl, TextureRef::from(&renderer.gbuffer().colors[k]), 1)
+            .unwrap();
         planes.push(plane(&format!("{}_resolved", a.name), &resolved, c));
     }
-    planes.push(plane("depth_samples", &readback.read(gl, depth, 1).unwrap(), 1));
-    let resolved_depth = readback.read(gl, TextureRef::from(&renderer.gbuffer().depth), 1).unwrap();
+    planes.push(plane(
+        "depth_samples",
+        &readback.read(gl, depth, 1).unwrap(),
+        1,
+    ));
+    let resolved_depth = readback
+        .read(gl, TextureRef::from(&renderer.gbuffer().depth), 1)
+        .unwrap();
     planes.push(plane("depth_resolved", &resolved_depth, 1));
     // Every value must be finite: background keeps its clear values, no sentinels.
     for p in &planes {
-        assert!(p.data.iter().all(|v| v.is_finite()), "{scene_name}: non-finite value in {}", p.name);
+        assert!(
+            p.data.iter().all(|v| v.is_finite()),
+            "{scene_name}: non-finite value in {}",
+            p.name
+        );
     }
     check_samples(&format!("{scene_name}-4x-median"), &planes, SAMPLES);
     readback.destroy(gl);
@@ -70,10 +112,13 @@ fn per_sample_golden(scene_name: &str) {
 }
 
 fn final_golden(scene_name: &str, label: &str, aa: AaMode, fxaa: bool) {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let gl = ctx.gl();
     let scene = Scene::load(&format!("builtin:{scene_name}")).unwrap();
-    let mut renderer = Renderer::new(gl, |n| ctx.get_proc_address(n), &scene, &options(aa, fxaa)).unwrap();
+    let mut renderer =
+        Renderer::new(gl, |n| ctx.get_proc_address(n), &scene, &options(aa, fxaa)).unwrap();
     renderer.render(gl).unwrap();
     let img = renderer.read_final(gl).unwrap();
     renderer.destroy(gl);
@@ -103,11 +148,26 @@ fn emissive_samples() {
 #[test]
 fn greebles_final_images() {
     final_golden("greebles", "none", AaMode::None, false);
-    final_golden("greebles", "median", AaMode::Resolve(ResolveSettings::default()), false);
-    final_golden("greebles", "median-fxaa", AaMode::Resolve(ResolveSettings::default()), true);
+    final_golden(
+        "greebles",
+        "median",
+        AaMode::Resolve(ResolveSettings::default()),
+        false,
+    );
+    final_golden(
+        "greebles",
+        "median-fxaa",
+        AaMode::Resolve(ResolveSettings::default()),
+        true,
+    );
 }
 
 #[test]
 fn transparent_final_image() {
-    final_golden("transparent", "median", AaMode::Resolve(ResolveSettings::default()), false);
+    final_golden(
+        "transparent",
+        "median",
+        AaMode::Resolve(ResolveSettings::default()),
+        false,
+    );
 }

@@ -14,12 +14,28 @@ use glow::HasContext;
 fn scene(seed: u32) -> Vec<f32> {
     let mut v = Vec::new();
     let s = seed as f32 * 0.37;
-    triangle(&mut v, [[-30.0, -20.0, -40.0], [30.0, -20.0, -40.0], [0.0, 25.0, -40.0]], [0.2, 0.3, 0.9]);
+    triangle(
+        &mut v,
+        [
+            [-30.0, -20.0, -40.0],
+            [30.0, -20.0, -40.0],
+            [0.0, 25.0, -40.0],
+        ],
+        [0.2, 0.3, 0.9],
+    );
     for k in 0..12 {
         let x = ((k as f32 * 1.7 + s).sin()) * 4.0;
         let y = ((k as f32 * 2.3 + s).cos()) * 3.0;
         let z = -8.0 - k as f32 * 0.9;
-        triangle(&mut v, [[x - 1.5, y - 1.0, z], [x + 1.5, y - 0.8, z - 0.5], [x, y + 1.6, z]], [0.9, 0.5 + k as f32 * 0.03, 0.1]);
+        triangle(
+            &mut v,
+            [
+                [x - 1.5, y - 1.0, z],
+                [x + 1.5, y - 0.8, z - 0.5],
+                [x, y + 1.6, z],
+            ],
+            [0.9, 0.5 + k as f32 * 0.03, 0.1],
+        );
     }
     v
 }
@@ -28,7 +44,12 @@ fn params(width: u32, height: u32, settings: ResolveSettings) -> ResolveParams {
     let m = perspective(0.9, width as f64 / height as f64, 0.5, Some(100.0));
     ResolveParams {
         settings,
-        projection: DepthProjection { p22: m[10], p23: m[14], zero_to_one: false, clear_depth: 1.0 },
+        projection: DepthProjection {
+            p22: m[10],
+            p23: m[14],
+            zero_to_one: false,
+            clear_depth: 1.0,
+        },
         fov_y: 0.9,
         height_px: height,
     }
@@ -37,13 +58,19 @@ fn params(width: u32, height: u32, settings: ResolveSettings) -> ResolveParams {
 /// Resident set size in bytes (Linux).
 fn rss_bytes() -> u64 {
     let statm = std::fs::read_to_string("/proc/self/statm").unwrap_or_default();
-    let pages: u64 = statm.split_whitespace().nth(1).and_then(|p| p.parse().ok()).unwrap_or(0);
+    let pages: u64 = statm
+        .split_whitespace()
+        .nth(1)
+        .and_then(|p| p.parse().ok())
+        .unwrap_or(0);
     pages * 4096
 }
 
 #[test]
 fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let gl = ctx.gl();
     let before = live_objects();
     let sizes = [(32u32, 24u32), (17, 9), (40, 30), (1, 1), (24, 40)];
@@ -52,25 +79,79 @@ fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
         let (w, h) = sizes[cycle as usize % sizes.len()];
         let mut host = Host::new(gl, w, h, Format::Rgba32f, Format::Depth32f);
         host.set_triangles(gl, &scene(cycle % 7));
-        let options = RetrofitOptions { samples: 1 + cycle % 4, rules: vec![(2, ResolveRule::BlendNormal)], position_attachment: Some(1) };
+        let options = RetrofitOptions {
+            samples: 1 + cycle % 4,
+            rules: vec![(2, ResolveRule::BlendNormal)],
+            position_attachment: Some(1),
+        };
         let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &options).unwrap();
         unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
-        host.draw(gl, &perspective(0.9, w as f64 / h as f64, 0.5, Some(100.0)), false);
-        msaa.resolve(gl, &params(w, h, ResolveSettings::default())).unwrap();
+        host.draw(
+            gl,
+            &perspective(0.9, w as f64 / h as f64, 0.5, Some(100.0)),
+            false,
+        );
+        msaa.resolve(gl, &params(w, h, ResolveSettings::default()))
+            .unwrap();
         // Change the sample count at run time, then resize the host and refresh.
         msaa.set_samples(gl, 4).unwrap();
         unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
-        host.draw(gl, &perspective(0.9, w as f64 / h as f64, 0.5, Some(100.0)), false);
-        msaa.resolve(gl, &params(w, h, ResolveSettings { fast_path: cycle % 2 == 0, ..ResolveSettings::default() })).unwrap();
+        host.draw(
+            gl,
+            &perspective(0.9, w as f64 / h as f64, 0.5, Some(100.0)),
+            false,
+        );
+        msaa.resolve(
+            gl,
+            &params(
+                w,
+                h,
+                ResolveSettings {
+                    fast_path: cycle % 2 == 0,
+                    ..ResolveSettings::default()
+                },
+            ),
+        )
+        .unwrap();
         unsafe {
             for t in [&host.albedo, &host.normal] {
                 gl.bind_texture(glow::TEXTURE_2D, Some(t.raw));
-                gl.tex_image_2d(glow::TEXTURE_2D, 0, glow::RGBA16F as i32, w as i32 + 1, h as i32, 0, glow::RGBA, glow::HALF_FLOAT, glow::PixelUnpackData::Slice(None));
+                gl.tex_image_2d(
+                    glow::TEXTURE_2D,
+                    0,
+                    glow::RGBA16F as i32,
+                    w as i32 + 1,
+                    h as i32,
+                    0,
+                    glow::RGBA,
+                    glow::HALF_FLOAT,
+                    glow::PixelUnpackData::Slice(None),
+                );
             }
             gl.bind_texture(glow::TEXTURE_2D, Some(host.position.raw));
-            gl.tex_image_2d(glow::TEXTURE_2D, 0, glow::RGBA32F as i32, w as i32 + 1, h as i32, 0, glow::RGBA, glow::FLOAT, glow::PixelUnpackData::Slice(None));
+            gl.tex_image_2d(
+                glow::TEXTURE_2D,
+                0,
+                glow::RGBA32F as i32,
+                w as i32 + 1,
+                h as i32,
+                0,
+                glow::RGBA,
+                glow::FLOAT,
+                glow::PixelUnpackData::Slice(None),
+            );
             gl.bind_texture(glow::TEXTURE_2D, Some(host.depth.raw));
-            gl.tex_image_2d(glow::TEXTURE_2D, 0, glow::DEPTH_COMPONENT32F as i32, w as i32 + 1, h as i32, 0, glow::DEPTH_COMPONENT, glow::FLOAT, glow::PixelUnpackData::Slice(None));
+            gl.tex_image_2d(
+                glow::TEXTURE_2D,
+                0,
+                glow::DEPTH_COMPONENT32F as i32,
+                w as i32 + 1,
+                h as i32,
+                0,
+                glow::DEPTH_COMPONENT,
+                glow::FLOAT,
+                glow::PixelUnpackData::Slice(None),
+            );
             gl.bind_texture(glow::TEXTURE_2D, None);
         }
         msaa.refresh(gl).unwrap();
@@ -87,16 +168,33 @@ fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
     let growth = rss_bytes().saturating_sub(rss_after_warmup);
     // Allocator noise is a few MiB at most; a leak of even one small texture
     // per cycle would be tens of MiB over 900 cycles.
-    assert!(growth < 16 << 20, "resident memory grew by {} KiB over 900 cycles", growth >> 10);
+    assert!(
+        growth < 16 << 20,
+        "resident memory grew by {} KiB over 900 cycles",
+        growth >> 10
+    );
 }
 
 /// Render and resolve one frame on the calling thread; return the resolved colour.
-fn render_once(ctx: &HeadlessContext, seed: u32, settings: ResolveSettings, frames: u32) -> Vec<f32> {
+fn render_once(
+    ctx: &HeadlessContext,
+    seed: u32,
+    settings: ResolveSettings,
+    frames: u32,
+) -> Vec<f32> {
     let gl = ctx.gl();
     let (w, h) = (48, 32);
     let mut host = Host::new(gl, w, h, Format::Rgba32f, Format::Depth32f);
     host.set_triangles(gl, &scene(seed));
-    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &RetrofitOptions { position_attachment: Some(1), ..Default::default() }).unwrap();
+    let mut msaa = MsaaRetrofit::new(
+        gl,
+        host.fbo.raw,
+        &RetrofitOptions {
+            position_attachment: Some(1),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let mut rb = Readback::new(gl).unwrap();
     let mut out = Vec::new();
     for _ in 0..frames {
@@ -122,14 +220,24 @@ fn two_contexts_on_two_threads_render_at_once_without_disturbing_each_other() {
     }
     let configs = [
         (Backend::Egl, 1, ResolveSettings::default()),
-        (Backend::Egl, 2, ResolveSettings { method: deferred_msaa::resolve::ResolveMethod::Front, ..ResolveSettings::default() }),
+        (
+            Backend::Egl,
+            2,
+            ResolveSettings {
+                method: deferred_msaa::resolve::ResolveMethod::Front,
+                ..ResolveSettings::default()
+            },
+        ),
     ];
     // Alone first, one after the other.
     let alone: Vec<Vec<f32>> = configs
         .iter()
         .map(|&(b, seed, s)| render_once(&HeadlessContext::new(b).unwrap(), seed, s, 1))
         .collect();
-    assert_ne!(alone[0], alone[1], "the two configurations must differ to prove anything");
+    assert_ne!(
+        alone[0], alone[1],
+        "the two configurations must differ to prove anything"
+    );
     // Then both at once, many frames each.
     let handles: Vec<_> = configs
         .iter()
@@ -144,6 +252,9 @@ fn two_contexts_on_two_threads_render_at_once_without_disturbing_each_other() {
         .collect();
     for (h, want) in handles.into_iter().zip(&alone) {
         let got = h.join().expect("render thread panicked");
-        assert_eq!(&got, want, "a concurrent render differs from the same render alone");
+        assert_eq!(
+            &got, want,
+            "a concurrent render differs from the same render alone"
+        );
     }
 }

@@ -196,6 +196,28 @@ fn lighting_and_model_shaders_do_not_change_with_msaa() {
         plain.geometry_program_source(),
         msaa.geometry_program_source()
     );
+    // The per-sample modes light with a permutation of their own; the
+    // per-pixel source stays the same, and the lighting math (lights, BRDF,
+    // the shading of one G-buffer sample) is lighting.frag's, verbatim.
+    for aa in [AaMode::PerSample, AaMode::Complex] {
+        let r = Renderer::new(gl, |n| ctx.get_proc_address(n), &scene, &options(aa))
+            .expect("per-sample renderer");
+        assert_eq!(r.lighting_program_source(), source, "{aa:?}");
+        assert_eq!(r.geometry_program_source(), plain.geometry_program_source());
+        let per_sample = r.per_sample_lighting_program_source();
+        assert!(
+            per_sample.contains(deferred_msaa::renderer::shaders::LIGHTING_FRAG)
+                && per_sample.contains("#define LIGHTING_FUNCTIONS_ONLY")
+                && per_sample.contains("sampler2DMS"),
+            "{per_sample}"
+        );
+        assert_eq!(
+            per_sample.matches("vec3 direct_light(").count(),
+            1,
+            "one BRDF"
+        );
+        r.destroy(gl);
+    }
     plain.destroy(gl);
     msaa.destroy(gl);
     assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
@@ -404,6 +426,47 @@ fn set_options_switches_at_run_time_without_leaks() {
                 ..start.clone()
             },
         ),
+        (
+            "per-sample",
+            RenderOptions {
+                aa: AaMode::PerSample,
+                ..start.clone()
+            },
+        ),
+        (
+            "complex",
+            RenderOptions {
+                aa: AaMode::Complex,
+                ..start.clone()
+            },
+        ),
+        (
+            "complex, resized",
+            RenderOptions {
+                aa: AaMode::Complex,
+                width: 112,
+                height: 64,
+                fxaa: true,
+                ..start.clone()
+            },
+        ),
+        (
+            "complex, freespace layout",
+            RenderOptions {
+                aa: AaMode::Complex,
+                layout: GBufferLayout::freespace_open(),
+                ..start.clone()
+            },
+        ),
+        (
+            "per-sample, 2 samples",
+            RenderOptions {
+                aa: AaMode::PerSample,
+                samples: 2,
+                ..start.clone()
+            },
+        ),
+        ("complex into none", options(AaMode::None)),
         ("back to start", start.clone()),
     ];
     for (what, opts) in &steps {
@@ -415,7 +478,7 @@ fn set_options_switches_at_run_time_without_leaks() {
         assert_eq!(renderer.gbuffer().height, opts.height, "{what}");
         match opts.aa {
             AaMode::None => assert!(renderer.retrofit().is_none(), "{what}"),
-            AaMode::Resolve(_) => {
+            AaMode::Resolve(_) | AaMode::PerSample | AaMode::Complex => {
                 let r = renderer.retrofit().expect("a retrofit");
                 assert_eq!(r.twin().width, opts.width, "{what}");
                 assert!(
@@ -771,4 +834,409 @@ fn the_renderer_leaves_the_hosts_depth_state_as_it_found_it() {
     extra.set_clip_depth_zero_to_one(false);
     renderer.destroy(gl);
     assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
+}
+
+// ---------------------------------------------------------------------------
+// Per-sample lighting (`per-sample`) and per-sample lighting of complex
+// pixels only (`complex`).
+
+fn render_with(
+    gl: &glow::Context,
+    ctx: &deferred_msaa::context::HeadlessContext,
+    scene: &Scene,
+    opts: &RenderOptions,
+    what: &str,
+) -> image::RgbaImage {
+    let mut renderer =
+        Renderer::new(gl, |n| ctx.get_proc_address(n), scene, opts).expect("renderer");
+    let img = render_checked(gl, &mut renderer, what);
+    renderer.destroy(gl);
+    img
+}
+
+fn srgb_decode(v: u8) -> f32 {
+    let c = f32::from(v) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn srgb_encode(l: f32) -> u8 {
+    let c = if l <= 0.003_130_8 {
+        l * 12.92
+    } else {
+        1.055 * l.powf(1.0 / 2.4) - 0.055
+    };
+    (c.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// Box-filter `factor`×`factor` blocks of an sRGB-encoded image in linear light.
+fn downsample(img: &image::RgbaImage, factor: u32) -> image::RgbaImage {
+    let (w, h) = (img.width() / factor, img.height() / factor);
+    image::RgbaImage::from_fn(w, h, |x, y| {
+        let mut sum = [0.0f32; 3];
+        for dy in 0..factor {
+            for dx in 0..factor {
+                let p = img.get_pixel(x * factor + dx, y * factor + dy);
+                for c in 0..3 {
+                    sum[c] += srgb_decode(p[c]);
+                }
+            }
+        }
+        let n = (factor * factor) as f32;
+        image::Rgba([
+            srgb_encode(sum[0] / n),
+            srgb_encode(sum[1] / n),
+            srgb_encode(sum[2] / n),
+            255,
+        ])
+    })
+}
+
+/// The scene rendered without MSAA at 4W×4H, tonemapped per pixel and
+/// box-filtered 4×4 in linear light: the 16-sample supersampled reference.
+fn supersampled(
+    gl: &glow::Context,
+    ctx: &deferred_msaa::context::HeadlessContext,
+    scene: &Scene,
+) -> image::RgbaImage {
+    let big = RenderOptions {
+        width: 4 * W,
+        height: 4 * H,
+        ..options(AaMode::None)
+    };
+    downsample(&render_with(gl, ctx, scene, &big, "4x4 reference"), 4)
+}
+
+#[test]
+fn per_sample_and_complex_render_every_builtin_scene() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    for name in Scene::builtin_names() {
+        let scene = Scene::load(&format!("builtin:{name}")).expect("builtin scene");
+        let mut renderer = Renderer::new(
+            gl,
+            |n| ctx.get_proc_address(n),
+            &scene,
+            &options(AaMode::PerSample),
+        )
+        .expect("per-sample renderer");
+        let per_sample = render_checked(gl, &mut renderer, &format!("{name} per-sample"));
+        let pixels = u64::from(W * H);
+        assert_eq!(renderer.per_sample_pixels(), Some(pixels), "{name}");
+        assert_eq!(renderer.complex_fraction(), None, "{name}");
+        assert!(renderer.read_complex_mask(gl).expect("mask").is_none());
+
+        renderer
+            .set_options(gl, &options(AaMode::Complex))
+            .expect("switching to complex");
+        assert_eq!(renderer.complex_fraction(), None, "no frame yet");
+        let complex = render_checked(gl, &mut renderer, &format!("{name} complex"));
+        let fraction = renderer.complex_fraction().expect("a complex fraction");
+        assert!((0.0..=1.0).contains(&fraction), "{name}: {fraction}");
+        // The query counts exactly the pixels the stencil marks.
+        let mask = renderer
+            .read_complex_mask(gl)
+            .expect("reading the mask")
+            .expect("a mask");
+        let marked = mask.pixels().filter(|p| p[0] != 0).count() as u64;
+        assert_eq!(renderer.per_sample_pixels(), Some(marked), "{name}");
+        // Complex pixels are lit exactly as per-sample lights them, simple
+        // pixels (all samples one surface) from sample 0: the same image.
+        let flip = deferred_msaa::compare::flip(&per_sample, &complex).expect("same size");
+        eprintln!(
+            "{name}: complex fraction {fraction:.3}; complex vs per-sample FLIP mean {:.5}",
+            flip.mean
+        );
+        assert!(
+            flip.mean < 0.002,
+            "{name}: complex differs from per-sample (FLIP mean {})",
+            flip.mean
+        );
+        save(&per_sample, &format!("{name}-per-sample"));
+        save(&complex, &format!("{name}-complex"));
+        renderer.destroy(gl);
+    }
+    assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
+}
+
+#[test]
+fn per_sample_lighting_has_the_least_error_against_supersampling() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let average = AaMode::Resolve(ResolveSettings {
+        method: ResolveMethod::Average,
+        ..ResolveSettings::default()
+    });
+    for name in ["greebles", "thin"] {
+        let scene = Scene::load(&format!("builtin:{name}")).expect("scene");
+        let reference = supersampled(gl, &ctx, &scene);
+        save(&reference, &format!("{name}-ssaa-reference"));
+        let mut errors = Vec::new();
+        for (method, aa) in [
+            ("none", AaMode::None),
+            ("average", average),
+            ("median", median()),
+            ("per-sample", AaMode::PerSample),
+            ("complex", AaMode::Complex),
+        ] {
+            let img = render_with(gl, &ctx, &scene, &options(aa), &format!("{name} {method}"));
+            let flip = deferred_msaa::compare::flip(&reference, &img).expect("same size");
+            errors.push((method, flip.mean));
+        }
+        eprintln!("{name}: FLIP mean against the 4x4 reference: {errors:?}");
+        let error = |m: &str| {
+            errors
+                .iter()
+                .find(|(n, _)| *n == m)
+                .map(|(_, e)| *e)
+                .expect("measured")
+        };
+        let per_sample = error("per-sample");
+        for other in ["none", "average", "median"] {
+            assert!(
+                per_sample < error(other),
+                "{name}: per-sample ({per_sample}) does not beat {other} ({}): {errors:?}",
+                error(other)
+            );
+        }
+        // Complex pixels are lit the same way; simple pixels are uniform.
+        let complex = error("complex");
+        assert!(
+            (complex - per_sample).abs() <= 0.002 + 0.02 * per_sample,
+            "{name}: complex ({complex}) is not within a small margin of per-sample ({per_sample})"
+        );
+    }
+    assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
+}
+
+#[test]
+fn complex_marks_a_minority_of_pixels_and_the_stencil_limits_per_sample_lighting() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let scene = Scene::load("builtin:greebles").expect("scene");
+    let mut renderer = Renderer::new(
+        gl,
+        |n| ctx.get_proc_address(n),
+        &scene,
+        &options(AaMode::PerSample),
+    )
+    .expect("renderer");
+    render_checked(gl, &mut renderer, "greebles per-sample");
+    let all = renderer.per_sample_pixels().expect("a count");
+    assert_eq!(all, u64::from(W * H));
+    renderer
+        .set_options(gl, &options(AaMode::Complex))
+        .expect("complex");
+    let img = render_checked(gl, &mut renderer, "greebles complex");
+    let fraction = renderer.complex_fraction().expect("a fraction");
+    let some = renderer.per_sample_pixels().expect("a count");
+    let mask = renderer
+        .read_complex_mask(gl)
+        .expect("reading the mask")
+        .expect("a mask");
+    save(&img, "greebles-complex");
+    if let Some(dir) = std::env::var_os("DEFERRED_MSAA_SAVE_RENDERS") {
+        let _ = mask.save(std::path::PathBuf::from(dir).join("greebles-complex-mask.png"));
+    }
+    eprintln!(
+        "greebles: {some} of {all} pixels lit per sample (complex fraction {fraction:.3}); coverage flags: {}",
+        Capabilities::query(gl).sample_mask_in
+    );
+    assert!(
+        fraction > 0.0 && fraction < 0.5,
+        "complex fraction {fraction}"
+    );
+    assert!(some < all, "the stencil did not limit the per-sample pass");
+    assert_eq!(
+        mask.pixels().filter(|p| p[0] != 0).count() as u64,
+        some,
+        "the per-sample pass lit other pixels than the mask marks"
+    );
+    renderer.destroy(gl);
+    assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
+}
+
+#[test]
+fn per_sample_lighting_cost_grows_with_the_number_of_lights() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let base = Scene::load("builtin:greebles").expect("scene");
+    let mut lit = base.clone();
+    // 32 more point lights over the hull, like `bench --lights 32`.
+    let (lo, hi) = (base.bounds.min, base.bounds.max);
+    let mut rng = common::Rng::new(32);
+    for _ in 0..32 {
+        let position = glam::Vec3::new(
+            rng.range(lo.x, hi.x),
+            rng.range(lo.y, hi.y) + 0.2 * (hi.y - lo.y),
+            rng.range(lo.z, hi.z),
+        );
+        let color = glam::Vec3::new(
+            rng.range(0.3, 1.0),
+            rng.range(0.3, 1.0),
+            rng.range(0.3, 1.0),
+        );
+        lit.lights.push(deferred_msaa::scene::Light::point(
+            position,
+            color,
+            rng.range(1.0, 5.0),
+            Some((hi - lo).length()),
+        ));
+    }
+    let methods = [
+        ("median", median()),
+        ("complex", AaMode::Complex),
+        ("per-sample", AaMode::PerSample),
+    ];
+    let opts = |aa| RenderOptions {
+        width: 160,
+        height: 90,
+        ..options(aa)
+    };
+    // Every (lights, method) renderer at once, frames taken round-robin so
+    // that a busy moment of the machine hits them all alike.
+    let mut runs = Vec::new();
+    for (lights, scene) in [(base.lights.len(), &base), (lit.lights.len(), &lit)] {
+        for (method, aa) in methods {
+            let mut renderer =
+                Renderer::new(gl, |n| ctx.get_proc_address(n), scene, &opts(aa)).expect("renderer");
+            renderer.render(gl).expect("warm-up frame");
+            runs.push((lights, method, renderer, Vec::new()));
+        }
+    }
+    let k = 7;
+    for _ in 0..k {
+        for (_, _, renderer, times) in runs.iter_mut() {
+            times.push(renderer.render(gl).expect("frame").lighting_ms);
+        }
+    }
+    let mut table = Vec::new();
+    for (lights, method, renderer, mut times) in runs {
+        times.sort_by(f64::total_cmp);
+        table.push((lights, method, times[k / 2]));
+        renderer.destroy(gl);
+    }
+    let at = |lights: usize, m: &str| {
+        table
+            .iter()
+            .find(|(l, n, _)| *l == lights && *n == m)
+            .map(|(_, _, t)| *t)
+            .expect("measured")
+    };
+    let (few, many) = (base.lights.len(), lit.lights.len());
+    for (m, _) in methods {
+        eprintln!(
+            "lighting ms, median of {k} frames: {m}: {:.2} with {few} lights, {:.2} with {many} (x{:.2})",
+            at(few, m),
+            at(many, m),
+            at(many, m) / at(few, m)
+        );
+    }
+    // Loose on purpose (timings on shared 2-core machines vary by 2x).
+    assert!(
+        at(many, "per-sample") >= at(many, "median"),
+        "per-sample lighting is cheaper than per-pixel lighting with {many} lights: {table:?}"
+    );
+    assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
+}
+
+/// The child of `complex_falls_back_to_the_discontinuity_test_without_sample_mask_in`,
+/// run in a process whose context has no `gl_SampleMaskIn`.
+#[test]
+#[ignore = "run by its parent test in a child process with a GL 3.2 context"]
+fn complex_without_sample_mask_in_child() {
+    let _ = env_logger::builder()
+        .filter_level(log::LevelFilter::Warn)
+        .try_init();
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    assert!(
+        !Capabilities::query(gl).sample_mask_in,
+        "the child's context still has gl_SampleMaskIn"
+    );
+    let scene = Scene::load("builtin:greebles").expect("scene");
+    let per_sample = render_with(
+        gl,
+        &ctx,
+        &scene,
+        &options(AaMode::PerSample),
+        "per-sample, GL 3.2",
+    );
+    let mut renderer = Renderer::new(
+        gl,
+        |n| ctx.get_proc_address(n),
+        &scene,
+        &options(AaMode::Complex),
+    )
+    .expect("complex renderer without gl_SampleMaskIn");
+    let complex = render_checked(gl, &mut renderer, "complex, GL 3.2");
+    let fraction = renderer.complex_fraction().expect("a fraction");
+    let flip = deferred_msaa::compare::flip(&per_sample, &complex).expect("same size");
+    eprintln!(
+        "child: complex fraction {fraction:.3} from discontinuities alone; complex vs per-sample FLIP mean {:.5}",
+        flip.mean
+    );
+    assert!(fraction > 0.0 && fraction < 0.5, "{fraction}");
+    assert!(flip.mean < 0.005, "FLIP mean {}", flip.mean);
+    renderer.destroy(gl);
+}
+
+#[test]
+fn complex_falls_back_to_the_discontinuity_test_without_sample_mask_in() {
+    if common::egl_context().is_none() {
+        return;
+    }
+    // A real 3.2 core context without the extensions that give GLSL 1.50
+    // gl_SampleMaskIn.
+    let exe = std::env::current_exe().expect("the test binary's path");
+    let out = std::process::Command::new(exe)
+        .args([
+            "--ignored",
+            "--exact",
+            "complex_without_sample_mask_in_child",
+            "--nocapture",
+            "--test-threads",
+            "1",
+        ])
+        .env("MESA_GL_VERSION_OVERRIDE", "3.2")
+        .env("MESA_GLSL_VERSION_OVERRIDE", "150")
+        .env(
+            "MESA_EXTENSION_OVERRIDE",
+            "-GL_ARB_gpu_shader5 -GL_ARB_sample_shading",
+        )
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("running the child test");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    eprintln!("{stderr}");
+    assert!(out.status.success(), "child failed:\n{stdout}\n{stderr}");
+    assert!(
+        stdout.contains("1 passed"),
+        "the child test did not run:\n{stdout}"
+    );
+    if stderr.contains("skipped:") {
+        return;
+    }
+    let line = stderr
+        .lines()
+        .find(|l| l.contains("method `complex`: no coverage mask"))
+        .unwrap_or_else(|| panic!("no log line about the fallback:\n{stderr}"));
+    assert!(
+        line.contains("gl_SampleMaskIn") && line.contains("discontinuity test alone"),
+        "{line}"
+    );
 }

@@ -46,23 +46,27 @@ fn gen_case(rng: &mut Rng, n: usize, kind: u32) -> Case {
     let foot = base * (FOV_Y as f32 / H as f32).tan();
     for i in 0..n {
         z[i] = match kind {
-            0 => rng.range(1.0, 200.0),                          // unrelated depths
-            1 => base,                                           // all equal (uniform)
-            2 => base + foot * rng.below(3) as f32,              // clusters and exact ties
-            3 => base + foot * rng.range(-6.0, 6.0),             // across the window edges
-            4 => base,                                           // background (below)
-            5 => base + foot * rng.range(0.0, 3.0),              // half background (below)
-            6 => base,                                           // one geometry sample (below)
-            7 => base + foot * rng.below(2) as f32 * 20.0,       // two surfaces
+            0 => rng.range(1.0, 200.0),                    // unrelated depths
+            1 => base,                                     // all equal (uniform)
+            2 => base + foot * rng.below(3) as f32,        // clusters and exact ties
+            3 => base + foot * rng.range(-6.0, 6.0),       // across the window edges
+            4 => base,                                     // background (below)
+            5 => base + foot * rng.range(0.0, 3.0),        // half background (below)
+            6 => base,                                     // one geometry sample (below)
+            7 => base + foot * rng.below(2) as f32 * 20.0, // two surfaces
             _ => rng.range(1.0, 200.0),
         };
     }
     match kind {
         4 => depth.iter_mut().for_each(|d| *d = CLEAR_DEPTH),
-        5 => (0..n).filter(|i| i % 2 == 1).for_each(|i| depth[i] = CLEAR_DEPTH),
+        5 => (0..n)
+            .filter(|i| i % 2 == 1)
+            .for_each(|i| depth[i] = CLEAR_DEPTH),
         6 => {
             let keep = rng.below(n as u32) as usize;
-            (0..n).filter(|&i| i != keep).for_each(|i| depth[i] = CLEAR_DEPTH);
+            (0..n)
+                .filter(|&i| i != keep)
+                .for_each(|i| depth[i] = CLEAR_DEPTH);
         }
         _ => {}
     }
@@ -71,11 +75,20 @@ fn gen_case(rng: &mut Rng, n: usize, kind: u32) -> Case {
         let colour = [rng.unit(), rng.unit(), rng.unit(), rng.unit()];
         let mut position = [rng.range(-5.0, 5.0), rng.range(-5.0, 5.0), -z[i], 1.0];
         let mut normal = {
-            let v = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
+            let v = [
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            ];
             let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt().max(1e-3);
             [v[0] / l, v[1] / l, v[2] / l, rng.unit()]
         };
-        let mut emissive = [rng.range(0.0, 4.0), rng.range(0.0, 4.0), rng.range(0.0, 4.0), 1.0];
+        let mut emissive = [
+            rng.range(0.0, 4.0),
+            rng.range(0.0, 4.0),
+            rng.range(0.0, 4.0),
+            1.0,
+        ];
         let material = [rng.below(255) as f32, i as f32, 0.0, 1.0];
         // Sprinkle the adversarial values.
         match (kind, rng.below(8)) {
@@ -86,7 +99,13 @@ fn gen_case(rng: &mut Rng, n: usize, kind: u32) -> Case {
             }
             (_, 1) => emissive = [65504.0, rng.range(0.0, 65504.0), 1.0, 1.0],
             (_, 2) if kind >= 8 => position[2] = f32::NAN, // a non-finite key is background
-            (_, 3) => normal = if i % 2 == 0 { [0.0, 0.0, 1.0, 0.5] } else { [0.0, 0.0, -1.0, 0.25] },
+            (_, 3) => {
+                normal = if i % 2 == 0 {
+                    [0.0, 0.0, 1.0, 0.5]
+                } else {
+                    [0.0, 0.0, -1.0, 0.25]
+                }
+            }
             _ => {}
         }
         atts[0].push(colour);
@@ -121,8 +140,16 @@ struct Harness {
 impl Harness {
     fn new(gl: &glow::Context, n: u32, seed: u64) -> Harness {
         let mut rng = Rng::new(seed);
-        let cases: Vec<Case> = (0..W * H).map(|p| gen_case(&mut rng, n as usize, p % 10)).collect();
-        let formats = [Format::Rgba32f, Format::Rgba32f, Format::Rgba32f, Format::Rgba32f, Format::Rgba32ui];
+        let cases: Vec<Case> = (0..W * H)
+            .map(|p| gen_case(&mut rng, n as usize, p % 10))
+            .collect();
+        let formats = [
+            Format::Rgba32f,
+            Format::Rgba32f,
+            Format::Rgba32f,
+            Format::Rgba32f,
+            Format::Rgba32ui,
+        ];
         let mut inputs = Vec::new();
         for (k, &format) in formats.iter().enumerate() {
             let mut bytes: Vec<u8> = Vec::new();
@@ -137,7 +164,10 @@ impl Harness {
                     }
                 }
             }
-            inputs.push(Texture2dArray::new(gl, &format!("input {k}"), format, W, H, n, Some(&bytes)).unwrap());
+            inputs.push(
+                Texture2dArray::new(gl, &format!("input {k}"), format, W, H, n, Some(&bytes))
+                    .unwrap(),
+            );
         }
         let mut depth_bytes: Vec<u8> = Vec::new();
         for s in 0..n as usize {
@@ -145,7 +175,9 @@ impl Harness {
                 depth_bytes.extend_from_slice(&case.depth[s].to_ne_bytes());
             }
         }
-        let depth = Texture2dArray::new(gl, "input depth", Format::R32f, W, H, n, Some(&depth_bytes)).unwrap();
+        let depth =
+            Texture2dArray::new(gl, "input depth", Format::R32f, W, H, n, Some(&depth_bytes))
+                .unwrap();
         let outputs: Vec<Texture2d> = formats
             .iter()
             .enumerate()
@@ -160,14 +192,38 @@ impl Harness {
         attachments.push((Attachment::Depth, TextureRef::from(&out_depth)));
         let draw: Vec<Option<u32>> = (0..outputs.len() as u32).map(Some).collect();
         let target = Framebuffer::new(gl, "layer harness target", &attachments, &draw).unwrap();
-        Harness { n, inputs, depth, outputs, out_depth, target, cases }
+        Harness {
+            n,
+            inputs,
+            depth,
+            outputs,
+            out_depth,
+            target,
+            cases,
+        }
     }
 
     /// Resolve on the GPU and compare every pixel, attachment and depth with the CPU.
-    fn check(&self, gl: &glow::Context, resolver: &mut Resolver, readback: &mut Readback, settings: ResolveSettings) {
+    fn check(
+        &self,
+        gl: &glow::Context,
+        resolver: &mut Resolver,
+        readback: &mut Readback,
+        settings: ResolveSettings,
+    ) {
         let colors: Vec<TextureRef> = self.inputs.iter().map(TextureRef::from).collect();
-        let projection = DepthProjection { p22: -1.0, p23: -0.2, zero_to_one: false, clear_depth: CLEAR_DEPTH as f64 };
-        let params = ResolveParams { settings, projection, fov_y: FOV_Y, height_px: H };
+        let projection = DepthProjection {
+            p22: -1.0,
+            p23: -0.2,
+            zero_to_one: false,
+            clear_depth: CLEAR_DEPTH as f64,
+        };
+        let params = ResolveParams {
+            settings,
+            projection,
+            fov_y: FOV_Y,
+            height_px: H,
+        };
         let inputs = ResolveInputs {
             depth: TextureRef::from(&self.depth),
             colors: &colors,
@@ -175,9 +231,17 @@ impl Harness {
             key: KeySource::Position(1),
             samples: self.n,
         };
-        resolver.run(gl, &inputs, &self.target, &params, false).unwrap();
-        let gpu: Vec<_> = self.outputs.iter().map(|t| readback.read(gl, TextureRef::from(t), 1).unwrap()).collect();
-        let gpu_depth = readback.read(gl, TextureRef::from(&self.out_depth), 1).unwrap();
+        resolver
+            .run(gl, &inputs, &self.target, &params, false)
+            .unwrap();
+        let gpu: Vec<_> = self
+            .outputs
+            .iter()
+            .map(|t| readback.read(gl, TextureRef::from(t), 1).unwrap())
+            .collect();
+        let gpu_depth = readback
+            .read(gl, TextureRef::from(&self.out_depth), 1)
+            .unwrap();
 
         let cpu = CpuResolve {
             settings,
@@ -191,7 +255,11 @@ impl Harness {
         for (p, case) in self.cases.iter().enumerate() {
             let px = PixelSamples {
                 depth: case.depth.iter().map(|&d| d as f64).collect(),
-                attachments: case.atts.iter().map(|a| a.iter().map(|v| v.map(|c| c as f64)).collect()).collect(),
+                attachments: case
+                    .atts
+                    .iter()
+                    .map(|a| a.iter().map(|v| v.map(|c| c as f64)).collect())
+                    .collect(),
             };
             let want = cpu.resolve_pixel(&px);
             if want.ambiguous {
@@ -219,10 +287,16 @@ impl Harness {
         assert!(
             failures.is_empty(),
             "{}x {:?}: {} mismatches, first: {:#?}",
-            self.n, settings, failures.len(), &failures[..failures.len().min(8)]
+            self.n,
+            settings,
+            failures.len(),
+            &failures[..failures.len().min(8)]
         );
         // Near-edge pixels are rare by construction; too many would hide bugs.
-        assert!(ambiguous * 10 < self.cases.len(), "{ambiguous} ambiguous pixels");
+        assert!(
+            ambiguous * 10 < self.cases.len(),
+            "{ambiguous} ambiguous pixels"
+        );
     }
 
     fn destroy(self, gl: &glow::Context) {
@@ -245,16 +319,30 @@ fn settings_matrix() -> Vec<ResolveSettings> {
             if method == ResolveMethod::Average && window == Window::Hard {
                 continue;
             }
-            all.push(ResolveSettings { method, window, ..ResolveSettings::default() });
+            all.push(ResolveSettings {
+                method,
+                window,
+                ..ResolveSettings::default()
+            });
         }
     }
-    all.push(ResolveSettings { fast_path: false, ..ResolveSettings::default() });
-    all.push(ResolveSettings { blend_depth: true, c: 3.0, c_in: 1.0, ..ResolveSettings::default() });
+    all.push(ResolveSettings {
+        fast_path: false,
+        ..ResolveSettings::default()
+    });
+    all.push(ResolveSettings {
+        blend_depth: true,
+        c: 3.0,
+        c_in: 1.0,
+        ..ResolveSettings::default()
+    });
     all
 }
 
 fn run_for(n: u32) {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let gl = ctx.gl();
     let before = deferred_msaa::gl::live_objects();
     let mut resolver = Resolver::new(gl).unwrap();

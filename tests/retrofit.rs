@@ -6,6 +6,7 @@
 mod common;
 
 use common::host::{Host, perspective, triangle};
+use deferred_msaa::Error;
 use deferred_msaa::gl::{Attachment, Format, Texture2d, TextureRef, live_objects};
 use deferred_msaa::readback::Readback;
 use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
@@ -13,7 +14,6 @@ use deferred_msaa::resolve::{
     DepthProjection, ResolveMethod, ResolveParams, ResolveRule, ResolveSettings, Window,
 };
 use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions, introspect};
-use deferred_msaa::Error;
 use glow::HasContext;
 
 const W: u32 = 64;
@@ -30,11 +30,35 @@ fn projection() -> [f64; 16] {
 /// front of itself, a tilted panel, and a sliver.
 fn triangles() -> Vec<f32> {
     let mut v = Vec::new();
-    triangle(&mut v, [[-60.0, -40.0, -60.0], [60.0, -40.0, -60.0], [0.0, 50.0, -60.0]], [0.2, 0.3, 0.8]);
-    triangle(&mut v, [[-4.0, -3.0, -10.0], [3.0, -2.5, -10.0], [-1.0, 3.0, -10.0]], [0.9, 0.4, 0.1]);
-    triangle(&mut v, [[-2.0, -1.0, -9.9], [1.5, -1.2, -9.9], [0.0, 1.0, -9.9]], [0.1, 0.9, 0.2]);
-    triangle(&mut v, [[1.0, -3.0, -8.0], [5.0, -3.0, -20.0], [3.0, 3.0, -14.0]], [0.8, 0.8, 0.8]);
-    triangle(&mut v, [[-5.0, 2.0, -12.0], [5.0, 2.05, -12.0], [5.0, 2.2, -12.0]], [1.0, 0.0, 1.0]);
+    triangle(
+        &mut v,
+        [
+            [-60.0, -40.0, -60.0],
+            [60.0, -40.0, -60.0],
+            [0.0, 50.0, -60.0],
+        ],
+        [0.2, 0.3, 0.8],
+    );
+    triangle(
+        &mut v,
+        [[-4.0, -3.0, -10.0], [3.0, -2.5, -10.0], [-1.0, 3.0, -10.0]],
+        [0.9, 0.4, 0.1],
+    );
+    triangle(
+        &mut v,
+        [[-2.0, -1.0, -9.9], [1.5, -1.2, -9.9], [0.0, 1.0, -9.9]],
+        [0.1, 0.9, 0.2],
+    );
+    triangle(
+        &mut v,
+        [[1.0, -3.0, -8.0], [5.0, -3.0, -20.0], [3.0, 3.0, -14.0]],
+        [0.8, 0.8, 0.8],
+    );
+    triangle(
+        &mut v,
+        [[-5.0, 2.0, -12.0], [5.0, 2.05, -12.0], [5.0, 2.2, -12.0]],
+        [1.0, 0.0, 1.0],
+    );
     v
 }
 
@@ -48,7 +72,12 @@ fn params(settings: ResolveSettings) -> ResolveParams {
     let p = projection();
     ResolveParams {
         settings,
-        projection: DepthProjection { p22: p[10], p23: p[14], zero_to_one: false, clear_depth: 1.0 },
+        projection: DepthProjection {
+            p22: p[10],
+            p23: p[14],
+            zero_to_one: false,
+            clear_depth: 1.0,
+        },
         fov_y: FOV_Y,
         height_px: H,
     }
@@ -73,7 +102,9 @@ fn offered_counts(gl: &glow::Context) -> Vec<u32> {
 
 #[test]
 fn resolve_matches_the_cpu_reference_on_real_samples() {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let counts = offered_counts(ctx.gl());
     assert!(!counts.is_empty(), "the driver offers no multisampling");
     for n in counts {
@@ -91,14 +122,21 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
         position_attachment: Some(1),
     };
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &options).unwrap();
-    assert_eq!(msaa.samples(), samples, "the driver offered {samples}x but allocated another count");
+    assert_eq!(
+        msaa.samples(),
+        samples,
+        "the driver offered {samples}x but allocated another count"
+    );
     // Two lines: draw into our FBO, resolve.
     unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
     host.draw(gl, &projection(), false);
 
     let mut readback = Readback::new(gl).unwrap();
     let (depth_ref, color_refs) = msaa.inputs().unwrap();
-    let samples: Vec<_> = color_refs.iter().map(|t| readback.read(gl, *t, 1).unwrap()).collect();
+    let samples: Vec<_> = color_refs
+        .iter()
+        .map(|t| readback.read(gl, *t, 1).unwrap())
+        .collect();
     let depth_samples = readback.read(gl, depth_ref, 1).unwrap();
     let n = msaa.samples();
 
@@ -106,7 +144,12 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
     for &method in ResolveMethod::all() {
         for &window in Window::all() {
             for fast_path in [true, false] {
-                let settings = ResolveSettings { method, window, fast_path, ..ResolveSettings::default() };
+                let settings = ResolveSettings {
+                    method,
+                    window,
+                    fast_path,
+                    ..ResolveSettings::default()
+                };
                 let p = params(settings);
                 msaa.resolve(gl, &p).unwrap();
                 let resolved: Vec<_> = [&host.albedo, &host.position, &host.normal]
@@ -126,7 +169,9 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
                 for y in 0..H {
                     for x in 0..W {
                         let px = PixelSamples {
-                            depth: (0..n).map(|s| depth_samples.get(s, x, y)[0] as f64).collect(),
+                            depth: (0..n)
+                                .map(|s| depth_samples.get(s, x, y)[0] as f64)
+                                .collect(),
                             attachments: samples
                                 .iter()
                                 .map(|a| (0..n).map(|s| a.get(s, x, y).map(|c| c as f64)).collect())
@@ -140,12 +185,18 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
                         for (k, plane) in resolved.iter().enumerate() {
                             let got = plane.get(0, x, y);
                             let ok = if k == 1 {
-                                (0..4).all(|c| ((got[c] as f64) - want.attachments[k][c]).abs() <= 1e-4 * (1.0 + want.attachments[k][c].abs()))
+                                (0..4).all(|c| {
+                                    ((got[c] as f64) - want.attachments[k][c]).abs()
+                                        <= 1e-4 * (1.0 + want.attachments[k][c].abs())
+                                })
                             } else {
                                 (0..4).all(|c| half_close(got[c], want.attachments[k][c]))
                             };
                             if !ok {
-                                bad.push(format!("({x},{y}) att {k}: gpu {got:?} cpu {:?}", want.attachments[k]));
+                                bad.push(format!(
+                                    "({x},{y}) att {k}: gpu {got:?} cpu {:?}",
+                                    want.attachments[k]
+                                ));
                             }
                         }
                         let d = resolved_depth.get(0, x, y)[0] as f64;
@@ -154,7 +205,12 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
                         }
                     }
                 }
-                assert!(bad.is_empty(), "{settings:?}: {} mismatches: {:#?}", bad.len(), &bad[..bad.len().min(6)]);
+                assert!(
+                    bad.is_empty(),
+                    "{settings:?}: {} mismatches: {:#?}",
+                    bad.len(),
+                    &bad[..bad.len().min(6)]
+                );
             }
         }
     }
@@ -169,11 +225,21 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
 
 #[test]
 fn sample_count_and_size_changes_rebuild_the_twins() {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let gl = ctx.gl();
     let before = live_objects();
     let host = host(gl);
-    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &RetrofitOptions { position_attachment: Some(1), ..Default::default() }).unwrap();
+    let mut msaa = MsaaRetrofit::new(
+        gl,
+        host.fbo.raw,
+        &RetrofitOptions {
+            position_attachment: Some(1),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let first = msaa.framebuffer();
     for requested in [2, 4, 1, 3] {
         msaa.set_samples(gl, requested).unwrap();
@@ -181,14 +247,16 @@ fn sample_count_and_size_changes_rebuild_the_twins() {
         assert!(msaa.samples() >= requested.max(1));
         unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
         host.draw(gl, &projection(), false);
-        msaa.resolve(gl, &params(ResolveSettings::default())).unwrap();
+        msaa.resolve(gl, &params(ResolveSettings::default()))
+            .unwrap();
     }
     assert_ne!(first, msaa.framebuffer());
     let e = msaa.set_samples(gl, 64).unwrap_err();
     assert!(matches!(e, Error::UnsupportedSampleCount { .. }), "{e}");
     assert!(e.to_string().contains("offers"), "{e}");
     // A failed change leaves the retrofit working.
-    msaa.resolve(gl, &params(ResolveSettings::default())).unwrap();
+    msaa.resolve(gl, &params(ResolveSettings::default()))
+        .unwrap();
     msaa.destroy(gl);
     host.destroy(gl);
     assert_eq!(live_objects(), before);
@@ -196,7 +264,9 @@ fn sample_count_and_size_changes_rebuild_the_twins() {
 
 #[test]
 fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let gl = ctx.gl();
     let before = live_objects();
     let colour = Texture2d::new(gl, "colour", Format::Rgba16f, 32, 32).unwrap();
@@ -206,7 +276,13 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
         let fbo = gl.create_framebuffer().unwrap();
         gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
         for (p, t) in list {
-            gl.framebuffer_texture_2d(glow::FRAMEBUFFER, p.gl_enum(), glow::TEXTURE_2D, Some(t.raw), 0);
+            gl.framebuffer_texture_2d(
+                glow::FRAMEBUFFER,
+                p.gl_enum(),
+                glow::TEXTURE_2D,
+                Some(t.raw),
+                0,
+            );
         }
         gl.bind_framebuffer(glow::FRAMEBUFFER, None);
         fbo
@@ -214,7 +290,10 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
     // No depth attachment.
     let fbo = attach(&[(Attachment::Color(0), TextureRef::from(&colour))]);
     let e = introspect(gl, fbo).unwrap_err().to_string();
-    assert!(e.contains("GL_DEPTH_ATTACHMENT") && e.contains("no depth"), "{e}");
+    assert!(
+        e.contains("GL_DEPTH_ATTACHMENT") && e.contains("no depth"),
+        "{e}"
+    );
     unsafe { gl.delete_framebuffer(fbo) };
     // Different sizes.
     let fbo = attach(&[
@@ -223,7 +302,10 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
         (Attachment::Depth, TextureRef::from(&depth)),
     ]);
     let e = introspect(gl, fbo).unwrap_err().to_string();
-    assert!(e.contains("GL_COLOR_ATTACHMENT1") && e.contains("16x16"), "{e}");
+    assert!(
+        e.contains("GL_COLOR_ATTACHMENT1") && e.contains("16x16"),
+        "{e}"
+    );
     unsafe { gl.delete_framebuffer(fbo) };
     // A renderbuffer.
     unsafe {
@@ -232,10 +314,20 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
         gl.renderbuffer_storage(glow::RENDERBUFFER, glow::RGBA8, 32, 32);
         let fbo = attach(&[(Attachment::Depth, TextureRef::from(&depth))]);
         gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-        gl.framebuffer_renderbuffer(glow::FRAMEBUFFER, glow::COLOR_ATTACHMENT0, glow::RENDERBUFFER, Some(rb));
+        gl.framebuffer_renderbuffer(
+            glow::FRAMEBUFFER,
+            glow::COLOR_ATTACHMENT0,
+            glow::RENDERBUFFER,
+            Some(rb),
+        );
         gl.bind_framebuffer(glow::FRAMEBUFFER, None);
-        let e = MsaaRetrofit::new(gl, fbo, &RetrofitOptions::default()).unwrap_err().to_string();
-        assert!(e.contains("GL_COLOR_ATTACHMENT0") && e.contains("renderbuffer"), "{e}");
+        let e = MsaaRetrofit::new(gl, fbo, &RetrofitOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("GL_COLOR_ATTACHMENT0") && e.contains("renderbuffer"),
+            "{e}"
+        );
         gl.delete_framebuffer(fbo);
         gl.delete_renderbuffer(rb);
     }
@@ -243,10 +335,26 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
     unsafe {
         let tex = gl.create_texture().unwrap();
         gl.bind_texture(glow::TEXTURE_2D, Some(tex));
-        gl.tex_image_2d(glow::TEXTURE_2D, 0, glow::RGB565 as i32, 32, 32, 0, glow::RGB, glow::UNSIGNED_BYTE, glow::PixelUnpackData::Slice(None));
+        gl.tex_image_2d(
+            glow::TEXTURE_2D,
+            0,
+            glow::RGB565 as i32,
+            32,
+            32,
+            0,
+            glow::RGB,
+            glow::UNSIGNED_BYTE,
+            glow::PixelUnpackData::Slice(None),
+        );
         let fbo = attach(&[(Attachment::Depth, TextureRef::from(&depth))]);
         gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-        gl.framebuffer_texture_2d(glow::FRAMEBUFFER, glow::COLOR_ATTACHMENT0, glow::TEXTURE_2D, Some(tex), 0);
+        gl.framebuffer_texture_2d(
+            glow::FRAMEBUFFER,
+            glow::COLOR_ATTACHMENT0,
+            glow::TEXTURE_2D,
+            Some(tex),
+            0,
+        );
         gl.bind_framebuffer(glow::FRAMEBUFFER, None);
         let e = introspect(gl, fbo).unwrap_err();
         assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
@@ -256,10 +364,20 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
     }
     // An integer attachment cannot be blended.
     let ids = Texture2d::new(gl, "ids", Format::Rgba8ui, 32, 32).unwrap();
-    let fbo = attach(&[(Attachment::Color(0), TextureRef::from(&ids)), (Attachment::Depth, TextureRef::from(&depth))]);
-    let e = MsaaRetrofit::new(gl, fbo, &RetrofitOptions { rules: vec![(0, ResolveRule::Blend)], ..Default::default() })
-        .unwrap_err()
-        .to_string();
+    let fbo = attach(&[
+        (Attachment::Color(0), TextureRef::from(&ids)),
+        (Attachment::Depth, TextureRef::from(&depth)),
+    ]);
+    let e = MsaaRetrofit::new(
+        gl,
+        fbo,
+        &RetrofitOptions {
+            rules: vec![(0, ResolveRule::Blend)],
+            ..Default::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("RGBA8UI") && e.contains("selected"), "{e}");
     unsafe { gl.delete_framebuffer(fbo) };
     for t in [colour, small, depth, ids] {

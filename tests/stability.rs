@@ -60,10 +60,22 @@ impl Case {
         let zp = z + self.detail_gap;
         let mut v = Vec::new();
         let c = |x: f64, y: f64, z: f64| [x as f32, y as f32, z as f32];
-        triangle(&mut v, [c(-h, -h, z), c(h, -h, z), c(h, h, z)], [0.8, 0.2, 0.2]);
-        triangle(&mut v, [c(-h, -h, z), c(h, h, z), c(-h, h, z)], [0.8, 0.2, 0.2]);
+        triangle(
+            &mut v,
+            [c(-h, -h, z), c(h, -h, z), c(h, h, z)],
+            [0.8, 0.2, 0.2],
+        );
+        triangle(
+            &mut v,
+            [c(-h, -h, z), c(h, h, z), c(-h, h, z)],
+            [0.8, 0.2, 0.2],
+        );
         let p = h * 0.4;
-        triangle(&mut v, [c(-p, -p, zp), c(p, -p, zp), c(0.0, p, zp)], [0.2, 0.8, 0.2]);
+        triangle(
+            &mut v,
+            [c(-p, -p, zp), c(p, -p, zp), c(0.0, p, zp)],
+            [0.2, 0.8, 0.2],
+        );
         v
     }
 }
@@ -76,11 +88,18 @@ struct Outcome {
 }
 
 /// Draw, resolve (key from position and from depth) and read back.
-fn run(ctx: &deferred_msaa::context::HeadlessContext, case: &Case, key_from_position: bool) -> Outcome {
+fn run(
+    ctx: &deferred_msaa::context::HeadlessContext,
+    case: &Case,
+    key_from_position: bool,
+) -> Outcome {
     let gl = ctx.gl();
     let extra = ExtraFns::load(gl, |n| ctx.get_proc_address(n));
     if case.reversed {
-        assert!(extra.set_clip_depth_zero_to_one(true), "glClipControl is needed for reversed-Z");
+        assert!(
+            extra.set_clip_depth_zero_to_one(true),
+            "glClipControl is needed for reversed-Z"
+        );
     }
     let mut host = Host::new(gl, case.width, case.height, case.position, case.depth);
     host.set_triangles(gl, &case.triangles());
@@ -94,7 +113,10 @@ fn run(ctx: &deferred_msaa::context::HeadlessContext, case: &Case, key_from_posi
     let m = case.projection();
     host.draw(gl, &m, case.reversed);
     let params = ResolveParams {
-        settings: ResolveSettings { fast_path: false, ..ResolveSettings::default() },
+        settings: ResolveSettings {
+            fast_path: false,
+            ..ResolveSettings::default()
+        },
         projection: DepthProjection {
             p22: m[10],
             p23: m[14],
@@ -126,7 +148,11 @@ fn run(ctx: &deferred_msaa::context::HeadlessContext, case: &Case, key_from_posi
 fn assert_classified(case: &Case, out: &Outcome, what: &str) {
     let clear = if case.reversed { 0.0 } else { 1.0 };
     for img in [&out.depth, &out.position, &out.albedo, &out.normal] {
-        assert!(img.data.iter().all(|v| v.is_finite()), "{} ({what}): non-finite output", case.name);
+        assert!(
+            img.data.iter().all(|v| v.is_finite()),
+            "{} ({what}): non-finite output",
+            case.name
+        );
     }
     let (w, h) = (case.width, case.height);
     if w < 8 || h < 8 {
@@ -134,8 +160,18 @@ fn assert_classified(case: &Case, out: &Outcome, what: &str) {
     }
     // Corners: background, with the clear depth and the cleared position.
     for (x, y) in [(0, 0), (w - 1, 0), (0, h - 1), (w - 1, h - 1)] {
-        assert_eq!(out.depth.get(0, x, y)[0], clear, "{} ({what}): corner ({x},{y}) is not background", case.name);
-        assert_eq!(out.position.get(0, x, y), [0.0; 4], "{} ({what}): corner position", case.name);
+        assert_eq!(
+            out.depth.get(0, x, y)[0],
+            clear,
+            "{} ({what}): corner ({x},{y}) is not background",
+            case.name
+        );
+        assert_eq!(
+            out.position.get(0, x, y),
+            [0.0; 4],
+            "{} ({what}): corner position",
+            case.name
+        );
     }
     // Centre: the panel, in front of the hull by the detail gap.
     let centre = out.position.get(0, w / 2, h / 2);
@@ -146,7 +182,12 @@ fn assert_classified(case: &Case, out: &Outcome, what: &str) {
         case.name,
         centre[2]
     );
-    assert_ne!(out.depth.get(0, w / 2, h / 2)[0], clear, "{} ({what}): the model is lost to background", case.name);
+    assert_ne!(
+        out.depth.get(0, w / 2, h / 2)[0],
+        clear,
+        "{} ({what}): the model is lost to background",
+        case.name
+    );
     // Hull beside the panel: geometry, and farther than the panel.
     let hull = out.position.get(0, w / 2 + w / 10, h / 2 + h / 5);
     assert!(
@@ -159,15 +200,29 @@ fn assert_classified(case: &Case, out: &Outcome, what: &str) {
     // Normals of geometry are unit length (never NaN).
     let n = out.normal.get(0, w / 2, h / 2);
     let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    assert!((len - 1.0).abs() < 1e-2, "{} ({what}): normal length {len}", case.name);
+    assert!(
+        (len - 1.0).abs() < 1e-2,
+        "{} ({what}): normal length {len}",
+        case.name
+    );
 }
 
 fn check(case: &Case) {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let before = live_objects();
     for key_from_position in [true, false] {
         let out = run(&ctx, case, key_from_position);
-        assert_classified(case, &out, if key_from_position { "key from position" } else { "key from depth" });
+        assert_classified(
+            case,
+            &out,
+            if key_from_position {
+                "key from position"
+            } else {
+                "key from depth"
+            },
+        );
     }
     assert_eq!(live_objects(), before);
 }
@@ -175,33 +230,62 @@ fn check(case: &Case) {
 #[test]
 fn near_1e_minus_4_with_far_1e9() {
     for depth in [Format::Depth32f, Format::Depth24] {
-        check(&Case { near: 1e-4, far: Some(1e9), depth, name: format!("near 1e-4 far 1e9 {depth}"), ..Case::new("") });
+        check(&Case {
+            near: 1e-4,
+            far: Some(1e9),
+            depth,
+            name: format!("near 1e-4 far 1e9 {depth}"),
+            ..Case::new("")
+        });
     }
 }
 
 #[test]
 fn infinite_far_plane() {
-    check(&Case { far: None, ..Case::new("infinite far") });
+    check(&Case {
+        far: None,
+        ..Case::new("infinite far")
+    });
 }
 
 #[test]
 fn reversed_z() {
-    check(&Case { reversed: true, ..Case::new("reversed-Z") });
-    check(&Case { reversed: true, far: None, ..Case::new("reversed-Z infinite") });
+    check(&Case {
+        reversed: true,
+        ..Case::new("reversed-Z")
+    });
+    check(&Case {
+        reversed: true,
+        far: None,
+        ..Case::new("reversed-Z infinite")
+    });
 }
 
 #[test]
 fn d24_and_d32f_agree_on_an_ordinary_scene() {
-    check(&Case { depth: Format::Depth24, ..Case::new("D24") });
-    check(&Case { depth: Format::Depth32f, ..Case::new("D32F") });
+    check(&Case {
+        depth: Format::Depth24,
+        ..Case::new("D24")
+    });
+    check(&Case {
+        depth: Format::Depth32f,
+        ..Case::new("D32F")
+    });
 }
 
 #[test]
 fn a_model_200_km_away_through_a_half_degree_lens() {
     let fso = GBufferLayout::freespace_open();
     let rec = GBufferLayout::recommended();
-    let standard = DepthSetup { near: 0.01, far: Some(1.0e6), reversed: false };
-    let reversed = DepthSetup { reversed: true, ..standard };
+    let standard = DepthSetup {
+        near: 0.01,
+        far: Some(1.0e6),
+        reversed: false,
+    };
+    let reversed = DepthSetup {
+        reversed: true,
+        ..standard
+    };
     // FreeSpace Open's layout: detected and warned about.
     let w = precision_warnings(&fso, &standard, 200_000.0, 5.0);
     assert!(w.iter().any(|m| m.contains("65504")), "{w:#?}");
@@ -223,40 +307,75 @@ fn a_model_200_km_away_through_a_half_degree_lens() {
     check(&case);
     // What FreeSpace Open's layout does with it: the FP16 position overflows
     // (to infinity, or clamped at 65504 by some drivers): the depth is gone.
-    let Some(ctx) = common::egl_context() else { return };
-    let fso_case = Case { depth: Format::Depth24, position: Format::Rgba16f, reversed: false, ..case };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let fso_case = Case {
+        depth: Format::Depth24,
+        position: Format::Rgba16f,
+        reversed: false,
+        ..case
+    };
     let out = run(&ctx, &fso_case, true);
     let z = out.position.get(0, fso_case.width / 2, fso_case.height / 2)[2];
-    assert!(!z.is_finite() || z.abs() <= 65504.0, "FP16 position unexpectedly held {z}");
-    assert!(((z as f64) + 199_995.0).abs() > 1000.0, "FP16 position unexpectedly held {z}");
+    assert!(
+        !z.is_finite() || z.abs() <= 65504.0,
+        "FP16 position unexpectedly held {z}"
+    );
+    assert!(
+        ((z as f64) + 199_995.0).abs() > 1000.0,
+        "FP16 position unexpectedly held {z}"
+    );
 }
 
 #[test]
 fn fields_of_view_from_a_hundredth_of_a_degree_to_179() {
     for deg in [0.01f64, 0.5, 10.0, 60.0, 120.0, 179.0] {
-        check(&Case { fov_y: deg.to_radians(), name: format!("fov {deg}°"), ..Case::new("") });
+        check(&Case {
+            fov_y: deg.to_radians(),
+            name: format!("fov {deg}°"),
+            ..Case::new("")
+        });
     }
 }
 
 #[test]
 fn framebuffers_from_1x1_to_the_maximum_width() {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let max = deferred_msaa::gl::Capabilities::query(ctx.gl()).max_texture_size;
     drop(ctx);
     for (w, h) in [(1, 1), (2, 1), (1, 3), (max, 1), (1, max)] {
-        check(&Case { width: w, height: h, name: format!("{w}x{h}"), ..Case::new("") });
+        check(&Case {
+            width: w,
+            height: h,
+            name: format!("{w}x{h}"),
+            ..Case::new("")
+        });
     }
 }
 
 #[test]
 fn resolve_is_bit_identical_run_after_run() {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let case = Case::new("determinism");
     let first = run(&ctx, &case, true);
     for _ in 0..3 {
         let again = run(&ctx, &case, true);
-        for (a, b) in [(&first.albedo, &again.albedo), (&first.position, &again.position), (&first.normal, &again.normal), (&first.depth, &again.depth)] {
-            let same = a.data.iter().zip(&b.data).all(|(x, y)| x.to_bits() == y.to_bits());
+        for (a, b) in [
+            (&first.albedo, &again.albedo),
+            (&first.position, &again.position),
+            (&first.normal, &again.normal),
+            (&first.depth, &again.depth),
+        ] {
+            let same = a
+                .data
+                .iter()
+                .zip(&b.data)
+                .all(|(x, y)| x.to_bits() == y.to_bits());
             assert!(same, "resolved output differs between runs");
         }
     }
@@ -264,31 +383,57 @@ fn resolve_is_bit_identical_run_after_run() {
 
 #[test]
 fn hdr_values_up_to_65504_stay_finite() {
-    let Some(ctx) = common::egl_context() else { return };
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
     let gl = ctx.gl();
     let mut host = Host::new(gl, 32, 32, Format::Rgba32f, Format::Depth32f);
     let mut v = Vec::new();
     // A 65504-bright triangle over a dim one: edge pixels blend the two.
-    triangle(&mut v, [[-9.0, -9.0, -10.0], [9.0, -9.0, -10.0], [0.0, 9.0, -10.0]], [0.5, 0.5, 0.5]);
-    triangle(&mut v, [[-3.0, -3.0, -9.99], [3.0, -3.0, -9.99], [0.0, 3.0, -9.99]], [65504.0, 65504.0, 1.0]);
+    triangle(
+        &mut v,
+        [[-9.0, -9.0, -10.0], [9.0, -9.0, -10.0], [0.0, 9.0, -10.0]],
+        [0.5, 0.5, 0.5],
+    );
+    triangle(
+        &mut v,
+        [[-3.0, -3.0, -9.99], [3.0, -3.0, -9.99], [0.0, 3.0, -9.99]],
+        [65504.0, 65504.0, 1.0],
+    );
     host.set_triangles(gl, &v);
-    let options = RetrofitOptions { samples: 4, rules: vec![(0, ResolveRule::BlendHdr)], position_attachment: Some(1) };
+    let options = RetrofitOptions {
+        samples: 4,
+        rules: vec![(0, ResolveRule::BlendHdr)],
+        position_attachment: Some(1),
+    };
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &options).unwrap();
     unsafe { glow::HasContext::bind_framebuffer(gl, glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
     let m = perspective(1.2, 1.0, 0.1, Some(100.0));
     host.draw(gl, &m, false);
     let params = ResolveParams {
         settings: ResolveSettings::default(),
-        projection: DepthProjection { p22: m[10], p23: m[14], zero_to_one: false, clear_depth: 1.0 },
+        projection: DepthProjection {
+            p22: m[10],
+            p23: m[14],
+            zero_to_one: false,
+            clear_depth: 1.0,
+        },
         fov_y: 1.2,
         height_px: 32,
     };
     msaa.resolve(gl, &params).unwrap();
     let mut rb = Readback::new(gl).unwrap();
     let albedo = rb.read(gl, TextureRef::from(&host.albedo), 1).unwrap();
-    assert!(albedo.data.iter().all(|v| v.is_finite() && *v <= 65504.0), "HDR blend left the FP16 range");
+    assert!(
+        albedo.data.iter().all(|v| v.is_finite() && *v <= 65504.0),
+        "HDR blend left the FP16 range"
+    );
     // Edge pixels blend the two in the tonemapped domain: strictly between them.
-    let blended = albedo.data.chunks_exact(4).filter(|p| p[0] > 0.6 && p[0] < 65000.0).count();
+    let blended = albedo
+        .data
+        .chunks_exact(4)
+        .filter(|p| p[0] > 0.6 && p[0] < 65000.0)
+        .count();
     assert!(blended > 0, "no blended HDR edge pixel");
     rb.destroy(gl);
     msaa.destroy(gl);

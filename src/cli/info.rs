@@ -1,9 +1,9 @@
 //! `deferred-msaa info`: what the context offers.
 
 use super::CommonArgs;
+use crate::Result;
 use crate::context::{Backend, HeadlessContext};
 use crate::gl::{Capabilities, ExtraFns, Format, sample_positions};
-use crate::Result;
 use serde_json::{Map, Value, json};
 use std::io::Write;
 
@@ -80,10 +80,13 @@ pub fn report(ctx: &HeadlessContext) -> Result<Value> {
 
 /// Run `info`.
 pub fn run(args: &InfoArgs) -> Result<()> {
-    let ctx = HeadlessContext::new(args.common.backend)?;
+    let mut ctx = HeadlessContext::new(args.common.backend)?;
+    // Driver messages (KHR_debug) go to the log: RUST_LOG=gl=debug shows them.
+    crate::gl::install_debug_log(ctx.gl_mut());
     let r = report(&ctx)?;
     if args.json {
-        let text = serde_json::to_string_pretty(&r).map_err(|e| crate::Error::invalid(e.to_string()))?;
+        let text =
+            serde_json::to_string_pretty(&r).map_err(|e| crate::Error::invalid(e.to_string()))?;
         // A closed pipe (`| head`) is not an error worth a message.
         let _ = writeln!(std::io::stdout(), "{text}");
         return Ok(());

@@ -1,6 +1,7 @@
 //! The `deferred-msaa` command line: argument parsing and the subcommands.
 //! `src/main.rs` only calls [`main`].
 
+mod bench;
 mod info;
 mod render;
 
@@ -38,6 +39,8 @@ pub enum Command {
     Render(render::RenderCmd),
     /// Render, then write every sample of every attachment as .npy, final.png and meta.json.
     Dump(render::DumpCmd),
+    /// Measure error against run time for every method; write a report with plots.
+    Bench(bench::BenchCmd),
 }
 
 /// Run the CLI; returns the process exit code. Errors print as one line on stderr.
@@ -66,7 +69,10 @@ pub fn main() -> i32 {
         Err(e) => {
             // Usage errors as one line, like every other refusal.
             let text = e.render().to_string();
-            let line = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("error: bad arguments");
+            let line = text
+                .lines()
+                .find(|l| !l.trim().is_empty())
+                .unwrap_or("error: bad arguments");
             eprintln!("{} (see --help)", line.trim_end());
             return 2;
         }
@@ -83,7 +89,12 @@ pub fn main() -> i32 {
 
 /// An error's message on one line (shader logs are folded).
 pub fn one_line(e: &Error) -> String {
-    e.to_string().lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join(" | ")
+    e.to_string()
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join(" | ")
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -91,6 +102,7 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Info(args)) => info::run(&args),
         Some(Command::Render(cmd)) => render::run_render(&cmd),
         Some(Command::Dump(cmd)) => render::run_dump(&cmd),
+        Some(Command::Bench(cmd)) => bench::run(&cmd),
         // The main job on the built-in default scene.
         None => render::run_render(&render::RenderCmd::default_scene()?),
     }

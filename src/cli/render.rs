@@ -91,8 +91,14 @@ fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT"))?;
-    let w: u32 = w.trim().parse().map_err(|_| format!("`{s}`: width is not a number"))?;
-    let h: u32 = h.trim().parse().map_err(|_| format!("`{s}`: height is not a number"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}`: width is not a number"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}`: height is not a number"))?;
     if w == 0 || h == 0 {
         return Err(format!("`{s}`: width and height must be at least 1"));
     }
@@ -107,7 +113,10 @@ impl RenderArgs {
             AaMode::None
         } else {
             let method: ResolveMethod = self.method.parse().map_err(|_| {
-                Error::invalid(format!("unknown method `{}`; available: {METHODS}", self.method))
+                Error::invalid(format!(
+                    "unknown method `{}`; available: {METHODS}",
+                    self.method
+                ))
             })?;
             let window: Window = self.window.parse()?;
             let settings = ResolveSettings {
@@ -153,7 +162,9 @@ impl Session {
         for w in &scene.warnings {
             log::warn!("{}: {w}", args.scene);
         }
-        let ctx = HeadlessContext::new(args.common.backend)?;
+        let mut ctx = HeadlessContext::new(args.common.backend)?;
+        // Driver messages (KHR_debug) go to the log: RUST_LOG=gl=debug shows them.
+        crate::gl::install_debug_log(ctx.gl_mut());
         // The renderer logs its precision warnings (log::warn!) itself.
         let loader = |name: &str| ctx.get_proc_address(name);
         let mut renderer = Renderer::new(ctx.gl(), loader, &scene, &options)?;
@@ -184,7 +195,9 @@ fn view_image(img: &SampleImage, view: &str, channels: u32) -> image::RgbaImage 
     let (w, h) = (img.width, img.height);
     let plane = img.plane(0);
     let finite = plane.iter().copied().filter(|v| v.is_finite());
-    let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
     image::RgbaImage::from_fn(w, h, |x, y| {
         let i = ((y * w + x) * 4) as usize;
         let v = &plane[i..i + 4];
@@ -192,7 +205,11 @@ fn view_image(img: &SampleImage, view: &str, channels: u32) -> image::RgbaImage 
             let t = match view {
                 "normal" => c * 0.5 + 0.5,
                 "position" | "depth" => {
-                    if hi > lo { (c - lo) / (hi - lo) } else { 0.0 }
+                    if hi > lo {
+                        (c - lo) / (hi - lo)
+                    } else {
+                        0.0
+                    }
                 }
                 _ => c,
             };
@@ -212,7 +229,10 @@ fn save_png(img: &image::RgbaImage, path: &Path) -> Result<()> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
     img.save_with_format(path, image::ImageFormat::Png)
-        .map_err(|source| Error::Image { path: path.to_path_buf(), source })
+        .map_err(|source| Error::Image {
+            path: path.to_path_buf(),
+            source,
+        })
 }
 
 fn resolved_view(session: &Session, view: &str) -> Result<image::RgbaImage> {
@@ -226,7 +246,10 @@ fn resolved_view(session: &Session, view: &str) -> Result<image::RgbaImage> {
     let (texture, channels) = if view == "depth" {
         (TextureRef::from(&gbuffer.depth), 1)
     } else if let Some(k) = layout.index_of(view) {
-        (TextureRef::from(&gbuffer.colors[k]), layout.colors[k].format.channels())
+        (
+            TextureRef::from(&gbuffer.colors[k]),
+            layout.colors[k].format.channels(),
+        )
     } else {
         let names: Vec<&str> = layout.colors.iter().map(|a| a.name.as_str()).collect();
         return Err(Error::invalid(format!(
@@ -276,7 +299,8 @@ pub fn run_dump(cmd: &DumpCmd) -> Result<()> {
     let result = (|| -> Result<serde_json::Value> {
         let (w, h) = (gbuffer.width as usize, gbuffer.height as usize);
         // Per-sample sources: the multisampled twins, or the single-sample G-buffer for `none`.
-        let (sample_colors, sample_depth): (Vec<TextureRef>, TextureRef) = match renderer.retrofit() {
+        let (sample_colors, sample_depth): (Vec<TextureRef>, TextureRef) = match renderer.retrofit()
+        {
             Some(r) => {
                 let (depth, colors) = r.inputs()?;
                 (colors, depth)
@@ -295,21 +319,30 @@ pub fn run_dump(cmd: &DumpCmd) -> Result<()> {
         for (k, a) in layout.colors.iter().enumerate() {
             let c = a.format.channels() as usize;
             let s = readback.read(gl, sample_colors[k], 1)?;
-            crate::dump::write_npy(&dir.join(format!("{}_samples.npy", a.name)), &[s.samples as usize, h, w, c], &strip(&s, c))?;
+            crate::dump::write_npy(
+                &dir.join(format!("{}_samples.npy", a.name)),
+                &[s.samples as usize, h, w, c],
+                &strip(&s, c),
+            )?;
             let r = readback.read(gl, TextureRef::from(&gbuffer.colors[k]), 1)?;
-            crate::dump::write_npy(&dir.join(format!("{}_resolved.npy", a.name)), &[h, w, c], &strip(&r, c))?;
+            crate::dump::write_npy(
+                &dir.join(format!("{}_resolved.npy", a.name)),
+                &[h, w, c],
+                &strip(&r, c),
+            )?;
         }
         let s = readback.read(gl, sample_depth, 1)?;
-        crate::dump::write_npy(&dir.join("depth_samples.npy"), &[s.samples as usize, h, w], &strip(&s, 1))?;
+        crate::dump::write_npy(
+            &dir.join("depth_samples.npy"),
+            &[s.samples as usize, h, w],
+            &strip(&s, 1),
+        )?;
         let r = readback.read(gl, TextureRef::from(&gbuffer.depth), 1)?;
         crate::dump::write_npy(&dir.join("depth_resolved.npy"), &[h, w], &strip(&r, 1))?;
         save_png(&renderer.read_final(gl)?, &dir.join("final.png"))?;
 
         let camera = renderer.camera();
-        let settings = match renderer.options().aa {
-            AaMode::Resolve(s) => s,
-            AaMode::None => ResolveSettings::default(),
-        };
+        let settings = renderer.options().aa.settings().unwrap_or_default();
         let key_source = match layout.key_attachment() {
             Some(a) => a.name.clone(),
             None => "depth".into(),

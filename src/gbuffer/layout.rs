@@ -120,12 +120,16 @@ impl GBufferLayout {
             return Err(Error::UnsupportedFormat {
                 attachment: "depth".into(),
                 format: self.depth.name().into(),
-                reason: "the depth attachment needs a DEPTH_COMPONENT or DEPTH_STENCIL format".into(),
+                reason: "the depth attachment needs a DEPTH_COMPONENT or DEPTH_STENCIL format"
+                    .into(),
             });
         }
         for (i, a) in self.colors.iter().enumerate() {
             if self.colors[..i].iter().any(|b| b.name == a.name) {
-                return Err(Error::Layout(format!("attachment name `{}` is used twice", a.name)));
+                return Err(Error::Layout(format!(
+                    "attachment name `{}` is used twice",
+                    a.name
+                )));
             }
             if a.format.is_depth() {
                 return Err(Error::UnsupportedFormat {
@@ -138,7 +142,10 @@ impl GBufferLayout {
                 return Err(Error::UnsupportedFormat {
                     attachment: a.name.clone(),
                     format: a.format.name().into(),
-                    reason: format!("integer values can only be selected, not resolved by `{}`", a.rule),
+                    reason: format!(
+                        "integer values can only be selected, not resolved by `{}`",
+                        a.rule
+                    ),
                 });
             }
         }
@@ -181,14 +188,18 @@ mod tests {
     fn recommended_layout_is_valid_and_wide() {
         let rec = GBufferLayout::recommended();
         rec.validate().unwrap();
-        assert_eq!(rec.key_attachment().map(|a| a.format), Some(Format::Rgba32f));
+        assert_eq!(
+            rec.key_attachment().map(|a| a.format),
+            Some(Format::Rgba32f)
+        );
         assert_eq!(rec.depth, Format::Depth32f);
     }
 
     #[test]
     fn bad_layouts_name_the_attachment() {
         let mut l = GBufferLayout::freespace_open();
-        l.colors[3] = AttachmentDesc::new("material", Format::Rgba8ui).with_rule(ResolveRule::Blend);
+        l.colors[3] =
+            AttachmentDesc::new("material", Format::Rgba8ui).with_rule(ResolveRule::Blend);
         let e = l.validate().unwrap_err().to_string();
         assert!(e.contains("material") && e.contains("RGBA8UI"), "{e}");
         let mut l = GBufferLayout::freespace_open();

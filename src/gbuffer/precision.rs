@@ -56,7 +56,10 @@ pub fn precision_warnings(
     detail: f64,
 ) -> Vec<String> {
     let mut warnings = Vec::new();
-    if let Some(position) = layout.attachment("position").or_else(|| layout.key_attachment()) {
+    if let Some(position) = layout
+        .attachment("position")
+        .or_else(|| layout.key_attachment())
+    {
         if position.format.is_half_float() && max_distance > HALF_MAX {
             warnings.push(format!(
                 "attachment `{}` ({}) overflows beyond {HALF_MAX} units but the scene reaches {max_distance:.0}: \
@@ -86,7 +89,11 @@ pub fn precision_warnings(
 mod tests {
     use super::*;
 
-    const FAR_MODEL: DepthSetup = DepthSetup { near: 0.01, far: Some(1.0e6), reversed: false };
+    const FAR_MODEL: DepthSetup = DepthSetup {
+        near: 0.01,
+        far: Some(1.0e6),
+        reversed: false,
+    };
 
     #[test]
     fn freespace_open_layout_cannot_hold_a_model_200_km_away() {
@@ -98,7 +105,10 @@ mod tests {
 
     #[test]
     fn reversed_float_depth_keeps_it() {
-        let setup = DepthSetup { reversed: true, ..FAR_MODEL };
+        let setup = DepthSetup {
+            reversed: true,
+            ..FAR_MODEL
+        };
         let w = precision_warnings(&GBufferLayout::recommended(), &setup, 200_000.0, 1.0);
         assert!(w.is_empty(), "{w:#?}");
         let (res, lost) = depth_resolution(Format::Depth32f, &setup, 200_000.0);
@@ -111,7 +121,13 @@ mod tests {
 
     #[test]
     fn ordinary_scenes_are_fine() {
-        let setup = DepthSetup { near: 0.1, far: Some(1000.0), reversed: false };
-        assert!(precision_warnings(&GBufferLayout::freespace_open(), &setup, 200.0, 0.05).is_empty());
+        let setup = DepthSetup {
+            near: 0.1,
+            far: Some(1000.0),
+            reversed: false,
+        };
+        assert!(
+            precision_warnings(&GBufferLayout::freespace_open(), &setup, 200.0, 0.05).is_empty()
+        );
     }
 }

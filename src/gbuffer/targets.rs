@@ -22,7 +22,12 @@ pub struct GBuffer {
 
 impl GBuffer {
     /// Allocate the layout's textures at `width`×`height`.
-    pub fn new(gl: &glow::Context, layout: &GBufferLayout, width: u32, height: u32) -> Result<Self> {
+    pub fn new(
+        gl: &glow::Context,
+        layout: &GBufferLayout,
+        width: u32,
+        height: u32,
+    ) -> Result<Self> {
         layout.validate()?;
         let mut colors: Vec<Texture2d> = Vec::new();
         let cleanup = |gl: &glow::Context, colors: Vec<Texture2d>| {
@@ -51,7 +56,10 @@ impl GBuffer {
             .enumerate()
             .map(|(k, t)| (Attachment::Color(k as u32), TextureRef::from(t)))
             .collect();
-        attachments.push((Attachment::for_depth_format(layout.depth), TextureRef::from(&depth)));
+        attachments.push((
+            Attachment::for_depth_format(layout.depth),
+            TextureRef::from(&depth),
+        ));
         let draw: Vec<Option<u32>> = (0..colors.len() as u32).map(Some).collect();
         match Framebuffer::new(gl, "gbuffer", &attachments, &draw) {
             Ok(fbo) => Ok(GBuffer {
@@ -151,7 +159,12 @@ impl MultisampleTwin {
             .zip(&textures)
             .map(|(s, t)| (s.point, TextureRef::from(t)))
             .collect();
-        match Framebuffer::new(gl, &format!("msaa gbuffer {real}x"), &attachments, draw_buffers) {
+        match Framebuffer::new(
+            gl,
+            &format!("msaa gbuffer {real}x"),
+            &attachments,
+            draw_buffers,
+        ) {
             Ok(fbo) => Ok(MultisampleTwin {
                 textures,
                 specs: specs.to_vec(),

@@ -40,7 +40,10 @@ impl Buffer {
             gl.buffer_data_u8_slice(target, data, usage);
             gl.bind_buffer(target, None);
         }
-        if let Err(e) = check_error(gl, &format!("allocating buffer `{label}` ({} bytes)", data.len())) {
+        if let Err(e) = check_error(
+            gl,
+            &format!("allocating buffer `{label}` ({} bytes)", data.len()),
+        ) {
             buffer.destroy(gl);
             return Err(e);
         }
@@ -49,7 +52,13 @@ impl Buffer {
     }
 
     /// Create an uninitialised buffer of `size` bytes.
-    pub fn with_size(gl: &glow::Context, label: &str, target: u32, size: usize, usage: u32) -> Result<Self> {
+    pub fn with_size(
+        gl: &glow::Context,
+        label: &str,
+        target: u32,
+        size: usize,
+        usage: u32,
+    ) -> Result<Self> {
         let raw = unsafe { gl.create_buffer() }.map_err(|reason| Error::Create {
             what: format!("buffer `{label}`"),
             reason,

@@ -156,7 +156,9 @@ impl Capabilities {
     pub fn sample_counts_for(gl: &glow::Context, format: Format) -> Vec<u32> {
         let v = gl.version();
         let iq = (v.major, v.minor) >= (4, 2)
-            || gl.supported_extensions().contains("GL_ARB_internalformat_query");
+            || gl
+                .supported_extensions()
+                .contains("GL_ARB_internalformat_query");
         let mut candidates: Vec<u32> = Vec::new();
         if iq {
             let mut n = [0i32];
@@ -222,7 +224,8 @@ fn probe_samples(gl: &glow::Context, format: Format, requested: u32) -> Option<u
             true,
         );
         let ok = check_error(gl, "probing a sample count").is_ok();
-        let n = gl.get_tex_level_parameter_i32(glow::TEXTURE_2D_MULTISAMPLE, 0, glow::TEXTURE_SAMPLES);
+        let n =
+            gl.get_tex_level_parameter_i32(glow::TEXTURE_2D_MULTISAMPLE, 0, glow::TEXTURE_SAMPLES);
         gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
         gl.delete_texture(raw);
         (ok && n > 0).then_some(n as u32)
@@ -232,8 +235,13 @@ fn probe_samples(gl: &glow::Context, format: Format, requested: u32) -> Option<u
 /// The sample positions (in pixel units, 0..1) of an `samples`-sample colour
 /// framebuffer, read with `glGetMultisamplefv(GL_SAMPLE_POSITION)`. Returns
 /// the real count and the positions; an empty list when the entry point is missing.
-pub fn sample_positions(gl: &glow::Context, extra: &ExtraFns, samples: u32) -> Result<(u32, Vec<[f32; 2]>)> {
-    let texture = Texture2dMultisample::new(gl, "sample-position probe", Format::Rgba8, 1, 1, samples)?;
+pub fn sample_positions(
+    gl: &glow::Context,
+    extra: &ExtraFns,
+    samples: u32,
+) -> Result<(u32, Vec<[f32; 2]>)> {
+    let texture =
+        Texture2dMultisample::new(gl, "sample-position probe", Format::Rgba8, 1, 1, samples)?;
     let real = texture.samples;
     let fbo = match Framebuffer::new(
         gl,

@@ -76,25 +76,97 @@ impl Format {
             R8 => (glow::R8, glow::RED, glow::UNSIGNED_BYTE, 1, "R8"),
             Rg8 => (glow::RG8, glow::RG, glow::UNSIGNED_BYTE, 2, "RG8"),
             Rgba8 => (glow::RGBA8, glow::RGBA, glow::UNSIGNED_BYTE, 4, "RGBA8"),
-            Srgb8Alpha8 => (glow::SRGB8_ALPHA8, glow::RGBA, glow::UNSIGNED_BYTE, 4, "SRGB8_ALPHA8"),
-            Rgb10A2 => (glow::RGB10_A2, glow::RGBA, glow::UNSIGNED_INT_2_10_10_10_REV, 4, "RGB10_A2"),
+            Srgb8Alpha8 => (
+                glow::SRGB8_ALPHA8,
+                glow::RGBA,
+                glow::UNSIGNED_BYTE,
+                4,
+                "SRGB8_ALPHA8",
+            ),
+            Rgb10A2 => (
+                glow::RGB10_A2,
+                glow::RGBA,
+                glow::UNSIGNED_INT_2_10_10_10_REV,
+                4,
+                "RGB10_A2",
+            ),
             R16f => (glow::R16F, glow::RED, glow::HALF_FLOAT, 2, "R16F"),
             Rg16f => (glow::RG16F, glow::RG, glow::HALF_FLOAT, 4, "RG16F"),
             Rgba16f => (glow::RGBA16F, glow::RGBA, glow::HALF_FLOAT, 8, "RGBA16F"),
-            R11fG11fB10f => (glow::R11F_G11F_B10F, glow::RGB, glow::FLOAT, 4, "R11F_G11F_B10F"),
+            R11fG11fB10f => (
+                glow::R11F_G11F_B10F,
+                glow::RGB,
+                glow::FLOAT,
+                4,
+                "R11F_G11F_B10F",
+            ),
             R32f => (glow::R32F, glow::RED, glow::FLOAT, 4, "R32F"),
             Rg32f => (glow::RG32F, glow::RG, glow::FLOAT, 8, "RG32F"),
             Rgba32f => (glow::RGBA32F, glow::RGBA, glow::FLOAT, 16, "RGBA32F"),
-            R32ui => (glow::R32UI, glow::RED_INTEGER, glow::UNSIGNED_INT, 4, "R32UI"),
-            Rgba8ui => (glow::RGBA8UI, glow::RGBA_INTEGER, glow::UNSIGNED_BYTE, 4, "RGBA8UI"),
-            Rgba16ui => (glow::RGBA16UI, glow::RGBA_INTEGER, glow::UNSIGNED_SHORT, 8, "RGBA16UI"),
-            Rgba32ui => (glow::RGBA32UI, glow::RGBA_INTEGER, glow::UNSIGNED_INT, 16, "RGBA32UI"),
+            R32ui => (
+                glow::R32UI,
+                glow::RED_INTEGER,
+                glow::UNSIGNED_INT,
+                4,
+                "R32UI",
+            ),
+            Rgba8ui => (
+                glow::RGBA8UI,
+                glow::RGBA_INTEGER,
+                glow::UNSIGNED_BYTE,
+                4,
+                "RGBA8UI",
+            ),
+            Rgba16ui => (
+                glow::RGBA16UI,
+                glow::RGBA_INTEGER,
+                glow::UNSIGNED_SHORT,
+                8,
+                "RGBA16UI",
+            ),
+            Rgba32ui => (
+                glow::RGBA32UI,
+                glow::RGBA_INTEGER,
+                glow::UNSIGNED_INT,
+                16,
+                "RGBA32UI",
+            ),
             Rgba32i => (glow::RGBA32I, glow::RGBA_INTEGER, glow::INT, 16, "RGBA32I"),
-            Depth16 => (glow::DEPTH_COMPONENT16, glow::DEPTH_COMPONENT, glow::UNSIGNED_SHORT, 2, "DEPTH_COMPONENT16"),
-            Depth24 => (glow::DEPTH_COMPONENT24, glow::DEPTH_COMPONENT, glow::UNSIGNED_INT, 4, "DEPTH_COMPONENT24"),
-            Depth32f => (glow::DEPTH_COMPONENT32F, glow::DEPTH_COMPONENT, glow::FLOAT, 4, "DEPTH_COMPONENT32F"),
-            Depth24Stencil8 => (glow::DEPTH24_STENCIL8, glow::DEPTH_STENCIL, glow::UNSIGNED_INT_24_8, 4, "DEPTH24_STENCIL8"),
-            Depth32fStencil8 => (glow::DEPTH32F_STENCIL8, glow::DEPTH_STENCIL, glow::FLOAT_32_UNSIGNED_INT_24_8_REV, 8, "DEPTH32F_STENCIL8"),
+            Depth16 => (
+                glow::DEPTH_COMPONENT16,
+                glow::DEPTH_COMPONENT,
+                glow::UNSIGNED_SHORT,
+                2,
+                "DEPTH_COMPONENT16",
+            ),
+            Depth24 => (
+                glow::DEPTH_COMPONENT24,
+                glow::DEPTH_COMPONENT,
+                glow::UNSIGNED_INT,
+                4,
+                "DEPTH_COMPONENT24",
+            ),
+            Depth32f => (
+                glow::DEPTH_COMPONENT32F,
+                glow::DEPTH_COMPONENT,
+                glow::FLOAT,
+                4,
+                "DEPTH_COMPONENT32F",
+            ),
+            Depth24Stencil8 => (
+                glow::DEPTH24_STENCIL8,
+                glow::DEPTH_STENCIL,
+                glow::UNSIGNED_INT_24_8,
+                4,
+                "DEPTH24_STENCIL8",
+            ),
+            Depth32fStencil8 => (
+                glow::DEPTH32F_STENCIL8,
+                glow::DEPTH_STENCIL,
+                glow::FLOAT_32_UNSIGNED_INT_24_8_REV,
+                8,
+                "DEPTH32F_STENCIL8",
+            ),
         }
     }
 
@@ -131,9 +203,10 @@ impl Format {
     pub fn from_name(name: &str) -> Option<Format> {
         let upper = name.trim().to_ascii_uppercase();
         let bare = upper.strip_prefix("GL_").unwrap_or(&upper);
-        Format::ALL.iter().copied().find(|f| {
-            f.name() == bare || f.name().replace("_COMPONENT", "") == bare
-        })
+        Format::ALL
+            .iter()
+            .copied()
+            .find(|f| f.name() == bare || f.name().replace("_COMPONENT", "") == bare)
     }
 
     /// Number of components (depth formats: 1).

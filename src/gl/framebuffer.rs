@@ -97,7 +97,9 @@ impl Framebuffer {
         let (width, height, samples) = match attachments.first() {
             Some((_, t)) => (t.width, t.height, t.samples),
             None => {
-                return Err(Error::Layout(format!("framebuffer `{label}` has no attachments")));
+                return Err(Error::Layout(format!(
+                    "framebuffer `{label}` has no attachments"
+                )));
             }
         };
         let raw = unsafe { gl.create_framebuffer() }.map_err(|reason| Error::Create {
@@ -134,7 +136,9 @@ impl Framebuffer {
                         Some(tex.raw),
                         0,
                     ),
-                    _ => gl.framebuffer_texture(glow::FRAMEBUFFER, point.gl_enum(), Some(tex.raw), 0),
+                    _ => {
+                        gl.framebuffer_texture(glow::FRAMEBUFFER, point.gl_enum(), Some(tex.raw), 0)
+                    }
                 }
             }
             let buffers: Vec<u32> = draw_buffers

@@ -58,11 +58,16 @@ pub fn preamble(extensions: &[&str], defines: &[(String, String)]) -> String {
 fn log_line_numbers(log: &str) -> Vec<usize> {
     let mut lines = Vec::new();
     for entry in log.lines() {
-        let rest = entry.trim_start_matches("ERROR: ").trim_start_matches("WARNING: ");
+        let rest = entry
+            .trim_start_matches("ERROR: ")
+            .trim_start_matches("WARNING: ");
         let Some(after_file) = rest.strip_prefix("0:").or_else(|| rest.strip_prefix("0(")) else {
             continue;
         };
-        let digits: String = after_file.chars().take_while(|c| c.is_ascii_digit()).collect();
+        let digits: String = after_file
+            .chars()
+            .take_while(|c| c.is_ascii_digit())
+            .collect();
         if let Ok(n) = digits.parse::<usize>() {
             if !lines.contains(&n) {
                 lines.push(n);
@@ -177,9 +182,7 @@ impl Program {
             return *loc;
         }
         let loc = unsafe { gl.get_uniform_location(self.raw, name) };
-        self.uniforms
-            .borrow_mut()
-            .insert(name.to_string(), loc);
+        self.uniforms.borrow_mut().insert(name.to_string(), loc);
         loc
     }
 
@@ -278,7 +281,10 @@ mod tests {
     #[test]
     fn parses_driver_line_numbers() {
         assert_eq!(log_line_numbers("0:12(5): error: `x' undeclared"), vec![12]);
-        assert_eq!(log_line_numbers("0(7) : error C1008: undefined variable"), vec![7]);
+        assert_eq!(
+            log_line_numbers("0(7) : error C1008: undefined variable"),
+            vec![7]
+        );
         assert_eq!(log_line_numbers("ERROR: 0:3: 'y' : undeclared"), vec![3]);
         assert!(log_line_numbers("link failed").is_empty());
     }

@@ -47,21 +47,44 @@ pub(crate) struct GeometryTarget {
 impl GeometryPass {
     /// Build the program with `o_color`, `o_position`, … bound to `slots`.
     pub(crate) fn new(gl: &glow::Context, slots: GBufferSlots) -> Result<Self> {
-        let program = Program::build(
+        Self::with_fragment(
             gl,
             "geometry",
-            &Self::preamble(),
+            slots,
+            &[],
+            ("geometry.frag", GEOMETRY_FRAG),
+            &[],
+        )
+    }
+
+    /// A program like the model program with another fragment shader
+    /// (`frag_name`, `frag_body`, compiled with `extensions`) that writes the
+    /// same outputs and `extra_outputs` (name, draw buffer).
+    pub(crate) fn with_fragment(
+        gl: &glow::Context,
+        label: &str,
+        slots: GBufferSlots,
+        extensions: &[&str],
+        (frag_name, frag_body): (&str, &str),
+        extra_outputs: &[(&str, u32)],
+    ) -> Result<Self> {
+        let mut outputs = vec![
+            ("o_color", slots.color),
+            ("o_position", slots.position),
+            ("o_normal", slots.normal),
+            ("o_specular", slots.specular),
+            ("o_emissive", slots.emissive),
+        ];
+        outputs.extend_from_slice(extra_outputs);
+        let program = Program::build(
+            gl,
+            label,
+            &preamble(extensions, &[]),
             &[
                 (ShaderStage::Vertex, "geometry.vert", GEOMETRY_VERT),
-                (ShaderStage::Fragment, "geometry.frag", GEOMETRY_FRAG),
+                (ShaderStage::Fragment, frag_name, frag_body),
             ],
-            &[
-                ("o_color", slots.color),
-                ("o_position", slots.position),
-                ("o_normal", slots.normal),
-                ("o_specular", slots.specular),
-                ("o_emissive", slots.emissive),
-            ],
+            &outputs,
         )?;
         let locations = AttribLocations::of(gl, &program);
         Ok(GeometryPass {
@@ -69,6 +92,11 @@ impl GeometryPass {
             slots,
             locations,
         })
+    }
+
+    /// The program (to set uniforms of its own, after binding it).
+    pub(crate) fn program(&self) -> &Program {
+        &self.program
     }
 
     fn preamble() -> String {

@@ -88,6 +88,19 @@ pub(crate) fn light_batches(lights: &[Light], view: &DMat4) -> Vec<LightBatch> {
 }
 
 impl LightBatch {
+    /// The packed lights, one entry per light: view-space position and
+    /// range, direction and kind, colour × intensity, spot cone.
+    pub(crate) fn lights(&self) -> impl Iterator<Item = [[f32; 4]; 4]> + '_ {
+        (0..self.position.len()).map(|i| {
+            [
+                self.position[i],
+                self.direction[i],
+                self.color[i],
+                self.cone[i],
+            ]
+        })
+    }
+
     /// Set the light uniforms of a bound program; `first` adds emission and ambient.
     pub(crate) fn apply(&self, gl: &glow::Context, program: &Program, first: bool) {
         program.set_i32(gl, "u_light_count", self.position.len() as i32);

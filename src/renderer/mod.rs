@@ -27,7 +27,16 @@
 //!    G-buffer bound.
 //! 6. **Lighting** (`lighting.frag`): per pixel, from the resolved G-buffer,
 //!    into an RGBA16F HDR target; background pixels (depth = clear depth)
-//!    get their emissive value only.
+//!    get their emissive value only. With [`AaMode::PerSample`] the lighting
+//!    pass (`lighting_per_sample.frag`, which calls `lighting.frag`'s
+//!    shading with every light in one uniform block) lights every sample of
+//!    the multisampled twins instead and averages them as the tonemap will
+//!    see them. With [`AaMode::Complex`] (whose G-buffer pass also records
+//!    coverage flags, `geometry_coverage.frag`) a detection pass
+//!    (`complex_mask.frag`) marks complex pixels in a stencil mask on the
+//!    HDR target, then two stencil-masked passes of
+//!    `lighting_per_sample.frag` light simple pixels once, from sample 0,
+//!    and complex pixels per sample.
 //! 7. **Transparent objects** (`transparent.frag`), forward, single-sampled,
 //!    alpha-blended, depth-tested against the resolved depth without writing it.
 //! 8. **Tonemap** (`tonemap.frag`) into an RGBA8 sRGB-encoded image.
@@ -47,10 +56,13 @@
 
 mod background;
 mod background_copy;
+mod complex_mask;
 mod depth;
 mod fxaa;
 mod geometry;
+mod geometry_coverage;
 mod lighting;
+mod lighting_per_sample;
 mod mesh;
 mod pass;
 mod targets;
@@ -68,16 +80,20 @@ use crate::scene::{Background, Camera, Light, Scene};
 use crate::{Error, Result};
 use background::BackgroundPass;
 use background_copy::{BackgroundCopyPass, CopyTarget};
+use complex_mask::{ComplexMaskPass, MaskTarget};
 pub use depth::DepthMode;
 use depth::{ClipControl, SceneExtent};
 use fxaa::FxaaPass;
 use geometry::{GeometryPass, GeometryTarget};
+use geometry_coverage::CoverageGeometryPass;
 use glam::Mat4;
 use glow::HasContext;
 use lighting::{LightingPass, light_batches};
+use lighting_per_sample::{PerSampleLightingPass, SampleInputs};
 use mesh::GpuScene;
+use pass::{LightTarget, StencilSelect};
 use std::ffi::c_void;
-use targets::Targets;
+use targets::{ComplexTargets, Targets};
 use tonemap::TonemapPass;
 use transparent::TransparentPass;
 
@@ -88,32 +104,81 @@ pub mod shaders {
     pub use super::lighting::{AMBIENT, LIGHTING_FRAG, LIGHTS_PER_BATCH, lighting_defines};
 }
 
-/// How the G-buffer is anti-aliased.
+/// How the frame is anti-aliased.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AaMode {
     /// No multisampling: the G-buffer pass draws into the single-sample
     /// G-buffer (method `none`).
     None,
     /// The G-buffer pass draws into the retrofit's multisampled twin, which
-    /// the depth-aware resolve writes back into the G-buffer.
+    /// the depth-aware resolve writes back into the G-buffer; lighting is
+    /// per pixel (methods `average`, `front`, `median`, `back`).
     Resolve(ResolveSettings),
+    /// Per-sample lighting (method `per-sample`), the reference quality of
+    /// MSAA deferred lighting at N× the lighting cost: the multisampled
+    /// G-buffer is not resolved for lighting; the lighting pass lights every
+    /// sample of the twins (`texelFetch(sampler2DMS, p, i)`) with every
+    /// light and averages the lit results after the tonemap curve (then
+    /// maps the average back to HDR), so the tonemapped pixel is the box
+    /// filter of its tonemapped samples, as in a supersampled image; a
+    /// pixel whose samples all have one radiance keeps it exactly. (A plain
+    /// HDR average lets a bright sample wash out the others: thin dark wires
+    /// vanish against an HDR sky.) With more than 256 lights the pass draws
+    /// once per 256 and the average is linear in HDR.
+    ///
+    /// The G-buffer is still resolved (the default median resolve) for the
+    /// decal hook and for the depth test of transparent objects, but the lit
+    /// image does not read it, so decals written into it are not lit.
+    PerSample,
+    /// Per-sample lighting on complex pixels only (method `complex`):
+    /// complex pixels are marked in a stencil mask — a triangle edge crosses
+    /// the pixel (the coverage mask `gl_SampleMaskIn` recorded by the
+    /// G-buffer pass, where the context has it), or its samples differ in
+    /// background, depth, normal or base colour (triangles that intersect,
+    /// which coverage misses; the whole test without `gl_SampleMaskIn`).
+    /// Two stencil-masked passes of the per-sample lighting program then
+    /// light simple pixels once, from sample 0, and complex pixels per
+    /// sample exactly as [`AaMode::PerSample`] does, so the image matches
+    /// it wherever the detection is right. The G-buffer is resolved as with
+    /// [`AaMode::PerSample`] (decals are not lit either). See
+    /// [`Renderer::complex_fraction`] and [`Renderer::read_complex_mask`].
+    Complex,
 }
 
 impl AaMode {
-    /// `none`, or the resolve method's name (`average`, `front`, `median`, `back`).
+    /// `none`, the resolve method's name (`average`, `front`, `median`,
+    /// `back`), `per-sample` or `complex`.
     pub fn name(&self) -> &'static str {
         match self {
             AaMode::None => "none",
             AaMode::Resolve(s) => s.method.name(),
+            AaMode::PerSample => "per-sample",
+            AaMode::Complex => "complex",
         }
     }
 
-    /// The resolve settings, when multisampling.
+    /// The settings of the G-buffer's resolve, when multisampling: those
+    /// given with [`AaMode::Resolve`]; the default (median, smooth) for
+    /// [`AaMode::PerSample`] and [`AaMode::Complex`], whose resolved
+    /// G-buffer serves decals and transparent objects.
     pub fn settings(&self) -> Option<ResolveSettings> {
         match self {
             AaMode::None => None,
             AaMode::Resolve(s) => Some(*s),
+            AaMode::PerSample | AaMode::Complex => Some(ResolveSettings::default()),
         }
+    }
+
+    /// Whether the G-buffer pass draws into the multisampled twins.
+    pub fn is_multisampled(&self) -> bool {
+        !matches!(self, AaMode::None)
+    }
+
+    /// Whether the lighting pass lights samples of the multisampled
+    /// G-buffer ([`AaMode::PerSample`], [`AaMode::Complex`]) rather than
+    /// the resolved pixels.
+    pub fn lights_per_sample(&self) -> bool {
+        matches!(self, AaMode::PerSample | AaMode::Complex)
     }
 }
 
@@ -124,8 +189,8 @@ pub struct RenderOptions {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// Requested samples per pixel with [`AaMode::Resolve`] (the driver's
-    /// real count is used; see [`Renderer::samples`]). Ignored with [`AaMode::None`].
+    /// Requested samples per pixel when multisampling (the driver's real
+    /// count is used; see [`Renderer::samples`]). Ignored with [`AaMode::None`].
     pub samples: u32,
     /// Anti-aliasing of the G-buffer.
     pub aa: AaMode,
@@ -166,7 +231,7 @@ impl RenderOptions {
                 self.width, self.height
             )));
         }
-        if let AaMode::Resolve(settings) = &self.aa {
+        if let Some(settings) = self.aa.settings() {
             if self.samples == 0 {
                 return Err(Error::invalid(
                     "a sample count of 0 is not a count; use 1 or more (or the `none` method)",
@@ -245,7 +310,9 @@ pub struct FrameTimings {
     pub resolve_ms: f64,
     /// The decal hook (0 without one).
     pub decal_ms: f64,
-    /// Deferred lighting.
+    /// Deferred lighting; with [`AaMode::PerSample`] the per-sample
+    /// lighting, with [`AaMode::Complex`] the complex-pixel detection and
+    /// both lighting passes.
     pub lighting_ms: f64,
     /// Forward transparent objects.
     pub transparent_ms: f64,
@@ -272,6 +339,7 @@ struct Passes {
     fxaa: FxaaPass,
     fullscreen: VertexArray,
     timer: GpuTimer,
+    sample: SampleLightingPasses,
 }
 
 impl Passes {
@@ -347,6 +415,7 @@ impl Passes {
             fxaa,
             fullscreen,
             timer,
+            sample: SampleLightingPasses::default(),
         })
     }
 
@@ -360,6 +429,95 @@ impl Passes {
         self.fxaa.destroy(gl);
         self.fullscreen.destroy(gl);
         self.timer.destroy(gl);
+        self.sample.destroy(gl);
+    }
+}
+
+/// The programs of [`AaMode::PerSample`] and [`AaMode::Complex`], built when
+/// a mode first needs them and kept.
+#[derive(Debug, Default)]
+struct SampleLightingPasses {
+    lighting: Option<PerSampleLightingPass>,
+    mask: Option<ComplexMaskPass>,
+    /// The coverage-recording model program, or why the context cannot
+    /// record coverage, for the layout's slots and coverage slot.
+    coverage: Option<CoverageState>,
+}
+
+/// [`SampleLightingPasses::coverage`]: built for these slots and coverage slot.
+#[derive(Debug)]
+struct CoverageState {
+    slots: GBufferSlots,
+    coverage_slot: u32,
+    pass: std::result::Result<CoverageGeometryPass, String>,
+}
+
+impl SampleLightingPasses {
+    /// Build what `aa` needs for a G-buffer with `slots` and `colors`
+    /// colour attachments (the coverage flags go to the next one). Without
+    /// `gl_SampleMaskIn`, `complex` falls back to the discontinuity test
+    /// alone and says so in a `log::warn!` line.
+    fn prepare(
+        &mut self,
+        gl: &glow::Context,
+        aa: &AaMode,
+        slots: GBufferSlots,
+        colors: u32,
+    ) -> Result<()> {
+        if !aa.lights_per_sample() {
+            return Ok(());
+        }
+        if self.lighting.is_none() {
+            self.lighting = Some(PerSampleLightingPass::new(gl)?);
+        }
+        if *aa != AaMode::Complex {
+            return Ok(());
+        }
+        let current = self
+            .coverage
+            .as_ref()
+            .is_some_and(|c| c.slots == slots && c.coverage_slot == colors);
+        if !current {
+            let pass = CoverageGeometryPass::new(gl, slots, colors);
+            if let Err(reason) = &pass {
+                log::warn!(
+                    "method `complex`: no coverage mask ({reason}); complex pixels are found by the depth, normal and colour discontinuity test alone"
+                );
+            }
+            let state = CoverageState {
+                slots,
+                coverage_slot: colors,
+                pass,
+            };
+            if let Some(CoverageState { pass: Ok(old), .. }) = self.coverage.replace(state) {
+                old.destroy(gl);
+            }
+        }
+        let with_coverage = self.coverage().is_some();
+        if self.mask.as_ref().map(ComplexMaskPass::uses_coverage) != Some(with_coverage) {
+            let mask = ComplexMaskPass::new(gl, with_coverage)?;
+            if let Some(old) = self.mask.replace(mask) {
+                old.destroy(gl);
+            }
+        }
+        Ok(())
+    }
+
+    /// The coverage-recording model program, when the context has one.
+    fn coverage(&self) -> Option<&CoverageGeometryPass> {
+        self.coverage.as_ref().and_then(|c| c.pass.as_ref().ok())
+    }
+
+    fn destroy(self, gl: &glow::Context) {
+        if let Some(p) = self.lighting {
+            p.destroy(gl);
+        }
+        if let Some(p) = self.mask {
+            p.destroy(gl);
+        }
+        if let Some(CoverageState { pass: Ok(p), .. }) = self.coverage {
+            p.destroy(gl);
+        }
     }
 }
 
@@ -370,28 +528,31 @@ struct Frame {
     gbuffer: GBuffer,
     retrofit: Option<MsaaRetrofit>,
     targets: Targets,
+    /// The targets of [`AaMode::Complex`], allocated by the first such frame
+    /// after a change of options (they refer to the twins and the HDR target).
+    complex: Option<ComplexTargets>,
 }
 
 impl Frame {
     fn new(gl: &glow::Context, options: &RenderOptions) -> Result<Self> {
         let gbuffer = GBuffer::new(gl, &options.layout, options.width, options.height)?;
-        let retrofit = match options.aa {
-            AaMode::None => None,
-            AaMode::Resolve(_) => {
-                match MsaaRetrofit::new(gl, gbuffer.fbo.raw, &options.retrofit_options()) {
-                    Ok(r) => Some(r),
-                    Err(e) => {
-                        gbuffer.destroy(gl);
-                        return Err(e);
-                    }
+        let retrofit = if options.aa.is_multisampled() {
+            match MsaaRetrofit::new(gl, gbuffer.fbo.raw, &options.retrofit_options()) {
+                Ok(r) => Some(r),
+                Err(e) => {
+                    gbuffer.destroy(gl);
+                    return Err(e);
                 }
             }
+        } else {
+            None
         };
         match Targets::new(gl, &gbuffer.depth, options.fxaa) {
             Ok(targets) => Ok(Frame {
                 gbuffer,
                 retrofit,
                 targets,
+                complex: None,
             }),
             Err(e) => {
                 if let Some(r) = retrofit {
@@ -404,6 +565,9 @@ impl Frame {
     }
 
     fn destroy(self, gl: &glow::Context) {
+        if let Some(c) = self.complex {
+            c.destroy(gl);
+        }
         if let Some(r) = self.retrofit {
             r.destroy(gl);
         }
@@ -497,6 +661,21 @@ fn attach_gbuffer_textures(
     Ok(())
 }
 
+/// The per-sample lighting program and the twins it reads.
+fn per_sample_inputs<'a>(
+    sample: &'a SampleLightingPasses,
+    retrofit: Option<&MsaaRetrofit>,
+    slots: GBufferSlots,
+) -> Result<(&'a PerSampleLightingPass, SampleInputs)> {
+    let pass = sample.lighting.as_ref().ok_or_else(|| {
+        Error::invalid("the per-sample lighting program is missing (not prepared)")
+    })?;
+    let retrofit = retrofit.ok_or_else(|| {
+        Error::invalid("per-sample lighting needs the multisampled G-buffer, which is missing")
+    })?;
+    Ok((pass, SampleInputs::of(retrofit, slots)?))
+}
+
 /// Run `f` between a timer's begin and end; the milliseconds it took.
 fn timed(gl: &glow::Context, timer: &mut GpuTimer, f: impl FnOnce() -> Result<()>) -> Result<f64> {
     timer.begin(gl);
@@ -521,6 +700,9 @@ pub struct Renderer {
     passes: Passes,
     frame: Frame,
     decal_hook: Option<DecalHook>,
+    /// Pixels the per-sample lighting pass lit in the last frame
+    /// (`GL_SAMPLES_PASSED`), with [`AaMode::PerSample`] and [`AaMode::Complex`].
+    per_sample_pixels: Option<u64>,
 }
 
 impl std::fmt::Debug for Renderer {
@@ -566,7 +748,12 @@ impl Renderer {
         for w in &warnings {
             log::warn!("scene `{}` ({depth_mode} depth): {w}", scene.name);
         }
-        let passes = Passes::new(gl, slots)?;
+        let mut passes = Passes::new(gl, slots)?;
+        let colors = options.layout.colors.len() as u32;
+        if let Err(e) = passes.sample.prepare(gl, &options.aa, slots, colors) {
+            passes.destroy(gl);
+            return Err(e);
+        }
         let gpu_scene = match GpuScene::new(gl, scene) {
             Ok(s) => s,
             Err(e) => {
@@ -596,6 +783,7 @@ impl Renderer {
             passes,
             frame,
             decal_hook: None,
+            per_sample_pixels: None,
         })
     }
 
@@ -652,11 +840,21 @@ impl Renderer {
 
     fn render_passes(&mut self, gl: &glow::Context) -> Result<FrameTimings> {
         let (width, height) = (self.options.width, self.options.height);
+        let aa = self.options.aa;
         let depth_mode = self.depth_mode;
+        let clear_depth = depth_mode.clear_depth();
         let view = self.camera.view.as_dmat4();
         let projection = self.projection();
         let params = self.resolve_params();
         let batches = light_batches(&self.lights, &view);
+        let footprint = (self.camera.fov_y / height as f32).tan();
+        self.per_sample_pixels = None;
+        let slots = self.passes.geometry.slots();
+        let colors = self.frame.gbuffer.colors.len() as u32;
+        self.passes.sample.prepare(gl, &aa, slots, colors)?;
+        if aa == AaMode::Complex {
+            self.prepare_complex_targets(gl)?;
+        }
         let Passes {
             background,
             background_copy,
@@ -667,13 +865,14 @@ impl Renderer {
             fxaa,
             fullscreen,
             timer,
+            sample,
         } = &mut self.passes;
         let Frame {
             gbuffer,
             retrofit,
             targets,
+            complex,
         } = &mut self.frame;
-        let slots = geometry.slots();
         let mut t = FrameTimings {
             total_ms: 0.0,
             geometry_ms: 0.0,
@@ -688,17 +887,27 @@ impl Renderer {
 
         // The G-buffer pass draws into the retrofit's multisampled twin when
         // there is one (the first of the two integration lines), else into
-        // the G-buffer itself.
-        let (fbo, draw_buffers) = match retrofit.as_ref() {
-            Some(r) => (r.framebuffer(), r.host().draw_buffers.clone()),
-            None => (
+        // the G-buffer itself. `complex` with coverage flags draws the twins
+        // plus the flags, with the model shader wrapped to write them.
+        let coverage = match (aa, sample.coverage(), complex.as_ref()) {
+            (AaMode::Complex, Some(pass), Some(c)) => c.coverage.as_ref().map(|c| (pass, c)),
+            _ => None,
+        };
+        let (fbo, draw_buffers) = match (coverage, retrofit.as_ref()) {
+            (Some((_, c)), _) => (c.fbo.raw, c.draw_buffers.clone()),
+            (None, Some(r)) => (r.framebuffer(), r.host().draw_buffers.clone()),
+            (None, None) => (
                 gbuffer.fbo.raw,
                 (0..gbuffer.colors.len() as u32).map(Some).collect(),
             ),
         };
+        let model = match (coverage, retrofit.as_ref()) {
+            (Some((pass, _)), Some(r)) => pass.prepare(gl, r.samples()),
+            _ => &*geometry,
+        };
         let target = GeometryTarget { fbo, width, height };
         t.geometry_ms = timed(gl, timer, || {
-            GeometryPass::clear(gl, target, depth_mode.clear_depth());
+            GeometryPass::clear(gl, target, clear_depth);
             background.draw(
                 gl,
                 &targets.background,
@@ -715,7 +924,7 @@ impl Renderer {
                 draw_buffers: &draw_buffers,
             };
             background_copy.draw(gl, copy, fullscreen, &targets.background.texture)?;
-            geometry.draw(
+            model.draw(
                 gl,
                 target,
                 &self.scene,
@@ -738,17 +947,87 @@ impl Renderer {
             })?;
         }
 
-        t.lighting_ms = timed(gl, timer, || {
-            lighting.draw(
+        let hdr = LightTarget {
+            fbo: targets.hdr.fbo.raw,
+            width,
+            height,
+            stencil: StencilSelect::All,
+        };
+        let mut lit_per_sample = None;
+        t.lighting_ms = timed(gl, timer, || match aa {
+            AaMode::None | AaMode::Resolve(_) => lighting.draw(
                 gl,
                 &targets.hdr,
                 fullscreen,
                 gbuffer,
                 slots,
                 &batches,
-                depth_mode.clear_depth(),
-            )
+                clear_depth,
+            ),
+            AaMode::PerSample => {
+                let (pass, inputs) = per_sample_inputs(sample, retrofit.as_ref(), slots)?;
+                lit_per_sample = pass.draw(
+                    gl,
+                    hdr,
+                    fullscreen,
+                    &inputs,
+                    inputs.samples,
+                    &batches,
+                    clear_depth,
+                    true,
+                )?;
+                Ok(())
+            }
+            AaMode::Complex => {
+                let (pass, inputs) = per_sample_inputs(sample, retrofit.as_ref(), slots)?;
+                let (Some(mask), Some(c)) = (sample.mask.as_ref(), complex.as_ref()) else {
+                    return Err(Error::invalid(
+                        "method `complex` has no mask pass or stencil target (not prepared)",
+                    ));
+                };
+                let mask_target = MaskTarget {
+                    fbo: c.hdr_with_stencil.raw,
+                    width,
+                    height,
+                };
+                let flags = c.coverage.as_ref().map(|c| TextureRef::from(&c.texture));
+                mask.draw(gl, mask_target, fullscreen, &inputs, flags, footprint)?;
+                let select = |value| LightTarget {
+                    fbo: c.hdr_with_stencil.raw,
+                    width,
+                    height,
+                    stencil: StencilSelect::Equal(value),
+                };
+                // Simple pixels: once, from sample 0.
+                pass.draw(
+                    gl,
+                    select(complex_mask::SIMPLE),
+                    fullscreen,
+                    &inputs,
+                    1,
+                    &batches,
+                    clear_depth,
+                    false,
+                )?;
+                // Complex pixels: every sample, averaged.
+                lit_per_sample = pass.draw(
+                    gl,
+                    select(complex_mask::COMPLEX),
+                    fullscreen,
+                    &inputs,
+                    inputs.samples,
+                    &batches,
+                    clear_depth,
+                    true,
+                )?;
+                unsafe {
+                    gl.disable(glow::STENCIL_TEST);
+                    gl.stencil_mask(0xFF);
+                }
+                Ok(())
+            }
         })?;
+        self.per_sample_pixels = lit_per_sample;
         t.transparent_ms = timed(gl, timer, || {
             transparent.draw(
                 gl,
@@ -783,6 +1062,71 @@ impl Renderer {
         Ok(t)
     }
 
+    /// Allocate `complex`'s stencil mask (and coverage flags, when the
+    /// context records coverage) unless they are there and match.
+    fn prepare_complex_targets(&mut self, gl: &glow::Context) -> Result<()> {
+        let coverage_slot = self
+            .passes
+            .sample
+            .coverage()
+            .map(CoverageGeometryPass::coverage_slot);
+        let current = self
+            .frame
+            .complex
+            .as_ref()
+            .is_some_and(|c| c.coverage.is_some() == coverage_slot.is_some());
+        if current {
+            return Ok(());
+        }
+        let retrofit = self.frame.retrofit.as_ref().ok_or_else(|| {
+            Error::invalid("method `complex` needs the multisampled G-buffer, which is missing")
+        })?;
+        let targets = ComplexTargets::new(
+            gl,
+            &self.frame.targets.hdr.texture,
+            coverage_slot.map(|slot| (retrofit, slot)),
+        )?;
+        if let Some(old) = self.frame.complex.replace(targets) {
+            old.destroy(gl);
+        }
+        Ok(())
+    }
+
+    /// The fraction of pixels [`AaMode::Complex`] marked complex (and lit
+    /// per sample) in the last frame, counted with a `GL_SAMPLES_PASSED`
+    /// query around the per-sample lighting pass, which the stencil mask
+    /// limits to those pixels. `None` with other modes, before the first
+    /// frame after [`Renderer::set_options`], or where the context gave no
+    /// query object.
+    pub fn complex_fraction(&self) -> Option<f32> {
+        if self.options.aa != AaMode::Complex {
+            return None;
+        }
+        let pixels = f64::from(self.options.width) * f64::from(self.options.height);
+        self.per_sample_pixels
+            .map(|n| (n as f64 / pixels.max(1.0)) as f32)
+    }
+
+    /// How many pixels the per-sample lighting pass lit in the last frame
+    /// (`GL_SAMPLES_PASSED` around it): every pixel with
+    /// [`AaMode::PerSample`], the complex ones with [`AaMode::Complex`].
+    /// `None` with other modes, before the first frame after
+    /// [`Renderer::set_options`], or without a query object.
+    pub fn per_sample_pixels(&self) -> Option<u64> {
+        self.per_sample_pixels
+    }
+
+    /// The last frame's complex-pixel mask of [`AaMode::Complex`], read back
+    /// from its stencil buffer (row 0 at the top; 255 = complex, lit per
+    /// sample; 0 = simple, lit once). `None` with other modes or before the
+    /// first frame after [`Renderer::set_options`].
+    pub fn read_complex_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
+        match (&self.options.aa, &self.frame.complex) {
+            (AaMode::Complex, Some(c)) => c.read_mask(gl).map(Some),
+            _ => Ok(None),
+        }
+    }
+
     /// Install (or remove, with `None`) the decal hook.
     ///
     /// It is called once per frame after the resolve (without multisampling:
@@ -800,6 +1144,11 @@ impl Renderer {
     /// control is `GL_ZERO_TO_ONE` during the hook, the nearer fragment
     /// passes GREATER and the background's depth is 0.0
     /// ([`Renderer::projection`] is the matrix to draw with).
+    ///
+    /// With [`AaMode::PerSample`] and [`AaMode::Complex`] the hook still
+    /// gets the resolved G-buffer (transparent objects are depth-tested
+    /// against it), but lighting reads the multisampled samples, so what
+    /// the hook draws is not lit.
     pub fn set_decal_hook(&mut self, hook: Option<DecalHook>) {
         self.decal_hook = hook;
     }
@@ -810,8 +1159,13 @@ impl Renderer {
     ///   framebuffer and lets the retrofit re-read it ([`MsaaRetrofit::set_samples`],
     ///   which rebuilds from the host's framebuffer), then the other targets;
     /// - a new sample count rebuilds the multisampled twins only;
-    /// - switching between `none` and a resolve creates or frees the retrofit;
+    /// - switching between `none` and a multisampled method creates or frees
+    ///   the retrofit;
     /// - a new resolve method or window changes nothing on the GPU;
+    /// - the first switch to `per-sample` or `complex` builds their programs
+    ///   (kept from then on); `complex`'s stencil mask and coverage flags are
+    ///   allocated by the next frame (they follow the twins and targets, and
+    ///   are freed on every change);
     /// - a new layout builds a new G-buffer and retrofit;
     /// - a new depth mode changes nothing on the GPU (it is decided again
     ///   with a new layout too, see [`DepthMode::Auto`]).
@@ -821,6 +1175,10 @@ impl Renderer {
     /// renderer keeps rendering with its previous options.
     pub fn set_options(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
         options.validate()?;
+        // The programs a per-sample mode needs, first: they are kept either way.
+        let slots = GBufferSlots::of(&options.layout)?;
+        let colors = options.layout.colors.len() as u32;
+        self.passes.sample.prepare(gl, &options.aa, slots, colors)?;
         let depth_mode =
             depth::resolve_mode(gl, options.depth_mode, &self.clip, options.layout.depth)?;
         let warnings = depth::warnings(&options.layout, &self.camera, depth_mode, self.extent);
@@ -839,6 +1197,12 @@ impl Renderer {
         self.options = options.clone();
         self.depth_mode = depth_mode;
         self.warnings = warnings;
+        // They refer to the twins and targets that may have changed; the
+        // next `complex` frame allocates them again.
+        if let Some(c) = self.frame.complex.take() {
+            c.destroy(gl);
+        }
+        self.per_sample_pixels = None;
         Ok(())
     }
 
@@ -935,24 +1299,24 @@ impl Renderer {
         options: &RenderOptions,
         host_changed: bool,
     ) -> Result<()> {
-        match (&mut self.frame.retrofit, &options.aa) {
-            (Some(r), AaMode::Resolve(_)) => {
+        match (&mut self.frame.retrofit, options.aa.is_multisampled()) {
+            (Some(r), true) => {
                 if host_changed || options.samples != self.options.samples {
                     // Rebuilds the twins from the host framebuffer as it is now.
                     r.set_samples(gl, options.samples)?;
                 }
             }
-            (None, AaMode::Resolve(_)) => {
+            (None, true) => {
                 let r =
                     MsaaRetrofit::new(gl, self.frame.gbuffer.fbo.raw, &options.retrofit_options())?;
                 self.frame.retrofit = Some(r);
             }
-            (Some(_), AaMode::None) => {
+            (Some(_), false) => {
                 if let Some(r) = self.frame.retrofit.take() {
                     r.destroy(gl);
                 }
             }
-            (None, AaMode::None) => {}
+            (None, false) => {}
         }
         Ok(())
     }
@@ -995,6 +1359,15 @@ impl Renderer {
     /// the G-buffer with and without MSAA.
     pub fn lighting_program_source(&self) -> String {
         LightingPass::source()
+    }
+
+    /// The fragment shader of [`AaMode::PerSample`] and [`AaMode::Complex`]'s
+    /// per-sample lighting exactly as compiled: `lighting.frag` (its lights,
+    /// BRDF and sample shading, with `LIGHTING_FUNCTIONS_ONLY`), then
+    /// `lighting_per_sample.frag`'s loop over the samples. The per-pixel
+    /// [`Renderer::lighting_program_source`] is not changed by these modes.
+    pub fn per_sample_lighting_program_source(&self) -> String {
+        PerSampleLightingPass::source()
     }
 
     /// The model fragment shader exactly as compiled; like the lighting

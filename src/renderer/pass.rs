@@ -58,3 +58,44 @@ pub(crate) fn draw_fullscreen(gl: &glow::Context, vao: &VertexArray) {
     vao.bind(gl);
     unsafe { gl.draw_arrays(glow::TRIANGLES, 0, 3) };
 }
+
+/// Which pixels a full-screen pass may write, by their stencil value (the
+/// complex-pixel mask of method `complex`: 1 = complex, 0 = simple).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum StencilSelect {
+    /// No stencil test.
+    All,
+    /// Only pixels whose stencil value equals this one (stencil not written).
+    Equal(u8),
+}
+
+/// Where a lighting pass draws: a framebuffer whose draw buffer 0 is the HDR
+/// target, and which pixels it lights.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LightTarget {
+    /// The framebuffer (the HDR target, or the HDR target with the stencil mask).
+    pub(crate) fbo: glow::Framebuffer,
+    /// Its width.
+    pub(crate) width: u32,
+    /// Its height.
+    pub(crate) height: u32,
+    /// The stencil test; anything but [`StencilSelect::All`] needs a
+    /// framebuffer with a stencil attachment.
+    pub(crate) stencil: StencilSelect,
+}
+
+impl LightTarget {
+    /// Bind the framebuffer, set [`fullscreen_state`], then the stencil test.
+    pub(crate) fn bind(&self, gl: &glow::Context) {
+        bind_target(gl, self.fbo, self.width, self.height);
+        fullscreen_state(gl);
+        if let StencilSelect::Equal(value) = self.stencil {
+            unsafe {
+                gl.enable(glow::STENCIL_TEST);
+                gl.stencil_func(glow::EQUAL, i32::from(value), 0xFF);
+                gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+                gl.stencil_mask(0);
+            }
+        }
+    }
+}

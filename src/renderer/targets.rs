@@ -1,9 +1,15 @@
 //! The renderer's own single-sample targets besides the G-buffer: the
 //! background, the HDR target (alone for lighting, with the resolved depth
-//! for transparent objects), the tonemapped LDR image and the FXAA output.
+//! for transparent objects), the tonemapped LDR image and the FXAA output;
+//! and those of [`AaMode::Complex`](super::AaMode::Complex): the HDR target
+//! with a stencil mask, and the coverage flags.
 
 use crate::Result;
-use crate::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef};
+use crate::gl::{
+    Attachment, Format, Framebuffer, Texture2d, Texture2dMultisample, TextureRef, check_error,
+};
+use crate::retrofit::MsaaRetrofit;
+use glow::HasContext;
 
 /// A texture and a framebuffer with it as colour attachment 0.
 #[derive(Debug)]
@@ -148,5 +154,164 @@ impl Targets {
         if let Some(t) = self.fxaa {
             t.destroy(gl);
         }
+    }
+}
+
+/// The targets of [`AaMode::Complex`](super::AaMode::Complex), sized like
+/// the HDR target and the retrofit's twins they refer to.
+#[derive(Debug)]
+pub(crate) struct ComplexTargets {
+    /// `DEPTH24_STENCIL8`, used only for its stencil: the complex-pixel mask.
+    pub(crate) stencil: Texture2d,
+    /// The HDR texture with `stencil` attached: the mask pass and both
+    /// lighting passes draw here.
+    pub(crate) hdr_with_stencil: Framebuffer,
+    /// The coverage flags and the G-buffer pass's framebuffer, when the
+    /// context records coverage.
+    pub(crate) coverage: Option<CoverageTarget>,
+}
+
+/// The multisampled coverage flags and a framebuffer with the retrofit's
+/// twins plus the flags, for the G-buffer pass of `complex`.
+#[derive(Debug)]
+pub(crate) struct CoverageTarget {
+    /// `R8`, one flag per sample: 1 where a fragment with partial coverage wrote it.
+    pub(crate) texture: Texture2dMultisample,
+    /// The twins at their own attachment points, the flags at `coverage_slot`.
+    pub(crate) fbo: Framebuffer,
+    /// Its draw-buffer mapping: the twins' own, then the flags at `coverage_slot`.
+    pub(crate) draw_buffers: Vec<Option<u32>>,
+}
+
+impl ComplexTargets {
+    /// Allocate the stencil mask for `hdr` and, with `coverage` = `(retrofit,
+    /// slot)`, the coverage flags (at the retrofit's sample count) and a
+    /// framebuffer holding the retrofit's twins with the flags at colour
+    /// attachment and draw buffer `slot`.
+    pub(crate) fn new(
+        gl: &glow::Context,
+        hdr: &Texture2d,
+        coverage: Option<(&MsaaRetrofit, u32)>,
+    ) -> Result<Self> {
+        let (w, h) = (hdr.width, hdr.height);
+        let stencil = Texture2d::new(gl, "complex-pixel stencil", Format::Depth24Stencil8, w, h)?;
+        let hdr_with_stencil = match Framebuffer::new(
+            gl,
+            "hdr with complex-pixel stencil",
+            &[
+                (Attachment::Color(0), TextureRef::from(hdr)),
+                (Attachment::DepthStencil, TextureRef::from(&stencil)),
+            ],
+            &[Some(0)],
+        ) {
+            Ok(f) => f,
+            Err(e) => {
+                stencil.destroy(gl);
+                return Err(e);
+            }
+        };
+        let coverage = match coverage {
+            None => None,
+            Some((retrofit, slot)) => match CoverageTarget::new(gl, retrofit, slot) {
+                Ok(c) => Some(c),
+                Err(e) => {
+                    hdr_with_stencil.destroy(gl);
+                    stencil.destroy(gl);
+                    return Err(e);
+                }
+            },
+        };
+        Ok(ComplexTargets {
+            stencil,
+            hdr_with_stencil,
+            coverage,
+        })
+    }
+
+    /// Read the mask back (row 0 at the top): 255 for complex pixels, 0 for simple ones.
+    pub(crate) fn read_mask(&self, gl: &glow::Context) -> Result<image::GrayImage> {
+        let (w, h) = (self.stencil.width, self.stencil.height);
+        let row = w as usize;
+        let mut data = vec![0u8; row * h as usize];
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.hdr_with_stencil.raw));
+            gl.bind_buffer(glow::PIXEL_PACK_BUFFER, None);
+            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
+            gl.pixel_store_i32(glow::PACK_ROW_LENGTH, 0);
+            gl.read_pixels(
+                0,
+                0,
+                w as i32,
+                h as i32,
+                glow::STENCIL_INDEX,
+                glow::UNSIGNED_BYTE,
+                glow::PixelPackData::Slice(Some(&mut data)),
+            );
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+        }
+        check_error(gl, "reading the complex-pixel stencil")?;
+        // GL's rows run bottom-up.
+        let flipped: Vec<u8> = data
+            .chunks_exact(row)
+            .rev()
+            .flatten()
+            .map(|&v| if v != 0 { 255 } else { 0 })
+            .collect();
+        image::GrayImage::from_raw(w, h, flipped).ok_or_else(|| {
+            crate::Error::invalid(format!(
+                "the complex-pixel mask's buffer does not hold {w}x{h} pixels"
+            ))
+        })
+    }
+
+    /// Free everything (not the HDR texture nor the twins).
+    pub(crate) fn destroy(self, gl: &glow::Context) {
+        if let Some(c) = self.coverage {
+            c.destroy(gl);
+        }
+        self.hdr_with_stencil.destroy(gl);
+        self.stencil.destroy(gl);
+    }
+}
+
+impl CoverageTarget {
+    fn new(gl: &glow::Context, retrofit: &MsaaRetrofit, slot: u32) -> Result<Self> {
+        let twin = retrofit.twin();
+        let texture = Texture2dMultisample::new(
+            gl,
+            "coverage flags",
+            Format::R8,
+            twin.width,
+            twin.height,
+            twin.samples,
+        )?;
+        let mut attachments = twin.fbo.attachments.clone();
+        attachments.push((Attachment::Color(slot), TextureRef::from(&texture)));
+        let mut draw_buffers = retrofit.host().draw_buffers.clone();
+        if draw_buffers.len() <= slot as usize {
+            draw_buffers.resize(slot as usize + 1, None);
+        }
+        draw_buffers[slot as usize] = Some(slot);
+        match Framebuffer::new(
+            gl,
+            "multisampled G-buffer with coverage flags",
+            &attachments,
+            &draw_buffers,
+        ) {
+            Ok(fbo) => Ok(CoverageTarget {
+                texture,
+                fbo,
+                draw_buffers,
+            }),
+            Err(e) => {
+                texture.destroy(gl);
+                Err(e)
+            }
+        }
+    }
+
+    fn destroy(self, gl: &glow::Context) {
+        self.fbo.destroy(gl);
+        self.texture.destroy(gl);
     }
 }

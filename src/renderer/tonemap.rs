@@ -7,7 +7,9 @@ use crate::Result;
 use crate::gl::{Program, Texture2d, VertexArray, check_error};
 use glow::HasContext;
 
-/// The tonemap shader's body.
+/// The tonemap shader's body; its first part (the curve, its inverse, the
+/// sRGB encoding) also goes into the per-sample lighting shader, compiled
+/// with `TONEMAP_FUNCTIONS_ONLY`.
 pub(crate) const TONEMAP_FRAG: &str = include_str!("../../shaders_glsl/tonemap.frag");
 
 /// Exposure applied before the curve.

@@ -141,7 +141,8 @@ impl CpuResolve {
         let m = zi.min(zr) * self.footprint;
         let (c, c_in) = (self.settings.c, self.settings.c_in);
         // f32 rounds each depth to about 6e-8 of itself and the edge to about 1e-7.
-        let near = |edge: f64| (d - edge).abs() <= 1e-6 * zi.abs().max(zr.abs()) + 1e-5 * edge.abs();
+        let near =
+            |edge: f64| (d - edge).abs() <= 1e-6 * zi.abs().max(zr.abs()) + 1e-5 * edge.abs();
         match self.settings.window {
             Window::Hard => (if d <= c * m { 1.0 } else { 0.0 }, near(c * m)),
             Window::Smooth => {
@@ -298,7 +299,11 @@ pub fn blend_hdr(values: &[[f64; 4]], weights: &[f64], r: usize) -> [f64; 4] {
     }
     // Both sums carry the same 1/weight, which cancels in the quotient; the
     // weight itself bounds the complement for all-negative colours (m = 0).
-    let denominator = complement[0].min(complement[1]).min(complement[2]).min(weight).max(1e-30);
+    let denominator = complement[0]
+        .min(complement[1])
+        .min(complement[2])
+        .min(weight)
+        .max(1e-30);
     [
         (sum[0] / denominator).clamp(lo[0], hi[0]),
         (sum[1] / denominator).clamp(lo[1], hi[1]),
@@ -328,9 +333,14 @@ mod tests {
     /// Colour = sample index, position z = −depths[i].
     fn pixel(depths: &[f64]) -> PixelSamples {
         PixelSamples {
-            depth: depths.iter().map(|&z| if z.is_infinite() { 1.0 } else { 0.5 }).collect(),
+            depth: depths
+                .iter()
+                .map(|&z| if z.is_infinite() { 1.0 } else { 0.5 })
+                .collect(),
             attachments: vec![
-                (0..depths.len()).map(|i| [i as f64, 0.0, 0.0, 1.0]).collect(),
+                (0..depths.len())
+                    .map(|i| [i as f64, 0.0, 0.0, 1.0])
+                    .collect(),
                 depths.iter().map(|&z| [0.0, 0.0, -z, 1.0]).collect(),
             ],
         }
@@ -351,10 +361,25 @@ mod tests {
     #[test]
     fn ties_break_to_the_lower_index() {
         let px = pixel(&[10.0, 5.0, 5.0, 10.0]);
-        assert_eq!(resolver(ResolveMethod::Front, Window::Hard).resolve_pixel(&px).reference, 1);
-        assert_eq!(resolver(ResolveMethod::Back, Window::Hard).resolve_pixel(&px).reference, 0);
+        assert_eq!(
+            resolver(ResolveMethod::Front, Window::Hard)
+                .resolve_pixel(&px)
+                .reference,
+            1
+        );
+        assert_eq!(
+            resolver(ResolveMethod::Back, Window::Hard)
+                .resolve_pixel(&px)
+                .reference,
+            0
+        );
         // Sorted (z, i): s1 s2 s0 s3 → position 2 is s0.
-        assert_eq!(resolver(ResolveMethod::Median, Window::Hard).resolve_pixel(&px).reference, 0);
+        assert_eq!(
+            resolver(ResolveMethod::Median, Window::Hard)
+                .resolve_pixel(&px)
+                .reference,
+            0
+        );
     }
 
     #[test]
@@ -442,7 +467,12 @@ mod tests {
     fn depth_keys_from_the_projection() {
         // Standard GL projection terms for near 0.1, far 100.
         let (n, f) = (0.1, 100.0);
-        let dp = DepthProjection { p22: -(f + n) / (f - n), p23: -2.0 * f * n / (f - n), zero_to_one: false, clear_depth: 1.0 };
+        let dp = DepthProjection {
+            p22: -(f + n) / (f - n),
+            p23: -2.0 * f * n / (f - n),
+            zero_to_one: false,
+            clear_depth: 1.0,
+        };
         // A point at distance 10: z_clip = p22·(−10) + p23, w = 10.
         let z_ndc = (dp.p22 * -10.0 + dp.p23) / 10.0;
         let depth = (z_ndc + 1.0) * 0.5;
@@ -450,7 +480,12 @@ mod tests {
         assert!((dp.linearize(0.0) - n).abs() < 1e-12);
         assert!((dp.linearize(1.0) - f).abs() < 1e-9);
         // Reversed-Z with an infinite far plane and GL_ZERO_TO_ONE: depth = n / z.
-        let rev = DepthProjection { p22: 0.0, p23: n, zero_to_one: true, clear_depth: 0.0 };
+        let rev = DepthProjection {
+            p22: 0.0,
+            p23: n,
+            zero_to_one: true,
+            clear_depth: 0.0,
+        };
         assert!((rev.linearize(n / 10.0) - 10.0).abs() < 1e-9);
         assert!(rev.linearize(0.0).is_infinite());
     }

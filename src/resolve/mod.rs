@@ -12,7 +12,9 @@ mod settings;
 pub use settings::{DepthProjection, ResolveMethod, ResolveRule, ResolveSettings, Window};
 
 use crate::gl::format::SampleKind;
-use crate::gl::{Framebuffer, Program, ShaderStage, TextureRef, VertexArray, check_error, preamble};
+use crate::gl::{
+    Framebuffer, Program, ShaderStage, TextureRef, VertexArray, check_error, preamble,
+};
 use crate::{Error, Result};
 use glow::HasContext;
 use std::collections::HashMap;
@@ -221,7 +223,9 @@ impl Resolver {
                 return Err(Error::UnsupportedFormat {
                     attachment: format!("{} input", tex.format),
                     format: tex.format.name().into(),
-                    reason: format!("integer formats can only be selected, not resolved by `{rule}`"),
+                    reason: format!(
+                        "integer formats can only be selected, not resolved by `{rule}`"
+                    ),
                 });
             }
             attachments.push((rule, kind));
@@ -271,7 +275,11 @@ impl Resolver {
             }
             let proj = params.projection;
             program.set_f32(gl, "u_clear_depth", proj.clear_depth as f32);
-            let to_ndc = if proj.zero_to_one { [1.0, 0.0] } else { [2.0, -1.0] };
+            let to_ndc = if proj.zero_to_one {
+                [1.0, 0.0]
+            } else {
+                [2.0, -1.0]
+            };
             program.set_vec2(gl, "u_depth_to_ndc", to_ndc);
             program.set_vec2(gl, "u_projection", [proj.p22 as f32, proj.p23 as f32]);
             program.set_f32(gl, "u_footprint", params.footprint() as f32);
@@ -299,7 +307,9 @@ impl Resolver {
 }
 
 fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program> {
-    let outputs: Vec<String> = (0..key.attachments.len()).map(|k| format!("o_att{k}")).collect();
+    let outputs: Vec<String> = (0..key.attachments.len())
+        .map(|k| format!("o_att{k}"))
+        .collect();
     let mut frag_outputs: Vec<(&str, u32)> = outputs
         .iter()
         .enumerate()
@@ -368,13 +378,7 @@ impl SavedState {
 
     pub(crate) fn restore(&self, gl: &glow::Context) {
         fn set(gl: &glow::Context, cap: u32, on: bool) {
-            unsafe {
-                if on {
-                    gl.enable(cap)
-                } else {
-                    gl.disable(cap)
-                }
-            }
+            unsafe { if on { gl.enable(cap) } else { gl.disable(cap) } }
         }
         unsafe {
             gl.bind_framebuffer(
@@ -386,7 +390,12 @@ impl SavedState {
                 std::num::NonZeroU32::new(self.vertex_array as u32).map(glow::NativeVertexArray),
             );
             gl.active_texture(self.active_texture as u32);
-            gl.viewport(self.viewport[0], self.viewport[1], self.viewport[2], self.viewport[3]);
+            gl.viewport(
+                self.viewport[0],
+                self.viewport[1],
+                self.viewport[2],
+                self.viewport[3],
+            );
             gl.depth_func(self.depth_func as u32);
             gl.depth_mask(self.depth_mask);
         }

@@ -92,7 +92,6 @@ fn load_bytes(
     is_glb_name: bool,
     name: String,
 ) -> Result<Scene, String> {
-
     let (json, bin) = if bytes.starts_with(b"glTF") {
         let glb = parse_glb(bytes)?;
         (glb.json, glb.bin)

@@ -1,0 +1,336 @@
+//! The entries of a bench method list (`--methods`).
+//!
+//! An entry is a method name, options after colons, and optionally `+fxaa`:
+//!
+//! | entry                 | meaning |
+//! |-----------------------|---------|
+//! | `none`                | a single-sample G-buffer |
+//! | `average`             | the naive resolve of the multisampled G-buffer (a hardware resolve) |
+//! | `front`, `median`, `back` | the depth-aware resolve with that reference sample |
+//! | `per-sample`          | lighting evaluated for every sample (needs renderer support) |
+//! | `complex`             | per-sample lighting only on complex pixels (needs renderer support) |
+//!
+//! Options of the resolve methods: `:hard` / `:smooth` (the closeness
+//! window), `:c=F` (outer width; when given without `c_in`, `c_in` becomes
+//! `min(2.5, c/2)`), `:c_in=F` (also spelt `c-in`), `:nofast` (no
+//! uniform-pixel fast path). `+fxaa` after any entry runs the crate's FXAA
+//! after tonemapping: `median:hard+fxaa`, `none+fxaa`.
+//!
+//! A run's `method` field in the report is the entry exactly as written.
+
+use crate::renderer::AaMode;
+use crate::resolve::{ResolveMethod, ResolveSettings, Window};
+use crate::{Error, Result};
+use std::fmt;
+use std::str::FromStr;
+
+/// The method list used when `--methods` is not given: these, then
+/// [`OPTIONAL_DEFAULT_METHODS`] that the renderer offers.
+pub const BASE_DEFAULT_METHODS: &[&str] = &[
+    "none",
+    "none+fxaa",
+    "average",
+    "front",
+    "median",
+    "back",
+    "median:hard",
+    "median:nofast",
+    "median+fxaa",
+];
+
+/// Default entries that join the default list once the renderer has them.
+pub const OPTIONAL_DEFAULT_METHODS: &[&str] = &["per-sample", "complex"];
+
+/// Every method name an entry may start with.
+pub const METHOD_NAMES: &[&str] = &[
+    "none",
+    "average",
+    "front",
+    "median",
+    "back",
+    "per-sample",
+    "complex",
+];
+
+/// What the accepted entries look like, for error messages.
+const ACCEPTED: &str = "accepted: none, average, front, median, back, per-sample, complex; \
+resolve options after colons (:hard, :smooth, :c=F, :c_in=F, :nofast); +fxaa after any entry";
+
+/// How a method anti-aliases, before FXAA.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AaMethod {
+    /// A single-sample G-buffer.
+    None,
+    /// The multisampled G-buffer resolved by [`crate::retrofit::MsaaRetrofit::resolve`]
+    /// (`average`, `front`, `median`, `back`).
+    Resolve(ResolveSettings),
+    /// Lighting for every sample of the multisampled G-buffer, then averaged.
+    PerSample,
+    /// Per-sample lighting on complex pixels only, per-pixel lighting elsewhere.
+    Complex,
+}
+
+impl AaMethod {
+    /// The method's name without options: `none`, `average`, …, `per-sample`, `complex`.
+    pub fn base_name(&self) -> &'static str {
+        match self {
+            AaMethod::None => "none",
+            AaMethod::Resolve(s) => s.method.name(),
+            AaMethod::PerSample => "per-sample",
+            AaMethod::Complex => "complex",
+        }
+    }
+
+    /// Whether the method renders into a multisampled G-buffer.
+    pub fn is_multisampled(&self) -> bool {
+        !matches!(self, AaMethod::None)
+    }
+
+    /// Whether the method does lighting work beyond the per-pixel pass of
+    /// `none` (its `ms_aa` then includes its lighting time minus `none`'s).
+    pub fn adds_lighting(&self) -> bool {
+        matches!(self, AaMethod::PerSample | AaMethod::Complex)
+    }
+
+    /// The renderer mode this method runs with. (A method whose renderer
+    /// mode is missing returns the one-line error "method `NAME` is not
+    /// available yet" here, and [`AaMethod::available`] is then false.)
+    pub fn aa_mode(&self) -> Result<AaMode> {
+        match self {
+            AaMethod::None => Ok(AaMode::None),
+            AaMethod::Resolve(s) => Ok(AaMode::Resolve(*s)),
+            AaMethod::PerSample => Ok(AaMode::PerSample),
+            AaMethod::Complex => Ok(AaMode::Complex),
+        }
+    }
+
+    /// Whether the renderer offers this method.
+    pub fn available(&self) -> bool {
+        self.aa_mode().is_ok()
+    }
+
+    /// Which methods can share one renderer (and so one set of GPU targets):
+    /// changing between methods of the same class changes nothing on the GPU.
+    pub(crate) fn class(&self) -> &'static str {
+        match self {
+            AaMethod::None => "single-sample",
+            AaMethod::Resolve(_) => "resolve",
+            AaMethod::PerSample => "per-sample",
+            AaMethod::Complex => "complex",
+        }
+    }
+}
+
+/// One entry of a method list: the method, FXAA, and the entry as written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MethodEntry {
+    /// The entry exactly as written (the report's `method` field).
+    pub label: String,
+    /// The anti-aliasing method with its options.
+    pub method: AaMethod,
+    /// Whether FXAA runs after tonemapping.
+    pub fxaa: bool,
+}
+
+impl fmt::Display for MethodEntry {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.label)
+    }
+}
+
+fn parse_number(entry: &str, key: &str, value: &str) -> Result<f64> {
+    value
+        .trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| {
+            Error::invalid(format!(
+                "method `{entry}`: `{key}={value}` is not a finite number"
+            ))
+        })
+}
+
+impl FromStr for MethodEntry {
+    type Err = Error;
+
+    /// Parse one entry (see the [module documentation](self)). The error is
+    /// one line that says what is accepted.
+    fn from_str(s: &str) -> Result<Self> {
+        let label = s.trim();
+        if label.is_empty() {
+            return Err(Error::invalid(format!(
+                "an empty method entry in --methods; {ACCEPTED}"
+            )));
+        }
+        let (body, fxaa) = match label.split_once('+') {
+            None => (label, false),
+            Some((body, "fxaa")) => (body, true),
+            Some((_, other)) => {
+                return Err(Error::invalid(format!(
+                    "method `{label}`: unknown `+{other}` (only `+fxaa`, at the end, is accepted); {ACCEPTED}"
+                )));
+            }
+        };
+        let mut parts = body.split(':');
+        let name = parts.next().unwrap_or("");
+        let options: Vec<&str> = parts.collect();
+        let unknown = || Error::invalid(format!("unknown method `{label}`; {ACCEPTED}"));
+        let method = match name {
+            "none" | "per-sample" | "complex" => {
+                if let Some(o) = options.first() {
+                    return Err(Error::invalid(format!(
+                        "method `{label}`: `{name}` takes no options (got `:{o}`); {ACCEPTED}"
+                    )));
+                }
+                match name {
+                    "none" => AaMethod::None,
+                    "per-sample" => AaMethod::PerSample,
+                    _ => AaMethod::Complex,
+                }
+            }
+            _ => {
+                let method: ResolveMethod = name.parse().map_err(|_| unknown())?;
+                let mut settings = ResolveSettings {
+                    method,
+                    ..ResolveSettings::default()
+                };
+                let mut c_in_given = false;
+                for option in &options {
+                    match option.split_once('=') {
+                        None if *option == "hard" => settings.window = Window::Hard,
+                        None if *option == "smooth" => settings.window = Window::Smooth,
+                        None if *option == "nofast" => settings.fast_path = false,
+                        Some(("c", v)) => settings.c = parse_number(label, "c", v)?,
+                        Some(("c_in" | "c-in", v)) => {
+                            settings.c_in = parse_number(label, "c_in", v)?;
+                            c_in_given = true;
+                        }
+                        _ => {
+                            return Err(Error::invalid(format!(
+                                "method `{label}`: unknown option `:{option}`; {ACCEPTED}"
+                            )));
+                        }
+                    }
+                }
+                if !c_in_given {
+                    settings.c_in = settings.c_in.min(settings.c * 0.5);
+                }
+                settings
+                    .validate()
+                    .map_err(|e| Error::invalid(format!("method `{label}`: {e}")))?;
+                AaMethod::Resolve(settings)
+            }
+        };
+        Ok(MethodEntry {
+            label: label.to_string(),
+            method,
+            fxaa,
+        })
+    }
+}
+
+/// Parse a comma-separated method list. Every entry must parse, be offered
+/// by the renderer ([`AaMethod::available`]) and appear once.
+pub fn parse_methods(list: &str) -> Result<Vec<MethodEntry>> {
+    let mut entries: Vec<MethodEntry> = Vec::new();
+    for item in list.split(',') {
+        let entry: MethodEntry = item.parse()?;
+        entry.method.aa_mode()?;
+        if entries.iter().any(|e| e.label == entry.label) {
+            return Err(Error::invalid(format!(
+                "method `{}` is listed twice in --methods",
+                entry.label
+            )));
+        }
+        entries.push(entry);
+    }
+    Ok(entries)
+}
+
+/// The default method list: [`BASE_DEFAULT_METHODS`], then those of
+/// [`OPTIONAL_DEFAULT_METHODS`] the renderer offers.
+pub fn default_methods() -> Vec<MethodEntry> {
+    BASE_DEFAULT_METHODS
+        .iter()
+        .chain(OPTIONAL_DEFAULT_METHODS)
+        .filter_map(|s| s.parse::<MethodEntry>().ok())
+        .filter(|e| e.method.available())
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(e: &MethodEntry) -> ResolveSettings {
+        match e.method {
+            AaMethod::Resolve(s) => s,
+            other => panic!("{other:?} is not a resolve"),
+        }
+    }
+
+    #[test]
+    fn entries_parse_with_options_and_fxaa() {
+        let e: MethodEntry = "median:hard+fxaa".parse().unwrap();
+        assert_eq!(e.label, "median:hard+fxaa");
+        assert!(e.fxaa);
+        assert_eq!(settings(&e).window, Window::Hard);
+        assert_eq!(settings(&e).method, ResolveMethod::Median);
+
+        let e: MethodEntry = "front:c=3".parse().unwrap();
+        assert_eq!((settings(&e).c, settings(&e).c_in), (3.0, 1.5));
+        let e: MethodEntry = "back:c=8:c_in=1:nofast".parse().unwrap();
+        assert_eq!((settings(&e).c, settings(&e).c_in), (8.0, 1.0));
+        assert!(!settings(&e).fast_path);
+        let e: MethodEntry = "median:c_in=1".parse().unwrap();
+        assert_eq!((settings(&e).c, settings(&e).c_in), (5.0, 1.0));
+
+        let e: MethodEntry = "none+fxaa".parse().unwrap();
+        assert_eq!((e.method, e.fxaa), (AaMethod::None, true));
+        assert_eq!(
+            "average".parse::<MethodEntry>().unwrap().method.base_name(),
+            "average"
+        );
+    }
+
+    #[test]
+    fn bad_entries_are_refused_in_one_line() {
+        for bad in [
+            "sideways",
+            "median:round",
+            "median:c=x",
+            "median:c=2:c_in=3",
+            "none:hard",
+            "median+smaa",
+            "median+fxaa:hard",
+            "",
+        ] {
+            let e = bad.parse::<MethodEntry>().unwrap_err().to_string();
+            assert_eq!(e.lines().count(), 1, "{bad}: {e}");
+        }
+        let e = "sideways".parse::<MethodEntry>().unwrap_err().to_string();
+        assert!(e.contains("sideways") && e.contains("median"), "{e}");
+        let e = parse_methods("median,median").unwrap_err().to_string();
+        assert!(e.contains("twice"), "{e}");
+    }
+
+    #[test]
+    fn unavailable_methods_say_so() {
+        for m in ["per-sample", "complex"] {
+            let entry: MethodEntry = m.parse().unwrap();
+            if !entry.method.available() {
+                let e = parse_methods(m).unwrap_err().to_string();
+                assert_eq!(e, format!("method `{m}` is not available yet"));
+            }
+        }
+    }
+
+    #[test]
+    fn the_default_list_parses() {
+        let d = default_methods();
+        assert!(d.len() >= BASE_DEFAULT_METHODS.len());
+        assert_eq!(d[0].label, "none");
+        assert!(d.iter().all(|e| e.method.available()));
+    }
+}

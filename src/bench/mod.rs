@@ -1,0 +1,806 @@
+//! The error-against-run-time benchmark behind `deferred-msaa bench`.
+//!
+//! For every scene it renders a reference — the whole pipeline at 4×4
+//! supersampling (16 samples per pixel, tonemapped per sample, box-filtered
+//! in linear light) — and then times every method entry ([`methods`]) at
+//! every requested sample count, interleaved round-robin frame by frame so
+//! that machine noise hits all methods alike: `warmup` untimed rounds, then
+//! `frames` timed ones, whose median is reported. The last frame of each
+//! method is compared with the reference (FLIP mean, PSNR, halo pixels).
+//!
+//! Methods whose switch changes nothing on the GPU (the resolve methods and
+//! their options) share one [`Renderer`]; `none`, `+fxaa` and each sample
+//! count get their own, so no frame pays for re-allocated targets.
+//!
+//! Outputs ([`write_outputs`]): `report.json` and `report.md`
+//! ([`report`]), `error_vs_time.png` (FLIP mean against frame time per
+//! scene, Pareto front marked) and `crops.png` (the same crop of every method
+//! beside the reference). The plots need a TrueType font at run time:
+//! Debian's `fonts-dejavu-core` (`/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf`),
+//! or any `.ttf` named by the `DEFERRED_MSAA_FONT` environment variable.
+//!
+//! ```no_run
+//! use deferred_msaa::bench::{self, BenchConfig};
+//! let config = BenchConfig { width: 320, height: 180, ..BenchConfig::default() };
+//! let out = std::path::Path::new("target/bench");
+//! bench::prepare_output_dir(out)?;
+//! let output = bench::run(&config)?;
+//! bench::write_outputs(&output, out)?;
+//! # Ok::<(), deferred_msaa::Error>(())
+//! ```
+
+mod crops;
+pub mod methods;
+mod plot;
+pub mod report;
+
+pub use methods::{AaMethod, MethodEntry, default_methods, parse_methods};
+pub use report::{Reference, Report, Run, pareto_front};
+
+use crate::compare;
+use crate::context::{Backend, GlVersion, HeadlessContext};
+use crate::gbuffer::GBufferLayout;
+use crate::gl::{TextureRef, TimerKind};
+use crate::readback::Readback;
+use crate::renderer::{AaMode, FrameTimings, RenderOptions, Renderer};
+use crate::resolve::KeySource;
+use crate::scene::{Aabb, Light, Scene};
+use crate::{Error, Result};
+use glam::Vec3;
+use glow::HasContext;
+use image::RgbaImage;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// The scenes benchmarked when none is named.
+pub const DEFAULT_SCENES: &[&str] = &["builtin:greebles", "builtin:thin"];
+
+/// The reference renders at this many times the width and the height.
+pub const REFERENCE_SCALE: u32 = 4;
+
+/// The luminance excess over the reference that makes a halo pixel.
+pub const HALO_THRESHOLD: f32 = 0.1;
+
+/// What to benchmark.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchConfig {
+    /// The context backend.
+    pub backend: Backend,
+    /// Scene specs: `builtin:NAME` or `.gltf`/`.glb` paths.
+    pub scenes: Vec<String>,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Requested sample counts for the multisampled methods (each is run at
+    /// every count; `none` runs once, at 1).
+    pub samples: Vec<u32>,
+    /// The method entries, in report order.
+    pub methods: Vec<MethodEntry>,
+    /// Point lights to add to each scene ([`extra_lights`]).
+    pub lights: u32,
+    /// Timed frames per run (the median is reported); at least 1.
+    pub frames: u32,
+    /// Untimed rounds before them.
+    pub warmup: u32,
+    /// The G-buffer layout.
+    pub layout: GBufferLayout,
+    /// Show a progress bar on stderr (drawn only when stderr is a terminal).
+    pub progress: bool,
+}
+
+impl Default for BenchConfig {
+    /// The default scenes and methods at 640×360, 4x, 9 frames after 3
+    /// warm-up rounds, no extra lights, the recommended layout, EGL.
+    fn default() -> Self {
+        BenchConfig {
+            backend: Backend::Egl,
+            scenes: DEFAULT_SCENES.iter().map(|s| s.to_string()).collect(),
+            width: 640,
+            height: 360,
+            samples: vec![4],
+            methods: default_methods(),
+            lights: 0,
+            frames: 9,
+            warmup: 3,
+            layout: GBufferLayout::recommended(),
+            progress: false,
+        }
+    }
+}
+
+impl BenchConfig {
+    /// Check everything that can be checked without a context: sizes,
+    /// counts, and that every scene names a built-in or an existing file.
+    pub fn validate(&self) -> Result<()> {
+        if self.width == 0 || self.height == 0 {
+            return Err(Error::invalid(format!(
+                "the image size must be at least 1x1, got {}x{}",
+                self.width, self.height
+            )));
+        }
+        if self.scenes.is_empty() {
+            return Err(Error::invalid("bench needs at least one scene"));
+        }
+        if self.methods.is_empty() {
+            return Err(Error::invalid("bench needs at least one method"));
+        }
+        if self.samples.is_empty() || self.samples.contains(&0) {
+            return Err(Error::invalid(
+                "--samples must be at least 1 (use the `none` method for no multisampling)",
+            ));
+        }
+        if self.frames == 0 {
+            return Err(Error::invalid("--frames must be at least 1"));
+        }
+        for entry in &self.methods {
+            entry.method.aa_mode()?;
+        }
+        for spec in &self.scenes {
+            check_scene_spec(spec)?;
+        }
+        self.layout.validate()
+    }
+}
+
+/// Fail early on a scene spec that cannot load: an unknown built-in or a
+/// missing file (parse errors surface when the scene is loaded).
+fn check_scene_spec(spec: &str) -> Result<()> {
+    if let Some(name) = spec.strip_prefix("builtin:") {
+        if !Scene::builtin_names().contains(&name) {
+            return Err(Error::Scene {
+                path: spec.into(),
+                reason: format!(
+                    "no built-in scene named `{name}`; the built-ins are {}",
+                    Scene::builtin_names().join(", ")
+                ),
+            });
+        }
+        return Ok(());
+    }
+    if !Path::new(spec).is_file() {
+        let hint = if Scene::builtin_names().contains(&spec) {
+            format!("; did you mean `builtin:{spec}`?")
+        } else {
+            String::new()
+        };
+        return Err(Error::Scene {
+            path: spec.into(),
+            reason: format!("no such file{hint}"),
+        });
+    }
+    Ok(())
+}
+
+/// Parse `WIDTHxHEIGHT` (both at least 1).
+pub fn parse_size(s: &str) -> Result<(u32, u32)> {
+    let bad = |why: &str| {
+        Error::invalid(format!(
+            "`{s}` is not a size: {why} (expected WIDTHxHEIGHT, e.g. 640x360)"
+        ))
+    };
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| bad("no `x`"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| bad("the width is not a number"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| bad("the height is not a number"))?;
+    if w == 0 || h == 0 {
+        return Err(bad("width and height must be at least 1"));
+    }
+    Ok((w, h))
+}
+
+/// `n` point lights placed deterministically around `bounds`: on a
+/// Fibonacci sphere of 1.25 times the bounding radius about its centre,
+/// with colours cycling through a small palette, a range of 4 radii, and
+/// intensities that together add about as much light as two of the default
+/// rig's point lights (so the image stays exposed while the lighting cost
+/// grows with `n`).
+pub fn extra_lights(bounds: &Aabb, n: u32) -> Vec<Light> {
+    if n == 0 {
+        return Vec::new();
+    }
+    let c = bounds.center();
+    let r = bounds.radius().max(1e-3);
+    let total = 2.0 * (1.6 * r) * (1.6 * r) * 1.2;
+    let each = total / n as f32;
+    let palette = [
+        Vec3::new(1.0, 0.85, 0.7),
+        Vec3::new(0.7, 0.85, 1.0),
+        Vec3::new(1.0, 0.7, 0.85),
+        Vec3::new(0.8, 1.0, 0.75),
+    ];
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..n)
+        .map(|i| {
+            let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let ring = (1.0 - y * y).max(0.0).sqrt();
+            let phi = golden * i as f32;
+            let dir = Vec3::new(ring * phi.cos(), y, ring * phi.sin());
+            Light::point(
+                c + dir * 1.25 * r,
+                palette[i as usize % palette.len()],
+                each,
+                Some(4.0 * r),
+            )
+        })
+        .collect()
+}
+
+/// sRGB-encoded 8-bit value to linear light.
+fn srgb_to_linear(v: u8) -> f32 {
+    let c = v as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Linear light to an sRGB-encoded 8-bit value.
+fn linear_to_srgb(l: f32) -> u8 {
+    let l = l.clamp(0.0, 1.0);
+    let c = if l <= 0.003_130_8 {
+        l * 12.92
+    } else {
+        1.055 * l.powf(1.0 / 2.4) - 0.055
+    };
+    (c * 255.0).round().clamp(0.0, 255.0) as u8
+}
+
+/// Box-filter `factor`×`factor` blocks of an sRGB-encoded image in linear
+/// light (decode, average, encode); the size must divide by `factor`.
+pub fn downsample_srgb(img: &RgbaImage, factor: u32) -> Result<RgbaImage> {
+    let factor = factor.max(1);
+    let (w, h) = img.dimensions();
+    if w % factor != 0 || h % factor != 0 {
+        return Err(Error::invalid(format!(
+            "a {w}x{h} image does not divide into {factor}x{factor} blocks"
+        )));
+    }
+    let lut: Vec<f32> = (0..=255u8).map(srgb_to_linear).collect();
+    let n = (factor * factor) as f32;
+    Ok(RgbaImage::from_fn(w / factor, h / factor, |x, y| {
+        let mut sum = [0f32; 4];
+        for dy in 0..factor {
+            for dx in 0..factor {
+                let p = img.get_pixel(x * factor + dx, y * factor + dy);
+                for c in 0..3 {
+                    sum[c] += lut[p[c] as usize];
+                }
+                sum[3] += p[3] as f32;
+            }
+        }
+        image::Rgba([
+            linear_to_srgb(sum[0] / n),
+            linear_to_srgb(sum[1] / n),
+            linear_to_srgb(sum[2] / n),
+            (sum[3] / n).round() as u8,
+        ])
+    }))
+}
+
+/// A finished bench: the report and the images it measured.
+#[derive(Clone, Debug)]
+pub struct BenchOutput {
+    /// The report.
+    pub report: Report,
+    /// Each scene's reference image, in scene order.
+    pub references: Vec<(String, RgbaImage)>,
+    /// The final image of each run, parallel to [`Report::runs`].
+    pub images: Vec<RgbaImage>,
+}
+
+/// Create the report folder and load the plots' font, so that a bench does
+/// not run for minutes only to fail at the end.
+pub fn prepare_output_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    plot::load_font()
+}
+
+/// Write `report.json`, `report.md`, `error_vs_time.png` and `crops.png` into `dir`.
+pub fn write_outputs(output: &BenchOutput, dir: &Path) -> Result<()> {
+    prepare_output_dir(dir)?;
+    output.report.write(dir)?;
+    plot::error_vs_time(&output.report, &dir.join("error_vs_time.png"))?;
+    crops::crops(output, &dir.join("crops.png"))
+}
+
+/// A file-name-safe form of a scene spec or method entry.
+fn file_stem(s: &str) -> String {
+    let stem = s.rsplit(['/', '\\']).next().unwrap_or(s);
+    stem.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// Write every measured image into `dir/images/`: `SCENE-ssaa.png` (the
+/// reference) and `SCENE-METHOD-Nx.png` per run, for looking at closely.
+pub fn write_images(output: &BenchOutput, dir: &Path) -> Result<()> {
+    let dir = dir.join("images");
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    let save = |img: &RgbaImage, name: String| {
+        let path = dir.join(name);
+        img.save_with_format(&path, image::ImageFormat::Png)
+            .map_err(|source| Error::Image { path, source })
+    };
+    for (scene, reference) in &output.references {
+        save(reference, format!("{}-ssaa.png", file_stem(scene)))?;
+    }
+    for (run, img) in output.report.runs.iter().zip(&output.images) {
+        save(
+            img,
+            format!(
+                "{}-{}-{}x.png",
+                file_stem(&run.scene),
+                file_stem(&run.method),
+                run.samples
+            ),
+        )?;
+    }
+    Ok(())
+}
+
+/// Run the benchmark (see the [module documentation](self)).
+pub fn run(config: &BenchConfig) -> Result<BenchOutput> {
+    config.validate()?;
+    let ctx = HeadlessContext::new(config.backend)?;
+    let gl = ctx.gl();
+    let version = GlVersion::query(gl);
+    let rounds = (config.warmup + config.frames) as u64;
+    let ms_entries = config
+        .methods
+        .iter()
+        .filter(|e| e.method.is_multisampled())
+        .count() as u64;
+    let ss_entries = config.methods.len() as u64 - ms_entries;
+    let jobs_per_scene = ms_entries * config.samples.len() as u64 + ss_entries;
+    let per_scene = 1 + jobs_per_scene * rounds + 1;
+    let pb = if config.progress {
+        ProgressBar::with_draw_target(
+            Some(per_scene * config.scenes.len() as u64),
+            ProgressDrawTarget::stderr(),
+        )
+    } else {
+        ProgressBar::hidden()
+    };
+    let style = ProgressStyle::with_template(
+        "{elapsed_precise} [{bar:30}] {pos}/{len} frames, eta {eta} · {msg}",
+    )
+    .map_err(|e| Error::invalid(format!("progress bar template: {e}")))?
+    .progress_chars("=> ");
+    pb.set_style(style);
+
+    let mut report = Report {
+        renderer: version.renderer.clone(),
+        gl_version: version.version_string.clone(),
+        reference: Reference {
+            method: "ssaa".into(),
+            spp: REFERENCE_SCALE * REFERENCE_SCALE,
+        },
+        runs: Vec::new(),
+        backend: config.backend.name().to_string(),
+        frames: config.frames,
+        warmup: config.warmup,
+        extra_lights: config.lights,
+        layout: if config.layout == GBufferLayout::freespace_open() {
+            "freespace-open".into()
+        } else if config.layout == GBufferLayout::recommended() {
+            "recommended".into()
+        } else {
+            "custom".into()
+        },
+    };
+    let mut references = Vec::new();
+    let mut images = Vec::new();
+    for spec in &config.scenes {
+        let measured = bench_scene(&ctx, config, spec, &pb, rounds)?;
+        references.push((spec.clone(), measured.reference));
+        for (run, image) in measured.runs {
+            report.runs.push(run);
+            images.push(image);
+        }
+    }
+    pb.finish_and_clear();
+    Ok(BenchOutput {
+        report,
+        references,
+        images,
+    })
+}
+
+/// One scene's results.
+struct SceneResult {
+    reference: RgbaImage,
+    runs: Vec<(Run, RgbaImage)>,
+}
+
+/// One (entry, sample count) to time.
+struct Job<'a> {
+    entry: &'a MethodEntry,
+    /// Hidden jobs are timed (as a lighting baseline) but not reported.
+    reported: bool,
+    samples_requested: u32,
+    options: RenderOptions,
+    /// Index into the renderer pool.
+    slot: usize,
+    samples: u32,
+    frames: Vec<FrameTimings>,
+    image: Option<RgbaImage>,
+    gbuffer_bytes: u64,
+}
+
+/// Renderers shared by jobs of the same class, FXAA setting and sample count.
+#[derive(Default)]
+struct Pool {
+    renderers: Vec<((&'static str, bool, u32), Renderer)>,
+}
+
+impl Pool {
+    fn slot(
+        &mut self,
+        ctx: &HeadlessContext,
+        scene: &Scene,
+        key: (&'static str, bool, u32),
+        options: &RenderOptions,
+    ) -> Result<usize> {
+        if let Some(i) = self.renderers.iter().position(|(k, _)| *k == key) {
+            return Ok(i);
+        }
+        let renderer = Renderer::new(ctx.gl(), |name| ctx.get_proc_address(name), scene, options)?;
+        self.renderers.push((key, renderer));
+        Ok(self.renderers.len() - 1)
+    }
+
+    fn get(&mut self, slot: usize) -> Result<&mut Renderer> {
+        self.renderers
+            .get_mut(slot)
+            .map(|(_, r)| r)
+            .ok_or_else(|| Error::invalid("bench: a renderer slot is missing"))
+    }
+
+    fn destroy(self, gl: &glow::Context) {
+        for (_, r) in self.renderers {
+            r.destroy(gl);
+        }
+    }
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    }
+}
+
+fn render_options(config: &BenchConfig, aa: AaMode, fxaa: bool, samples: u32) -> RenderOptions {
+    RenderOptions {
+        width: config.width,
+        height: config.height,
+        samples,
+        aa,
+        fxaa,
+        layout: config.layout.clone(),
+        ..RenderOptions::default()
+    }
+}
+
+/// The 4×4 supersampled reference of `scene` at the bench size.
+fn render_reference(
+    ctx: &HeadlessContext,
+    scene: &Scene,
+    config: &BenchConfig,
+) -> Result<RgbaImage> {
+    let gl = ctx.gl();
+    let (w, h) = (
+        config.width.saturating_mul(REFERENCE_SCALE),
+        config.height.saturating_mul(REFERENCE_SCALE),
+    );
+    let max = unsafe { gl.get_parameter_i32(glow::MAX_TEXTURE_SIZE) }.max(0) as u32;
+    if w > max || h > max {
+        return Err(Error::invalid(format!(
+            "the {REFERENCE_SCALE}x{REFERENCE_SCALE} supersampled reference needs {w}x{h}, \
+             over this driver's largest texture ({max}); use a smaller --size"
+        )));
+    }
+    let mut options = render_options(config, AaMode::None, false, 1);
+    options.width = w;
+    options.height = h;
+    let mut renderer = Renderer::new(gl, |name| ctx.get_proc_address(name), scene, &options)?;
+    let image = renderer.render(gl).and_then(|_| renderer.read_final(gl));
+    renderer.destroy(gl);
+    downsample_srgb(&image?, REFERENCE_SCALE)
+}
+
+/// The fraction of pixels whose depth-key samples are not all bitwise equal.
+fn complex_fraction(gl: &glow::Context, renderer: &Renderer) -> Result<Option<f64>> {
+    let Some(retrofit) = renderer.retrofit() else {
+        return Ok(None);
+    };
+    let (depth, colors) = retrofit.inputs()?;
+    let (texture, channel): (TextureRef, usize) = match retrofit.key() {
+        KeySource::Position(k) => match colors.get(k) {
+            Some(t) => (*t, 2),
+            None => (depth, 0),
+        },
+        KeySource::Depth => (depth, 0),
+    };
+    let mut readback = Readback::new(gl)?;
+    let image = readback.read(gl, texture, 1);
+    readback.destroy(gl);
+    let image = image?;
+    let pixels = (image.width * image.height) as usize;
+    if pixels == 0 {
+        return Ok(Some(0.0));
+    }
+    let mut complex = 0usize;
+    for p in 0..pixels {
+        let key = |s: u32| image.plane(s)[p * 4 + channel].to_bits();
+        let first = key(0);
+        if (1..image.samples).any(|s| key(s) != first) {
+            complex += 1;
+        }
+    }
+    Ok(Some(complex as f64 / pixels as f64))
+}
+
+fn bench_scene(
+    ctx: &HeadlessContext,
+    config: &BenchConfig,
+    spec: &str,
+    pb: &ProgressBar,
+    rounds: u64,
+) -> Result<SceneResult> {
+    pb.set_message(format!("{spec}: loading"));
+    let mut scene = Scene::load(spec)?;
+    for w in &scene.warnings {
+        log::warn!("{spec}: {w}");
+    }
+    let added = extra_lights(&scene.bounds, config.lights);
+    scene.lights.extend(added);
+    pb.set_message(format!("{spec}: ssaa reference"));
+    let reference = render_reference(ctx, &scene, config)?;
+    pb.inc(1);
+
+    let mut pool = Pool::default();
+    let result = time_scene(ctx, config, spec, &scene, &reference, &mut pool, pb, rounds);
+    pool.destroy(ctx.gl());
+    let runs = result?;
+    pb.inc(1);
+    Ok(SceneResult { reference, runs })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn time_scene(
+    ctx: &HeadlessContext,
+    config: &BenchConfig,
+    spec: &str,
+    scene: &Scene,
+    reference: &RgbaImage,
+    pool: &mut Pool,
+    pb: &ProgressBar,
+    rounds: u64,
+) -> Result<Vec<(Run, RgbaImage)>> {
+    let gl = ctx.gl();
+    // The jobs, with a hidden `none` as the lighting baseline when a method
+    // that adds lighting has no `none` entry beside it.
+    let hidden_none: Option<MethodEntry> =
+        (config.methods.iter().any(|e| e.method.adds_lighting())
+            && !config.methods.iter().any(|e| e.method == AaMethod::None))
+        .then(|| MethodEntry {
+            label: "none".into(),
+            method: AaMethod::None,
+            fxaa: false,
+        });
+    let mut jobs: Vec<Job> = Vec::new();
+    let entries = config
+        .methods
+        .iter()
+        .map(|e| (e, true))
+        .chain(hidden_none.iter().map(|e| (e, false)));
+    for (entry, reported) in entries {
+        let counts: Vec<u32> = if entry.method.is_multisampled() {
+            config.samples.clone()
+        } else {
+            vec![1]
+        };
+        for requested in counts {
+            let options = render_options(config, entry.method.aa_mode()?, entry.fxaa, requested);
+            let key = (entry.method.class(), entry.fxaa, requested);
+            let slot = pool.slot(ctx, scene, key, &options)?;
+            let renderer = pool.get(slot)?;
+            if renderer.options() != &options {
+                renderer.set_options(gl, &options)?;
+            }
+            let samples = renderer.samples();
+            if jobs
+                .iter()
+                .any(|j| j.entry.label == entry.label && j.samples == samples)
+            {
+                log::warn!(
+                    "{spec}: `{}` at {requested}x runs at {samples}x, which is already measured; skipped",
+                    entry.label
+                );
+                pb.set_length(pb.length().unwrap_or(0).saturating_sub(rounds));
+                continue;
+            }
+            let gbuffer_bytes = options.layout.bytes(config.width, config.height, 1)
+                + renderer.retrofit().map_or(0, |r| r.twin().bytes());
+            jobs.push(Job {
+                entry,
+                reported,
+                samples_requested: requested,
+                options,
+                slot,
+                samples,
+                frames: Vec::new(),
+                image: None,
+                gbuffer_bytes,
+            });
+        }
+    }
+
+    // Round-robin: every job renders once per round.
+    let mut complex: HashMap<u32, Option<f64>> = HashMap::new();
+    for round in 0..rounds {
+        let timed = round >= config.warmup as u64;
+        let last = round + 1 == rounds;
+        for job in jobs.iter_mut() {
+            pb.set_message(format!(
+                "{spec}: {} {}x, {}",
+                job.entry.label,
+                job.samples,
+                if timed { "timing" } else { "warm-up" }
+            ));
+            let renderer = pool.get(job.slot)?;
+            if renderer.options() != &job.options {
+                renderer.set_options(gl, &job.options)?;
+            }
+            let t = renderer.render(gl)?;
+            if timed {
+                job.frames.push(t);
+            }
+            if last {
+                job.image = Some(renderer.read_final(gl)?);
+                if job.entry.method.is_multisampled() && !complex.contains_key(&job.samples) {
+                    complex.insert(job.samples, complex_fraction(gl, renderer)?);
+                }
+            }
+            pb.inc(1);
+        }
+    }
+
+    // The lighting baseline: `none`'s median lighting time.
+    let base_lighting = median(
+        jobs.iter()
+            .filter(|j| j.entry.method == AaMethod::None)
+            .flat_map(|j| j.frames.iter().map(|t| t.lighting_ms))
+            .collect(),
+    );
+    pb.set_message(format!("{spec}: measuring error"));
+    let mut runs = Vec::new();
+    for job in jobs.into_iter().filter(|j| j.reported) {
+        let image = job
+            .image
+            .ok_or_else(|| Error::invalid("bench: a run has no final image"))?;
+        let flip = compare::flip(reference, &image)
+            .ok_or_else(|| Error::invalid("bench: the reference and the run differ in size"))?;
+        let psnr = compare::psnr(reference, &image);
+        let adds = job.entry.method.adds_lighting();
+        let ms_aa = median(
+            job.frames
+                .iter()
+                .map(|t| {
+                    let extra = if adds {
+                        (t.lighting_ms - base_lighting).max(0.0)
+                    } else {
+                        0.0
+                    };
+                    t.resolve_ms + t.fxaa_ms + extra
+                })
+                .collect(),
+        );
+        let timer = job
+            .frames
+            .first()
+            .map_or(TimerKind::FinishWallClock, |t| t.timer);
+        let run = Run {
+            scene: spec.to_string(),
+            method: job.entry.label.clone(),
+            fxaa: job.entry.fxaa,
+            samples: job.samples,
+            width: config.width,
+            height: config.height,
+            ms_total: median(job.frames.iter().map(|t| t.total_ms).collect()),
+            ms_aa,
+            timer: timer.name().to_string(),
+            flip_mean: flip.mean as f64,
+            psnr_db: psnr.is_finite().then_some(psnr),
+            halo_pixels: compare::halo_pixels(reference, &image, HALO_THRESHOLD) as u64,
+            gbuffer_bytes: job.gbuffer_bytes,
+            ms_resolve: median(job.frames.iter().map(|t| t.resolve_ms).collect()),
+            ms_fxaa: median(job.frames.iter().map(|t| t.fxaa_ms).collect()),
+            ms_lighting: median(job.frames.iter().map(|t| t.lighting_ms).collect()),
+            flip_p95: flip.p95 as f64,
+            complex_fraction: if job.entry.method.is_multisampled() {
+                complex.get(&job.samples).copied().flatten()
+            } else {
+                None
+            },
+            samples_requested: job.samples_requested,
+            lights: scene.lights.len() as u32,
+        };
+        runs.push((run, image));
+    }
+    Ok(runs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse() {
+        assert_eq!(parse_size("640x360").unwrap(), (640, 360));
+        assert_eq!(parse_size("96X54").unwrap(), (96, 54));
+        for bad in ["0x10", "big", "10x", "x10", "-1x5"] {
+            assert!(parse_size(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn downsampling_averages_in_linear_light() {
+        let img = RgbaImage::from_fn(4, 4, |x, _| {
+            if x % 2 == 0 {
+                image::Rgba([255, 255, 255, 255])
+            } else {
+                image::Rgba([0, 0, 0, 255])
+            }
+        });
+        let small = downsample_srgb(&img, 2).unwrap();
+        assert_eq!(small.dimensions(), (2, 2));
+        // Half white in linear light is sRGB 188, not 128.
+        assert_eq!(small.get_pixel(0, 0)[0], 188);
+        assert!(downsample_srgb(&img, 3).is_err());
+        for v in 0..=255u8 {
+            assert_eq!(linear_to_srgb(srgb_to_linear(v)), v);
+        }
+    }
+
+    #[test]
+    fn extra_lights_are_deterministic_and_around_the_bounds() {
+        let b = Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0));
+        let a = extra_lights(&b, 10);
+        assert_eq!(a, extra_lights(&b, 10));
+        assert_eq!(a.len(), 10);
+        for l in &a {
+            let d = (l.position - b.center()).length();
+            assert!((d - 1.25 * b.radius()).abs() < 1e-3);
+        }
+        assert!(extra_lights(&b, 0).is_empty());
+    }
+
+    #[test]
+    fn medians() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert_eq!(median(vec![]), 0.0);
+    }
+}

@@ -1,0 +1,255 @@
+//! The bench report: `report.json` (DESIGN.md section 4's schema, with a few
+//! extra keys) and `report.md` (a table per scene with ratios to `none`).
+
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The whole report, as written to `report.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// `GL_RENDERER`.
+    pub renderer: String,
+    /// `GL_VERSION`.
+    pub gl_version: String,
+    /// What the error measures compare against.
+    pub reference: Reference,
+    /// One run per (scene, method entry, real sample count).
+    pub runs: Vec<Run>,
+    /// `egl` or `osmesa` (extra key).
+    pub backend: String,
+    /// Frames timed per run; `ms_total` is their median (extra key).
+    pub frames: u32,
+    /// Untimed frames first (extra key).
+    pub warmup: u32,
+    /// Point lights added to each scene by `--lights` (extra key).
+    pub extra_lights: u32,
+    /// `recommended` or `freespace-open` (extra key).
+    pub layout: String,
+}
+
+/// The reference the error measures compare against.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Reference {
+    /// `ssaa`: the whole pipeline at 4×4 supersampling, box-filtered in linear light.
+    pub method: String,
+    /// Samples per pixel (16).
+    pub spp: u32,
+}
+
+/// One method on one scene at one sample count.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Run {
+    /// The scene spec (`builtin:NAME` or a path).
+    pub scene: String,
+    /// The method entry exactly as written (`median:hard`, `none+fxaa`).
+    pub method: String,
+    /// Whether FXAA ran.
+    pub fxaa: bool,
+    /// Real samples per pixel of the G-buffer pass (1 for `none`).
+    pub samples: u32,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Median frame time over the timed frames, in milliseconds.
+    pub ms_total: f64,
+    /// Median time the anti-aliasing adds: resolve + FXAA (+ lighting beyond
+    /// `none`'s for per-sample methods), in milliseconds.
+    pub ms_aa: f64,
+    /// How times were measured: `gl-time-elapsed` or `finish-wall-clock`.
+    pub timer: String,
+    /// Mean FLIP error against the reference (0 = identical, 1 = worst).
+    pub flip_mean: f64,
+    /// PSNR over RGB against the reference in dB (`null` when identical).
+    pub psnr_db: Option<f64>,
+    /// Pixels brighter than the reference by more than 0.1 in luminance.
+    pub halo_pixels: u64,
+    /// G-buffer memory the method needs: the single-sample G-buffer, plus
+    /// the multisampled twin for MSAA methods.
+    pub gbuffer_bytes: u64,
+    /// Median resolve time in ms (extra key).
+    pub ms_resolve: f64,
+    /// Median FXAA time in ms (extra key).
+    pub ms_fxaa: f64,
+    /// Median lighting time in ms (extra key).
+    pub ms_lighting: f64,
+    /// 95th percentile of the per-pixel FLIP error (extra key).
+    pub flip_p95: f64,
+    /// Fraction of pixels whose depth-key samples are not all equal, i.e.
+    /// that the resolve cannot take its fast path on (extra key; `null`
+    /// without multisampling).
+    pub complex_fraction: Option<f64>,
+    /// The requested sample count (extra key; the driver may round it).
+    pub samples_requested: u32,
+    /// Lights in the scene as rendered, `--lights` included (extra key).
+    pub lights: u32,
+}
+
+impl Report {
+    /// The scenes in the order they were run.
+    pub fn scenes(&self) -> Vec<&str> {
+        let mut scenes: Vec<&str> = Vec::new();
+        for r in &self.runs {
+            if !scenes.contains(&r.scene.as_str()) {
+                scenes.push(&r.scene);
+            }
+        }
+        scenes
+    }
+
+    /// The runs of one scene.
+    pub fn runs_of<'a>(&'a self, scene: &'a str) -> impl Iterator<Item = &'a Run> + 'a {
+        self.runs.iter().filter(move |r| r.scene == scene)
+    }
+
+    /// The `none` run of a scene, which the Markdown ratios divide by.
+    pub fn baseline(&self, scene: &str) -> Option<&Run> {
+        self.runs
+            .iter()
+            .find(|r| r.scene == scene && r.method == "none")
+    }
+
+    /// `report.json`, pretty-printed.
+    pub fn to_json(&self) -> Result<String> {
+        serde_json::to_string_pretty(self)
+            .map_err(|e| Error::invalid(format!("writing the report as JSON: {e}")))
+    }
+
+    /// `report.md`: a header, then per scene a table with ratios to the
+    /// scene's `none` run and the methods on the error/time Pareto front.
+    pub fn to_markdown(&self) -> String {
+        let mut md = String::new();
+        let first = self.runs.first();
+        let _ = writeln!(md, "# deferred-msaa bench\n");
+        let _ = writeln!(
+            md,
+            "{} · OpenGL {} · {} backend · {} · timer `{}`  ",
+            self.renderer,
+            self.gl_version,
+            self.backend,
+            first.map_or("no runs".to_string(), |r| format!(
+                "{}x{}",
+                r.width, r.height
+            )),
+            first.map_or("-", |r| r.timer.as_str()),
+        );
+        let _ = writeln!(
+            md,
+            "Reference: `{}` ({} samples per pixel, box-filtered in linear light). \
+             Times: median of {} frames after {} warm-up frames, methods interleaved frame by frame. \
+             Layout: {}. Extra lights: {}.\n",
+            self.reference.method,
+            self.reference.spp,
+            self.frames,
+            self.warmup,
+            self.layout,
+            self.extra_lights
+        );
+        let _ = writeln!(
+            md,
+            "Ratios (×) are to `none` on the same scene in the same run. \
+             FLIP: mean error against the reference, lower is better. \
+             Halo: pixels brighter than the reference by more than 0.1 in luminance. \
+             ★: on the Pareto front of error against frame time.\n"
+        );
+        for scene in self.scenes() {
+            let runs: Vec<&Run> = self.runs_of(scene).collect();
+            let base = self.baseline(scene);
+            let ratio = |v: f64, b: Option<f64>| match b {
+                Some(b) if b > 0.0 && v.is_finite() => format!("{:.2}", v / b),
+                _ => "–".to_string(),
+            };
+            let front = pareto_front(
+                &runs
+                    .iter()
+                    .map(|r| (r.ms_total, r.flip_mean))
+                    .collect::<Vec<_>>(),
+            );
+            let _ = writeln!(md, "## `{scene}`\n");
+            if let Some(c) = runs.iter().find_map(|r| r.complex_fraction) {
+                let _ = writeln!(
+                    md,
+                    "{:.1} % of pixels are complex (their samples differ in depth); {} lights.\n",
+                    c * 100.0,
+                    runs.first().map_or(0, |r| r.lights)
+                );
+            }
+            let _ = writeln!(
+                md,
+                "| method | samples | ms total | × none | ms AA | FLIP mean | × none | PSNR dB | halo px | G-buffer MiB | × none |"
+            );
+            let _ = writeln!(
+                md,
+                "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+            );
+            for (run, on_front) in runs.iter().zip(&front) {
+                let psnr = run.psnr_db.map_or("∞".to_string(), |p| format!("{p:.2}"));
+                let _ = writeln!(
+                    md,
+                    "| `{}`{} | {} | {:.2} | {} | {:.2} | {:.4} | {} | {} | {} | {:.1} | {} |",
+                    run.method,
+                    if *on_front { " ★" } else { "" },
+                    run.samples,
+                    run.ms_total,
+                    ratio(run.ms_total, base.map(|b| b.ms_total)),
+                    run.ms_aa,
+                    run.flip_mean,
+                    ratio(run.flip_mean, base.map(|b| b.flip_mean)),
+                    psnr,
+                    run.halo_pixels,
+                    run.gbuffer_bytes as f64 / (1024.0 * 1024.0),
+                    ratio(
+                        run.gbuffer_bytes as f64,
+                        base.map(|b| b.gbuffer_bytes as f64)
+                    ),
+                );
+            }
+            let _ = writeln!(md);
+        }
+        md
+    }
+
+    /// Write `report.json` and `report.md` into `dir`.
+    pub fn write(&self, dir: &Path) -> Result<()> {
+        let json = dir.join("report.json");
+        std::fs::write(&json, self.to_json()?).map_err(|e| Error::io(&json, e))?;
+        let md = dir.join("report.md");
+        std::fs::write(&md, self.to_markdown()).map_err(|e| Error::io(&md, e))?;
+        Ok(())
+    }
+}
+
+/// Which points of (time, error) pairs are on the Pareto front: no other
+/// point is at least as fast and at least as good and better in one of the
+/// two. Points with a non-finite coordinate are never on it.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
+    points
+        .iter()
+        .map(|&(t, e)| {
+            t.is_finite()
+                && e.is_finite()
+                && !points.iter().any(|&(t2, e2)| {
+                    t2.is_finite() && e2.is_finite() && t2 <= t && e2 <= e && (t2 < t || e2 < e)
+                })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_pareto_front_keeps_the_undominated() {
+        let pts = [
+            (1.0, 0.5),
+            (2.0, 0.2),
+            (3.0, 0.3),
+            (2.0, 0.2),
+            (0.5, f64::NAN),
+        ];
+        assert_eq!(pareto_front(&pts), [true, true, false, true, false]);
+    }
+}

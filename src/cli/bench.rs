@@ -1,0 +1,115 @@
+//! `deferred-msaa bench`: error against run time for every method, in one run.
+
+use super::CommonArgs;
+use crate::bench::{self, BenchConfig, DEFAULT_SCENES};
+use crate::gbuffer::GBufferLayout;
+use crate::{Error, Result};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+/// Arguments of `bench`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct BenchCmd {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// A scene to measure: `builtin:NAME` or a .gltf/.glb path; repeat for
+    /// more (default: builtin:greebles and builtin:thin).
+    #[arg(long = "scene", value_name = "S")]
+    scenes: Vec<String>,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x360", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Samples per pixel for the multisampled methods; repeat for more (default 4).
+    #[arg(long = "samples", value_name = "N")]
+    samples: Vec<u32>,
+    /// Comma-separated method entries, e.g. `none,median:hard,median+fxaa`
+    /// (default: none,none+fxaa,average,front,median,back,median:hard,median:nofast,median+fxaa).
+    #[arg(long, value_name = "LIST")]
+    methods: Option<String>,
+    /// Point lights to add around each scene.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    lights: u32,
+    /// Timed frames per method (the median is reported).
+    #[arg(long, default_value_t = 9, value_name = "K")]
+    frames: u32,
+    /// Untimed frames per method first.
+    #[arg(long, default_value_t = 3, value_name = "W")]
+    warmup: u32,
+    /// Use FreeSpace Open's G-buffer layout (FP16 position, D24) instead of the recommended one.
+    #[arg(long)]
+    fso_layout: bool,
+    /// Also write every measured image (and the reference) into DIR/images/.
+    #[arg(long)]
+    images: bool,
+    /// The folder to write report.json, report.md, error_vs_time.png and crops.png into.
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
+}
+
+fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+    bench::parse_size(s).map_err(|e| e.to_string())
+}
+
+impl BenchCmd {
+    fn config(&self) -> Result<BenchConfig> {
+        let methods = match &self.methods {
+            Some(list) => bench::parse_methods(list)?,
+            None => bench::default_methods(),
+        };
+        let config = BenchConfig {
+            backend: self.common.backend,
+            scenes: if self.scenes.is_empty() {
+                DEFAULT_SCENES.iter().map(|s| s.to_string()).collect()
+            } else {
+                self.scenes.clone()
+            },
+            width: self.size.0,
+            height: self.size.1,
+            samples: if self.samples.is_empty() {
+                vec![4]
+            } else {
+                self.samples.clone()
+            },
+            methods,
+            lights: self.lights,
+            frames: self.frames,
+            warmup: self.warmup,
+            layout: if self.fso_layout {
+                GBufferLayout::freespace_open()
+            } else {
+                GBufferLayout::recommended()
+            },
+            progress: std::io::stderr().is_terminal(),
+        };
+        config.validate()?;
+        Ok(config)
+    }
+}
+
+/// Run `bench`.
+pub fn run(cmd: &BenchCmd) -> Result<()> {
+    let dir = cmd.report.clone().ok_or_else(|| {
+        Error::invalid(
+            "bench needs --report DIR, the folder to write report.json, report.md, \
+             error_vs_time.png and crops.png into",
+        )
+    })?;
+    let config = cmd.config()?;
+    bench::prepare_output_dir(&dir)?;
+    let output = bench::run(&config)?;
+    bench::write_outputs(&output, &dir)?;
+    if cmd.images {
+        bench::write_images(&output, &dir)?;
+    }
+    for r in &output.report.runs {
+        println!(
+            "{} {} {}x: {:.2} ms (AA {:.2} ms), FLIP {:.4}, halo {}",
+            r.scene, r.method, r.samples, r.ms_total, r.ms_aa, r.flip_mean, r.halo_pixels
+        );
+    }
+    println!(
+        "report -> {} (report.json, report.md, error_vs_time.png, crops.png)",
+        dir.display()
+    );
+    Ok(())
+}
