@@ -7,8 +7,8 @@ fn has_khr_debug(gl: &glow::Context) -> bool {
     (v.major, v.minor) >= (4, 3) || gl.supported_extensions().contains("GL_KHR_debug")
 }
 
-/// Route the driver's debug messages to `log` (errors as `error!`, performance
-/// and portability notes as `debug!`). Returns `false` when the context lacks
+/// Route the driver's debug messages to `log`: high-severity notes as `warn!`,
+/// GL errors (which also come back as typed errors) and the rest as `debug!`. Returns `false` when the context lacks
 /// KHR_debug; then nothing is installed.
 pub fn install_debug_log(gl: &mut glow::Context) -> bool {
     if !has_khr_debug(gl) {
@@ -19,9 +19,10 @@ pub fn install_debug_log(gl: &mut glow::Context) -> bool {
         gl.debug_message_callback(|source, kind, id, severity, message| {
             let _ = source;
             match (kind, severity) {
-                (glow::DEBUG_TYPE_ERROR, _) | (_, glow::DEBUG_SEVERITY_HIGH) => {
-                    log::error!(target: "gl", "[{id}] {message}")
-                }
+                // GL errors also reach the caller as typed errors (check_error):
+                // logging them loudly would say the same thing twice.
+                (glow::DEBUG_TYPE_ERROR, _) => log::debug!(target: "gl", "[{id}] {message}"),
+                (_, glow::DEBUG_SEVERITY_HIGH) => log::warn!(target: "gl", "[{id}] {message}"),
                 (_, glow::DEBUG_SEVERITY_MEDIUM) => log::warn!(target: "gl", "[{id}] {message}"),
                 (_, glow::DEBUG_SEVERITY_NOTIFICATION) => {
                     log::trace!(target: "gl", "[{id}] {message}")
