@@ -145,17 +145,6 @@ pub enum Error {
     #[error("{0}")]
     InvalidArgument(String),
 
-    /// The estimated memory exceeds the budget.
-    #[error("the G-buffer needs {needed_mib:.1} MiB, over the {budget_mib:.1} MiB budget; {hint}")]
-    MemoryBudget {
-        /// Estimated bytes, in MiB.
-        needed_mib: f64,
-        /// The budget, in MiB.
-        budget_mib: f64,
-        /// What to do about it.
-        hint: String,
-    },
-
     /// A file could not be read or written.
     #[error("{}: {source}", path.display())]
     Io {

@@ -38,56 +38,32 @@ void main() {
 
 /// A standard GL perspective matrix (column-major); `far = None` is infinite.
 pub fn perspective(fov_y: f64, aspect: f64, near: f64, far: Option<f64>) -> [f64; 16] {
-    let f = 1.0 / (fov_y / 2.0).tan();
     let (p22, p23) = match far {
         Some(far) => ((far + near) / (near - far), 2.0 * far * near / (near - far)),
         None => (-1.0, -2.0 * near),
     };
-    [
-        f / aspect,
-        0.0,
-        0.0,
-        0.0,
-        0.0,
-        f,
-        0.0,
-        0.0,
-        0.0,
-        0.0,
-        p22,
-        -1.0,
-        0.0,
-        0.0,
-        p23,
-        0.0,
-    ]
+    projection_matrix(fov_y, aspect, p22, p23)
 }
 
 /// Reversed-Z for `GL_ZERO_TO_ONE` depth: near → 1, far → 0; `far = None` is infinite.
 pub fn perspective_reversed(fov_y: f64, aspect: f64, near: f64, far: Option<f64>) -> [f64; 16] {
-    let f = 1.0 / (fov_y / 2.0).tan();
     let (p22, p23) = match far {
         Some(far) => (near / (far - near), far * near / (far - near)),
         None => (0.0, near),
     };
-    [
-        f / aspect,
-        0.0,
-        0.0,
-        0.0,
-        0.0,
-        f,
-        0.0,
-        0.0,
-        0.0,
-        0.0,
-        p22,
-        -1.0,
-        0.0,
-        0.0,
-        p23,
-        0.0,
-    ]
+    projection_matrix(fov_y, aspect, p22, p23)
+}
+
+/// A column-major perspective matrix with the given depth terms.
+fn projection_matrix(fov_y: f64, aspect: f64, p22: f64, p23: f64) -> [f64; 16] {
+    let f = 1.0 / (fov_y / 2.0).tan();
+    let mut m = [0.0; 16];
+    m[0] = f / aspect;
+    m[5] = f;
+    m[10] = p22;
+    m[11] = -1.0;
+    m[14] = p23;
+    m
 }
 
 pub struct Host {
