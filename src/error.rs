@@ -128,6 +128,23 @@ pub enum Error {
         reason: String,
     },
 
+    /// A G-buffer would take more memory than its budget allows
+    /// ([`MemoryBudget`](crate::gbuffer::MemoryBudget)), and no lower sample
+    /// count fits or stepping down was refused (strict).
+    #[error(
+        "the G-buffer needs {} at {samples}x, over the memory budget of {}; allow more memory (--memory-budget), fewer samples or a smaller size",
+        crate::gbuffer::fmt_bytes(*needed),
+        crate::gbuffer::fmt_bytes(*budget)
+    )]
+    MemoryBudget {
+        /// Bytes the G-buffer would take at `samples`.
+        needed: u64,
+        /// The budget in bytes.
+        budget: u64,
+        /// The sample count asked for (as the driver rounds it).
+        samples: u32,
+    },
+
     /// A G-buffer layout that cannot work.
     #[error("invalid G-buffer layout: {0}")]
     Layout(String),

@@ -1,0 +1,89 @@
+//! Which pixels the resolve took its slow path on: the last frame's resolve
+//! run again with its complex-pixel output (`COMPLEX_OUTPUT` in
+//! `resolve.frag`) drawn into a scratch R8 mask, the resolved attachments
+//! discarded (their draw buffers are `GL_NONE`), so the G-buffer is left as
+//! the frame made it.
+
+use crate::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef, check_error};
+use crate::resolve::ResolveParams;
+use crate::retrofit::MsaaRetrofit;
+use crate::{Error, Result};
+use glow::HasContext;
+
+/// The slow-path mask of `retrofit`'s current twins under `params`, row 0
+/// at the top: 255 where the resolve blended samples, 0 where the
+/// uniform-pixel fast path copied sample 0 (every pixel is slow with the
+/// fast path off).
+pub(crate) fn slow_path_mask(
+    gl: &glow::Context,
+    retrofit: &mut MsaaRetrofit,
+    params: &ResolveParams,
+) -> Result<image::GrayImage> {
+    let (w, h) = retrofit.host().size();
+    let mask = Texture2d::new(gl, "slow-path mask", Format::R8, w, h)?;
+    let colors = retrofit.host().colors.len();
+    // Draw buffer k (resolved attachment k) goes nowhere; the mask output,
+    // draw buffer `colors`, into the mask.
+    let mut draw: Vec<Option<u32>> = vec![None; colors];
+    draw.push(Some(0));
+    let fbo = match Framebuffer::new(
+        gl,
+        "slow-path mask",
+        &[(Attachment::Color(0), TextureRef::from(&mask))],
+        &draw,
+    ) {
+        Ok(f) => f,
+        Err(e) => {
+            mask.destroy(gl);
+            return Err(e);
+        }
+    };
+    let result = (|| {
+        // Pixels a resolve variant never draws count as fast.
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo.raw));
+            gl.disable(glow::SCISSOR_TEST);
+            gl.color_mask(true, true, true, true);
+            gl.clear_color(0.0, 0.0, 0.0, 0.0);
+            gl.clear(glow::COLOR_BUFFER_BIT);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        }
+        retrofit.resolve_into(gl, &fbo, params, true)?;
+        read_r8(gl, &fbo, w, h)
+    })();
+    fbo.destroy(gl);
+    mask.destroy(gl);
+    result
+}
+
+/// Read colour attachment 0 of `fbo` (R8) as a grey image, row 0 at the top.
+fn read_r8(gl: &glow::Context, fbo: &Framebuffer, w: u32, h: u32) -> Result<image::GrayImage> {
+    let mut data = vec![0u8; w as usize * h as usize];
+    unsafe {
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(fbo.raw));
+        gl.read_buffer(glow::COLOR_ATTACHMENT0);
+        gl.bind_buffer(glow::PIXEL_PACK_BUFFER, None);
+        gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
+        gl.pixel_store_i32(glow::PACK_ROW_LENGTH, 0);
+        gl.read_pixels(
+            0,
+            0,
+            w as i32,
+            h as i32,
+            glow::RED,
+            glow::UNSIGNED_BYTE,
+            glow::PixelPackData::Slice(Some(&mut data)),
+        );
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+    }
+    check_error(gl, "reading the slow-path mask")?;
+    // GL's rows run bottom-up.
+    let flipped: Vec<u8> = data
+        .chunks_exact(w.max(1) as usize)
+        .rev()
+        .flatten()
+        .map(|&v| if v >= 128 { 255 } else { 0 })
+        .collect();
+    image::GrayImage::from_raw(w, h, flipped)
+        .ok_or_else(|| Error::invalid(format!("the slow-path mask does not hold {w}x{h} pixels")))
+}
