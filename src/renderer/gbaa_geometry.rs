@@ -1,0 +1,163 @@
+//! The G-buffer pass of [`AaMode::Gbaa`](super::AaMode::Gbaa):
+//! `geometry.vert` (its outputs renamed by `#define`s), a geometry stage
+//! (`shaders_glsl/gbaa_geometry.geom`) that hands every fragment its
+//! triangle's three screen-space edge lines, and the unchanged model shader
+//! `geometry.frag` with its `main` renamed and called from a wrapper
+//! (`gbaa_geometry.frag`) that also writes the distance to the nearest edge
+//! along x or y and to the triangle's far side into two extra
+//! attachments. Geometry shaders are core in OpenGL 3.2, so this works on
+//! the floor.
+
+use super::GBufferSlots;
+use super::geometry::{GEOMETRY_FRAG, GEOMETRY_VERT, GeometryTarget};
+use super::mesh::{
+    AttribLocations, BASE_TEXTURE_UNIT, EMISSIVE_TEXTURE_UNIT, GpuScene, set_culling,
+};
+use super::pass::bind_target;
+use crate::Result;
+use crate::gl::{Program, ShaderStage, check_error, preamble};
+use glam::{DMat4, Mat4};
+use glow::HasContext;
+
+/// The geometry stage's body.
+pub(crate) const GBAA_GEOMETRY_GEOM: &str = include_str!("../../shaders_glsl/gbaa_geometry.geom");
+/// The fragment wrapper's body (compiled after `geometry.frag` with `main` renamed).
+pub(crate) const GBAA_GEOMETRY_FRAG: &str = include_str!("../../shaders_glsl/gbaa_geometry.frag");
+
+/// The value of an edge channel that holds no edge: farther than any
+/// distance the pass writes ([`REACH`]), so the post pass never blends by it.
+pub(crate) const NO_EDGE: f32 = 4.0;
+/// Edge distances are capped here (pixels); only those under 1 matter.
+pub(crate) const REACH: f32 = 2.0;
+/// Triangles smaller than this many square pixels write no edges: their
+/// edges do not separate a pixel's colour from its neighbours'. (Chosen
+/// from 0, 0.5, 1, 2 and 4 by FLIP against the supersampled reference on
+/// `builtin:greebles` and `builtin:thin` at 96x54 to 640x360; with 0,
+/// pixel-sized greebles blend into whatever surrounds them.)
+pub(crate) const MIN_AREA: f32 = 1.0;
+
+/// The defines the G-buffer pass and the post pass share.
+pub(crate) fn edge_defines() -> Vec<(String, String)> {
+    vec![
+        ("GBAA_NO_EDGE".into(), format!("{NO_EDGE:.1}")),
+        ("GBAA_REACH".into(), format!("{REACH:.1}")),
+        ("GBAA_MIN_AREA".into(), format!("{MIN_AREA:.3}")),
+    ]
+}
+
+/// The model program with the edge outputs.
+#[derive(Debug)]
+pub(crate) struct GbaaGeometryPass {
+    program: Program,
+    slots: GBufferSlots,
+    locations: AttribLocations,
+}
+
+impl GbaaGeometryPass {
+    /// Build the program: the model outputs at `slots` (with the defines
+    /// that drop those the layout lacks), `o_edge` on draw buffer
+    /// `edge_slot` and `o_edge_far` on `edge_slot + 1`.
+    pub(crate) fn new(gl: &glow::Context, slots: GBufferSlots, edge_slot: u32) -> Result<Self> {
+        let mut outputs = slots.outputs();
+        outputs.extend([("o_edge", edge_slot), ("o_edge_far", edge_slot + 1)]);
+        let mut defines = edge_defines();
+        defines.extend(slots.defines());
+        let program = Program::build(
+            gl,
+            "geometry + gbaa edges",
+            &preamble(&[], &defines),
+            &[
+                (ShaderStage::Vertex, "geometry.vert", &Self::vertex_body()),
+                (
+                    ShaderStage::Geometry,
+                    "gbaa_geometry.geom",
+                    GBAA_GEOMETRY_GEOM,
+                ),
+                (
+                    ShaderStage::Fragment,
+                    "geometry.frag + gbaa_geometry.frag",
+                    &Self::fragment_body(),
+                ),
+            ],
+            &outputs,
+        )?;
+        let locations = AttribLocations::of(gl, &program);
+        Ok(GbaaGeometryPass {
+            program,
+            slots,
+            locations,
+        })
+    }
+
+    /// `geometry.vert` with its outputs renamed to the geometry stage's inputs.
+    fn vertex_body() -> String {
+        format!(
+            "#define v_position vert_position\n#define v_normal vert_normal\n#define v_uv vert_uv\n#line 0\n{GEOMETRY_VERT}"
+        )
+    }
+
+    /// `geometry.frag` with `main` renamed to `model_main`, then the wrapper.
+    /// `#line 0` keeps the driver's line numbers on each file's own.
+    fn fragment_body() -> String {
+        format!(
+            "#define main model_main\n#line 0\n{GEOMETRY_FRAG}\n#undef main\n#line 0 1\n{GBAA_GEOMETRY_FRAG}"
+        )
+    }
+
+    /// The attachment numbers the model outputs are bound to.
+    pub(crate) fn slots(&self) -> GBufferSlots {
+        self.slots
+    }
+
+    /// Draw the scene's opaque and alpha-tested objects into `target` with
+    /// the same state as [`GeometryPass::draw`](super::geometry::GeometryPass::draw)
+    /// (depth test `depth_func`, depth written, back faces culled unless
+    /// double-sided); the framebuffer's draw buffers must map the edge outputs.
+    pub(crate) fn draw(
+        &self,
+        gl: &glow::Context,
+        target: GeometryTarget,
+        scene: &GpuScene,
+        view: &DMat4,
+        projection: &Mat4,
+        depth_func: u32,
+    ) -> Result<()> {
+        bind_target(gl, target.fbo, target.width, target.height);
+        unsafe {
+            gl.enable(glow::DEPTH_TEST);
+            gl.depth_func(depth_func);
+            gl.depth_mask(true);
+            gl.disable(glow::BLEND);
+            gl.disable(glow::SCISSOR_TEST);
+            gl.disable(glow::STENCIL_TEST);
+            gl.disable(glow::FRAMEBUFFER_SRGB);
+            gl.disable(glow::SAMPLE_ALPHA_TO_COVERAGE);
+            gl.color_mask(true, true, true, true);
+        }
+        let p = &self.program;
+        p.bind(gl);
+        p.set_mat4(gl, "u_projection", &projection.to_cols_array());
+        p.set_i32(gl, "u_base_texture", BASE_TEXTURE_UNIT as i32);
+        p.set_i32(gl, "u_emissive_texture", EMISSIVE_TEXTURE_UNIT as i32);
+        p.set_vec2(
+            gl,
+            "u_viewport",
+            [target.width as f32, target.height as f32],
+        );
+        for item in &scene.gbuffer_items {
+            let (model_view, normal) = item.matrices(view);
+            p.set_mat4(gl, "u_model_view", &model_view);
+            p.set_mat4(gl, "u_normal_matrix", &normal);
+            scene.bind_material(gl, p, &item.material);
+            set_culling(gl, &item.material);
+            scene.meshes[item.mesh].draw(gl, self.locations);
+        }
+        unsafe { gl.bind_vertex_array(None) };
+        check_error(gl, "the G-buffer pass of gbaa")
+    }
+
+    /// Free the program.
+    pub(crate) fn destroy(self, gl: &glow::Context) {
+        self.program.destroy(gl);
+    }
+}
