@@ -15,7 +15,9 @@
 //! ```text
 //! cargo bench --bench resolve_vs_blit [-- --size 640x360 --samples 4 --runs 30]
 //! ```
-//! Other options: `--warmup N`, `--triangles N`, `--seed N`,
+//! Other options: `--warmup N`, `--triangles N`, `--seed N`, `--scene S`
+//! (a built-in scene or glTF file seen through its camera instead of the
+//! random triangles, drawn by the same host shader),
 //! `--timer auto|query|wall`. Each run is timed both by a `GL_TIME_ELAPSED`
 //! query (where the context has one) and by `glFinish`-bracketed wall time;
 //! `auto` reports the query, except on software renderers, whose query does
@@ -28,11 +30,14 @@ use deferred_msaa::gl::{
     TimerKind, VertexArray, check_error, preamble,
 };
 use deferred_msaa::readback::Readback;
+use deferred_msaa::resolve::Schedule;
 use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
+use deferred_msaa::resolve::tiles::TILE_SIZE;
 use deferred_msaa::resolve::{
     DepthProjection, FULLSCREEN_VERT, ResolveParams, ResolveRule, ResolveSettings,
 };
 use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions};
+use deferred_msaa::scene::{Camera, Scene};
 use glow::HasContext;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -89,6 +94,8 @@ struct Args {
     triangles: usize,
     seed: u64,
     timer: TimerChoice,
+    /// A scene (`builtin:NAME` or a glTF path) instead of random triangles.
+    scene: Option<String>,
 }
 
 /// Which timer's numbers are the headline (both are always taken).
@@ -103,7 +110,7 @@ enum TimerChoice {
 }
 
 const USAGE: &str = "usage: resolve_vs_blit [--size WxH] [--samples N] [--runs K] [--warmup N] \
-                     [--triangles N] [--seed N] [--timer auto|query|wall]";
+                     [--triangles N] [--seed N] [--scene builtin:NAME|FILE.gltf] [--timer auto|query|wall]";
 
 /// `v` as a whole number of at least `min`.
 fn number<T>(name: &str, v: &str, min: T) -> Result<T, String>
@@ -128,6 +135,7 @@ fn parse_args() -> Result<Args, String> {
         triangles: 600,
         seed: 1,
         timer: TimerChoice::Auto,
+        scene: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -158,6 +166,7 @@ fn parse_args() -> Result<Args, String> {
             "--warmup" => args.warmup = number("--warmup", &value("a count")?, 0usize)?,
             "--triangles" => args.triangles = number("--triangles", &value("a count")?, 0usize)?,
             "--seed" => args.seed = number("--seed", &value("a number")?, 0u64)?,
+            "--scene" => args.scene = Some(value("a scene")?),
             "--timer" => {
                 args.timer = match value("auto|query|wall")?.as_str() {
                     "auto" => TimerChoice::Auto,
@@ -198,17 +207,31 @@ impl Rng {
     }
 }
 
-/// GL's standard perspective projection, column-major.
-fn projection(aspect: f32) -> [f32; 16] {
-    let f = 1.0 / (FOV_Y / 2.0).tan();
-    #[rustfmt::skip]
-    let m = [
-        f / aspect, 0.0, 0.0, 0.0,
-        0.0, f, 0.0, 0.0,
-        0.0, 0.0, (FAR + NEAR) / (NEAR - FAR), -1.0,
-        0.0, 0.0, 2.0 * FAR * NEAR / (NEAR - FAR), 0.0,
-    ];
-    m
+/// The synthetic scene's lens: GL's standard perspective projection.
+fn synthetic_camera() -> Camera {
+    Camera {
+        view: glam::Mat4::IDENTITY,
+        fov_y: FOV_Y,
+        near: NEAR,
+        far: Some(FAR),
+    }
+}
+
+/// Interleaved `[x, y, z, r, g, b]` view-space vertices of a real scene's
+/// opaque triangles seen through its camera, coloured by base colour.
+fn scene_vertices(spec: &str) -> Result<(Vec<f32>, Camera), String> {
+    let scene = Scene::load(spec).map_err(|e| e.to_string())?;
+    let mut v = Vec::new();
+    for object in &scene.objects {
+        let material = scene.material_of(object);
+        let to_view = scene.camera.view * object.transform;
+        for &i in &object.indices {
+            let p = to_view.transform_point3(glam::Vec3::from(object.positions[i as usize]));
+            v.extend_from_slice(&p.to_array());
+            v.extend_from_slice(&material.base_color[..3]);
+        }
+    }
+    Ok((v, scene.camera))
 }
 
 /// Interleaved `[x, y, z, r, g, b]` view-space vertices: one triangle that
@@ -265,10 +288,15 @@ struct Host {
     vertices: i32,
     width: u32,
     height: u32,
+    camera: Camera,
 }
 
 impl Host {
     fn new(gl: &glow::Context, args: &Args) -> deferred_msaa::Result<Host> {
+        let (data, camera) = match &args.scene {
+            Some(spec) => scene_vertices(spec).map_err(deferred_msaa::Error::invalid)?,
+            None => (scene(args), synthetic_camera()),
+        };
         let (w, h) = (args.width, args.height);
         let color = Texture2d::new(gl, "host color", Format::Rgba16f, w, h)?;
         let position = Texture2d::new(gl, "host position", Format::Rgba16f, w, h)?;
@@ -295,7 +323,6 @@ impl Host {
             ],
             &[("o_color", 0), ("o_position", 1), ("o_normal", 2)],
         )?;
-        let data = scene(args);
         let vbo = Buffer::with_data(
             gl,
             "host vertices",
@@ -326,6 +353,7 @@ impl Host {
             vao,
             vbo,
             vertices: (data.len() / 6) as i32,
+            camera,
             width: w,
             height: h,
         })
@@ -343,8 +371,11 @@ impl Host {
             gl.clear_depth_f64(1.0);
             gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
             self.program.bind(gl);
-            self.program
-                .set_mat4(gl, "u_projection", &projection(aspect));
+            self.program.set_mat4(
+                gl,
+                "u_projection",
+                &self.camera.projection(aspect).to_cols_array(),
+            );
             self.vao.bind(gl);
             gl.draw_arrays(glow::TRIANGLES, 0, self.vertices);
             gl.bind_vertex_array(None);
@@ -353,7 +384,10 @@ impl Host {
     }
 
     fn params(&self, settings: ResolveSettings) -> ResolveParams {
-        let p = projection(self.width as f32 / self.height as f32);
+        let p = self
+            .camera
+            .projection(self.width as f32 / self.height as f32)
+            .to_cols_array();
         ResolveParams {
             settings,
             projection: DepthProjection {
@@ -362,7 +396,7 @@ impl Host {
                 zero_to_one: false,
                 clear_depth: 1.0,
             },
-            fov_y: FOV_Y as f64,
+            fov_y: self.camera.fov_y as f64,
             height_px: self.height,
         }
     }
@@ -378,8 +412,10 @@ impl Host {
     }
 }
 
-/// The hardware resolve of the three colour attachments: one blit each.
-fn blit_resolve(gl: &glow::Context, twin: glow::Framebuffer, host: &Host) {
+/// The hardware resolve of the three colour attachments, one blit each, and
+/// with `depth` of the depth attachment too (the attachments the resolve
+/// writes; a multisampled depth blit takes one sample, GL_NEAREST).
+fn blit_resolve(gl: &glow::Context, twin: glow::Framebuffer, host: &Host, depth: bool) {
     let (w, h) = (host.width as i32, host.height as i32);
     unsafe {
         gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(twin));
@@ -397,6 +433,20 @@ fn blit_resolve(gl: &glow::Context, twin: glow::Framebuffer, host: &Host) {
                 w,
                 h,
                 glow::COLOR_BUFFER_BIT,
+                glow::NEAREST,
+            );
+        }
+        if depth {
+            gl.blit_framebuffer(
+                0,
+                0,
+                w,
+                h,
+                0,
+                0,
+                w,
+                h,
+                glow::DEPTH_BUFFER_BIT,
                 glow::NEAREST,
             );
         }
@@ -432,6 +482,9 @@ struct Complexity {
     pixels: u64,
     complex_key: u64,
     complex_depth: u64,
+    /// Tiles of the resolve's tile grid, and those with a complex pixel.
+    tiles: u64,
+    complex_tiles: u64,
 }
 
 fn count_complex(
@@ -463,7 +516,14 @@ fn count_complex(
         pixels: 0,
         complex_key: 0,
         complex_depth: 0,
+        tiles: 0,
+        complex_tiles: 0,
     };
+    let (tw, th) = (
+        depth.width.div_ceil(TILE_SIZE),
+        depth.height.div_ceil(TILE_SIZE),
+    );
+    let mut slow_tiles = vec![false; (tw * th) as usize];
     for y in 0..depth.height {
         for x in 0..depth.width {
             let px = PixelSamples {
@@ -474,13 +534,19 @@ fn count_complex(
                     .collect(),
             };
             c.pixels += 1;
-            c.complex_key += cpu.resolve_pixel(&px).complex as u64;
+            let complex = cpu.resolve_pixel(&px).complex;
+            c.complex_key += complex as u64;
+            // Tiles count from the bottom row up, as GL's window coordinates do.
+            let y_gl = depth.height - 1 - y;
+            slow_tiles[((y_gl / TILE_SIZE) * tw + x / TILE_SIZE) as usize] |= complex;
             c.complex_depth +=
                 px.depth
                     .iter()
                     .any(|d| d.to_bits() != px.depth[0].to_bits()) as u64;
         }
     }
+    c.tiles = slow_tiles.len() as u64;
+    c.complex_tiles = slow_tiles.iter().filter(|&&t| t).count() as u64;
     Ok(c)
 }
 
@@ -517,31 +583,43 @@ fn stats(times: &[f64]) -> Stats {
 #[derive(Clone, Copy, PartialEq)]
 enum Method {
     ResolveFast,
+    ResolveFastSinglePass,
+    ResolveFastTiles,
     ResolveNoFast,
     Blit,
+    BlitColor,
     Trivial,
 }
 
 impl Method {
-    const ALL: [Method; 4] = [
+    const ALL: [Method; 7] = [
         Method::ResolveFast,
+        Method::ResolveFastSinglePass,
+        Method::ResolveFastTiles,
         Method::ResolveNoFast,
         Method::Blit,
+        Method::BlitColor,
         Method::Trivial,
     ];
     fn key(self) -> &'static str {
         match self {
             Method::ResolveFast => "resolve_median_smooth_fast",
+            Method::ResolveFastSinglePass => "resolve_median_smooth_fast_one_pass",
+            Method::ResolveFastTiles => "resolve_median_smooth_fast_tiles",
             Method::ResolveNoFast => "resolve_median_smooth_nofast",
-            Method::Blit => "blit_x3",
+            Method::Blit => "blit_x3_depth",
+            Method::BlitColor => "blit_x3",
             Method::Trivial => "fullscreen_trivial",
         }
     }
     fn label(self) -> &'static str {
         match self {
-            Method::ResolveFast => "resolve median smooth, fast path on",
+            Method::ResolveFast => "resolve median smooth, fast path on (default schedule)",
+            Method::ResolveFastSinglePass => "resolve median smooth, fast path on, one pass",
+            Method::ResolveFastTiles => "resolve median smooth, fast path on, 8x8 tiles",
             Method::ResolveNoFast => "resolve median smooth, fast path off",
-            Method::Blit => "3x glBlitFramebuffer (hardware resolve)",
+            Method::Blit => "3x glBlitFramebuffer + depth (hardware resolve)",
+            Method::BlitColor => "3x glBlitFramebuffer, colour only",
             Method::Trivial => "trivial full-screen pass (3 outputs)",
         }
     }
@@ -563,7 +641,8 @@ fn run(args: &Args) -> Result<(), String> {
     let host = Host::new(gl, args).map_err(e)?;
     let options = RetrofitOptions {
         samples: args.samples,
-        rules: vec![(2, ResolveRule::BlendNormal)],
+        // As the recommended layout resolves normals: the reference sample's.
+        rules: vec![(2, ResolveRule::Select)],
         position_attachment: Some(1),
     };
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &options).map_err(e)?;
@@ -634,8 +713,21 @@ fn run(args: &Args) -> Result<(), String> {
         }
         match m {
             Method::ResolveFast => msaa.resolve(gl, &fast)?,
+            Method::ResolveFastSinglePass => {
+                msaa.set_schedule(Schedule::OnePass)?;
+                let result = msaa.resolve(gl, &fast);
+                msaa.set_schedule(Schedule::Tiles(TILE_SIZE))?;
+                result?
+            }
+            Method::ResolveFastTiles => {
+                msaa.set_schedule(Schedule::Tiles(TILE_SIZE))?;
+                let result = msaa.resolve(gl, &fast);
+                msaa.set_schedule(Schedule::Tiles(TILE_SIZE))?;
+                result?
+            }
             Method::ResolveNoFast => msaa.resolve(gl, &nofast)?,
-            Method::Blit => blit_resolve(gl, twin, &host),
+            Method::Blit => blit_resolve(gl, twin, &host, true),
+            Method::BlitColor => blit_resolve(gl, twin, &host, false),
             Method::Trivial => trivial_pass(gl, &trivial, &empty_vao, &host),
         }
         let q_ms = query.as_mut().map(|q| q.end(gl));
@@ -701,8 +793,15 @@ fn run(args: &Args) -> Result<(), String> {
     };
 
     println!(
-        "resolve_vs_blit: {}x{}, {}x MSAA (requested {}), G-buffer 3x RGBA16F + DEPTH32F, {} triangles + background",
-        args.width, args.height, samples, args.samples, args.triangles
+        "resolve_vs_blit: {}x{}, {}x MSAA (requested {}), G-buffer 3x RGBA16F + DEPTH32F, {}",
+        args.width,
+        args.height,
+        samples,
+        args.samples,
+        match &args.scene {
+            Some(spec) => format!("scene {spec}"),
+            None => format!("{} random triangles + background", args.triangles),
+        }
     );
     println!(
         "context: EGL, {} | GL {} | GLSL {}",
@@ -723,6 +822,12 @@ fn run(args: &Args) -> Result<(), String> {
         "                {:.2}% ({}; raw depth-buffer samples differ, tilted interiors included)",
         100.0 * frac(complexity.complex_depth),
         complexity.complex_depth
+    );
+    println!(
+        "slow tiles ({TILE_SIZE}x{TILE_SIZE}): {:.2}% ({} of {})",
+        100.0 * complexity.complex_tiles as f64 / complexity.tiles.max(1) as f64,
+        complexity.complex_tiles,
+        complexity.tiles
     );
     println!(
         "{} warm-up rounds, then {} runs per method, interleaved round-robin",
@@ -785,12 +890,16 @@ fn run(args: &Args) -> Result<(), String> {
         "samples": samples,
         "gbuffer": ["RGBA16F color", "RGBA16F position", "RGBA16F normal", "DEPTH32F"],
         "triangles": args.triangles,
+        "scene": args.scene,
         "seed": args.seed,
         "pixels": complexity.pixels,
         "complex_pixels": complexity.complex_key,
         "complex_fraction": frac(complexity.complex_key),
         "depth_differs_pixels": complexity.complex_depth,
         "depth_differs_fraction": frac(complexity.complex_depth),
+        "tile_size": TILE_SIZE,
+        "slow_tiles": complexity.complex_tiles,
+        "tiles": complexity.tiles,
         "timer": primary.name(),
         "timer_reason": reason,
         "warmup": args.warmup,

@@ -182,6 +182,14 @@ fn refusals_are_one_line_with_a_non_zero_exit() {
         (&["render", "--c", "2", "--c-in", "3"], "--c-in"),
         (&["render", "--samples", "64", "--size", "16x16"], "64x"),
         (&["render", "--view", "nope", "--size", "16x16"], "nope"),
+        (&["render", "--aa-region", "circle:1,2,3,4"], "circle"),
+        (&["render", "--aa-region", "ellipse:8,8,0,4"], "radii"),
+        (&["render", "--aa-region", "rect:1,2,3"], "four numbers"),
+        (
+            &["render", "--method", "none", "--aa-max-depth", "5"],
+            "none",
+        ),
+        (&["render", "--aa-max-depth", "-1", "--size", "16x16"], "-1"),
         (&["frobnicate"], "frobnicate"),
     ];
     for (args, needle) in cases {

@@ -9,9 +9,10 @@ use common::host::{Host, perspective, triangle};
 use deferred_msaa::Error;
 use deferred_msaa::gl::{Attachment, Format, Texture2d, TextureRef, live_objects};
 use deferred_msaa::readback::Readback;
-use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
+use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
 use deferred_msaa::resolve::{
-    DepthProjection, ResolveMethod, ResolveParams, ResolveRule, ResolveSettings, Window,
+    DepthProjection, Region, ResolveMethod, ResolveParams, ResolveRule, ResolveSettings, Schedule,
+    Selection, SelectionFlag, Window,
 };
 use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions, introspect};
 use glow::HasContext;
@@ -140,7 +141,18 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
     let depth_samples = readback.read(gl, depth_ref, 1).unwrap();
     let n = msaa.samples();
 
-    let mut complex_pixels = 0;
+    // A depth threshold inside the scene's range: the median geometry key.
+    let mut keys: Vec<f64> = (0..H)
+        .flat_map(|y| (0..W).map(move |x| (x, y)))
+        .flat_map(|(x, y)| (0..n).map(move |s| (s, x, y)))
+        .filter(|&(s, x, y)| depth_samples.get(s, x, y)[0] != 1.0)
+        .map(|(s, x, y)| -(samples[1].get(s, x, y)[2] as f64))
+        .collect();
+    keys.sort_by(f64::total_cmp);
+    let max_depth = keys[keys.len() / 2];
+    // Every method, window and fast path with the default schedule; the
+    // other schedules (an odd tile size included); and selective AA.
+    let mut cases = Vec::new();
     for &method in ResolveMethod::all() {
         for &window in Window::all() {
             for fast_path in [true, false] {
@@ -150,6 +162,65 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
                     fast_path,
                     ..ResolveSettings::default()
                 };
+                cases.push((settings, msaa.schedule()));
+            }
+        }
+    }
+    let median = ResolveSettings::default();
+    for schedule in [Schedule::OnePass, Schedule::Tiles(3), Schedule::Tiles(16)] {
+        cases.push((median, schedule));
+    }
+    let selections = [
+        Selection {
+            region: Some(Region::Rect {
+                x: 10.0,
+                y: 8.0,
+                width: 30.0,
+                height: 20.0,
+            }),
+            ..Selection::default()
+        },
+        Selection {
+            region: Some(Region::Ellipse {
+                x: 32.0,
+                y: 24.0,
+                rx: 20.0,
+                ry: 12.0,
+            }),
+            ..Selection::default()
+        },
+        Selection {
+            max_depth: Some(max_depth),
+            ..Selection::default()
+        },
+        Selection {
+            // Triangles whose colour has red >= 0.5 are anti-aliased.
+            flag: Some(SelectionFlag {
+                attachment: 0,
+                component: 0,
+            }),
+            ..Selection::default()
+        },
+    ];
+    for selection in selections {
+        for fast_path in [true, false] {
+            for schedule in [Schedule::Tiles(8), Schedule::OnePass] {
+                let settings = ResolveSettings {
+                    fast_path,
+                    selection,
+                    ..ResolveSettings::default()
+                };
+                cases.push((settings, schedule));
+            }
+        }
+    }
+    let default_schedule = msaa.schedule();
+    let mut complex_pixels = 0;
+    let mut outside_pixels = 0;
+    for (settings, schedule) in cases {
+        {
+            {
+                msaa.set_schedule(schedule).unwrap();
                 let p = params(settings);
                 msaa.resolve(gl, &p).unwrap();
                 let resolved: Vec<_> = [&host.albedo, &host.position, &host.normal]
@@ -164,8 +235,15 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
                     clear_depth: 1.0,
                     footprint: p.footprint(),
                 };
+                // The same resolve without selective AA.
+                let plain = CpuResolve {
+                    settings: ResolveSettings {
+                        selection: Selection::default(),
+                        ..settings
+                    },
+                    ..cpu.clone()
+                };
                 let mut bad = Vec::new();
-                complex_pixels = 0;
                 for y in 0..H {
                     for x in 0..W {
                         let px = PixelSamples {
@@ -177,8 +255,14 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
                                 .map(|a| (0..n).map(|s| a.get(s, x, y).map(|c| c as f64)).collect())
                                 .collect(),
                         };
-                        let want = cpu.resolve_pixel(&px);
-                        complex_pixels += want.complex as usize;
+                        let at = PixelPlace { x, y, height: H };
+                        let want = cpu.resolve_pixel_at(&px, Some(at));
+                        if settings.selection.is_active() {
+                            let all = plain.resolve_pixel(&px);
+                            outside_pixels += usize::from(all.complex && !want.complex);
+                        } else {
+                            complex_pixels += usize::from(want.complex);
+                        }
                         if want.ambiguous {
                             continue;
                         }
@@ -207,15 +291,21 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
                 }
                 assert!(
                     bad.is_empty(),
-                    "{settings:?}: {} mismatches: {:#?}",
+                    "{settings:?} {schedule:?}: {} mismatches: {:#?}",
                     bad.len(),
                     &bad[..bad.len().min(6)]
                 );
             }
         }
     }
-    // The scene has edges: the slow path must really have been exercised.
+    msaa.set_schedule(default_schedule).unwrap();
+    // The scene has edges: the slow path must really have been exercised,
+    // and every selection must have turned some complex pixels into one-sample ones.
     assert!(complex_pixels > 30, "only {complex_pixels} complex pixels");
+    assert!(
+        outside_pixels > 4 * 20,
+        "selective AA left only {outside_pixels} complex pixels out"
+    );
 
     readback.destroy(gl);
     msaa.destroy(gl);

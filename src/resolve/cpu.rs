@@ -37,6 +37,17 @@ pub struct PixelSamples {
     pub attachments: Vec<Vec<[f64; 4]>>,
 }
 
+/// Where a pixel is, for a selective-AA region.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelPlace {
+    /// Column, from the left.
+    pub x: u32,
+    /// Row, from the top (as images are read back).
+    pub y: u32,
+    /// The target's height in pixels.
+    pub height: u32,
+}
+
 /// One resolved pixel.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResolvedPixel {
@@ -162,27 +173,66 @@ impl CpuResolve {
         }
     }
 
-    /// Resolve one pixel.
+    /// Resolve one pixel. A selective-AA region is not evaluated (it needs
+    /// the pixel's place: see [`CpuResolve::resolve_pixel_at`]).
     pub fn resolve_pixel(&self, px: &PixelSamples) -> ResolvedPixel {
+        self.resolve_pixel_at(px, None)
+    }
+
+    /// Whether the pixel lies outside the selective-AA selection, and whether
+    /// `f32` may decide that differently (a key at the depth threshold).
+    fn outside_selection(
+        &self,
+        px: &PixelSamples,
+        keys: &Keys,
+        at: Option<PixelPlace>,
+    ) -> (bool, bool) {
+        let sel = &self.settings.selection;
+        let mut outside = false;
+        let mut ambiguous = false;
+        if let (Some(region), Some(at)) = (sel.region, at) {
+            let u = region.window_uniform(at.height);
+            let (cx, cy) = (at.x as f64 + 0.5, (at.height - 1 - at.y) as f64 + 0.5);
+            outside |= region.outside_window(u, cx, cy);
+        }
+        if let Some(max_depth) = sel.max_depth {
+            let geometry = (0..keys.z.len()).filter(|&i| !keys.bg[i]);
+            outside |= !geometry.clone().any(|i| keys.z[i] <= max_depth);
+            ambiguous |= geometry
+                .into_iter()
+                .any(|i| (keys.z[i] - max_depth).abs() <= 1e-6 * max_depth.abs());
+        }
+        if let Some(flag) = sel.flag {
+            let values = &px.attachments[flag.attachment];
+            outside |= !values
+                .iter()
+                .any(|v| v[usize::from(flag.component.min(3))] >= 0.5);
+        }
+        (outside, ambiguous)
+    }
+
+    /// Resolve the pixel at `at` (needed for a selective-AA region).
+    pub fn resolve_pixel_at(&self, px: &PixelSamples, at: Option<PixelPlace>) -> ResolvedPixel {
         let n = px.depth.len();
         let keys = self.keys(px);
 
         let uniform = self.settings.fast_path
             && (1..n).all(|i| keys.bg[i] == keys.bg[0] && (keys.bg[0] || keys.z[i] == keys.z[0]));
-        if uniform {
+        let (outside, selection_ambiguous) = self.outside_selection(px, &keys, at);
+        if uniform || outside {
             return ResolvedPixel {
                 attachments: px.attachments.iter().map(|a| a[0]).collect(),
                 depth: px.depth[0],
                 reference: 0,
                 weights: vec![1.0; n],
                 complex: false,
-                ambiguous: false,
+                ambiguous: selection_ambiguous,
             };
         }
 
         let r = self.reference(&keys);
         let mut weights = Vec::with_capacity(n);
-        let mut ambiguous = false;
+        let mut ambiguous = selection_ambiguous;
         for i in 0..n {
             let (w, near_edge) = self.closeness(&keys, i, r);
             weights.push(w);

@@ -8,8 +8,13 @@
 
 pub mod cpu;
 mod settings;
+pub mod tiles;
 
-pub use settings::{DepthProjection, ResolveMethod, ResolveRule, ResolveSettings, Window};
+pub use settings::{
+    DepthProjection, Region, ResolveMethod, ResolveRule, ResolveSettings, Selection, SelectionFlag,
+    Window,
+};
+use tiles::{RESOLVE_TILES_VERT, TILE_SIZE, TileMask};
 
 use crate::gl::format::SampleKind;
 use crate::gl::{
@@ -59,6 +64,53 @@ pub struct ResolveProgramKey {
     pub blend_depth: bool,
     /// Write the complex-pixel mask to output `attachments.len()`.
     pub complex_output: bool,
+    /// Which of the resolve's passes this program is.
+    pub pass: ResolvePass,
+    /// Selective anti-aliasing criteria compiled in.
+    pub selection: SelectionKey,
+}
+
+/// The passes of a resolve ([`tiles`] explains the tiled schedule).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ResolvePass {
+    /// The whole resolve over a full-screen triangle.
+    Single,
+    /// The tile classification, `tile_size` pixels square.
+    ClassifyTiles {
+        /// Tile edge in pixels.
+        tile_size: u32,
+    },
+    /// Every pixel copies sample 0 (the slow tiles are drawn over it next).
+    OneSample,
+    /// The tiles with a slow pixel: the single-pass program on the tile grid.
+    SlowTiles {
+        /// Tile edge in pixels.
+        tile_size: u32,
+    },
+}
+
+/// The compiled-in shape of a [`Selection`] (its numbers are uniforms).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct SelectionKey {
+    /// `Some(true)` for an ellipse, `Some(false)` for a rectangle.
+    pub region_ellipse: Option<bool>,
+    /// A depth threshold is set.
+    pub max_depth: bool,
+    /// The flag's attachment and component.
+    pub flag: Option<SelectionFlag>,
+}
+
+impl SelectionKey {
+    /// The shape of `selection`.
+    pub fn of(selection: &Selection) -> Self {
+        SelectionKey {
+            region_ellipse: selection
+                .region
+                .map(|r| matches!(r, Region::Ellipse { .. })),
+            max_depth: selection.max_depth.is_some(),
+            flag: selection.flag,
+        }
+    }
 }
 
 impl ResolveProgramKey {
@@ -118,7 +170,43 @@ impl ResolveProgramKey {
         if self.complex_output {
             def("COMPLEX_OUTPUT", "1".into());
         }
+        match self.pass {
+            ResolvePass::Single => {}
+            ResolvePass::ClassifyTiles { tile_size } => {
+                def("PASS_CLASSIFY_TILES", "1".into());
+                def("TILE_SIZE", tile_size.to_string());
+            }
+            ResolvePass::OneSample => def("PASS_ONE_SAMPLE", "1".into()),
+            ResolvePass::SlowTiles { tile_size } => def("TILE_SIZE", tile_size.to_string()),
+        }
+        let sel = self.selection;
+        if let Some(ellipse) = sel.region_ellipse {
+            let shape = if ellipse {
+                "REGION_ELLIPSE"
+            } else {
+                "REGION_RECT"
+            };
+            def("SELECT_REGION", shape.into());
+        }
+        if sel.max_depth {
+            def("SELECT_MAX_DEPTH", "1".into());
+        }
+        if let Some(f) = sel.flag {
+            def("SELECT_FLAG_SAMPLER", format!("u_att{}", f.attachment));
+            let component = ["x", "y", "z", "w"][usize::from(f.component.min(3))];
+            def("SELECT_FLAG_COMPONENT", component.into());
+        }
         d
+    }
+
+    /// The vertex shader this pass draws with.
+    fn vertex_shader(&self) -> (&'static str, &'static str) {
+        match self.pass {
+            ResolvePass::Single | ResolvePass::ClassifyTiles { .. } | ResolvePass::OneSample => {
+                ("fullscreen.vert", FULLSCREEN_VERT)
+            }
+            ResolvePass::SlowTiles { .. } => ("resolve_tiles.vert", RESOLVE_TILES_VERT),
+        }
     }
 }
 
@@ -162,15 +250,48 @@ impl ResolveParams {
 pub struct Resolver {
     programs: HashMap<ResolveProgramKey, Program>,
     vao: VertexArray,
+    schedule: Schedule,
+    tiles: Option<TileMask>,
+}
+
+/// How a resolve finds the pixels that take one sample (uniform pixels on
+/// the fast path, pixels outside a selective-AA selection). Every schedule
+/// gives the same values; they differ in speed, by GPU.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Schedule {
+    /// One full-screen pass; a per-pixel branch skips the slow path. Best
+    /// where branches are real (GPUs run 32–64 pixels per branch).
+    OnePass,
+    /// Classify tiles of this many pixels, then draw one-sample tiles and
+    /// slow tiles apart ([`tiles`]): a SIMD software rasteriser (llvmpipe)
+    /// runs both sides of a branch, but never visits a tile it is not given.
+    Tiles(u32),
 }
 
 impl Resolver {
-    /// Create the pass (programs are built on first use).
+    /// Create the pass (programs are built on first use). One-sample pixels
+    /// are found per tile of [`TILE_SIZE`] pixels (see [`tiles`]).
     pub fn new(gl: &glow::Context) -> Result<Self> {
         Ok(Resolver {
             programs: HashMap::new(),
             vao: VertexArray::new(gl, "resolve full-screen triangle")?,
+            schedule: Schedule::Tiles(TILE_SIZE),
+            tiles: None,
         })
+    }
+
+    /// Choose how one-sample pixels are found (see [`Schedule`]).
+    pub fn set_schedule(&mut self, schedule: Schedule) -> Result<()> {
+        if schedule == Schedule::Tiles(0) {
+            return Err(Error::invalid("a resolve tile must be at least 1 pixel"));
+        }
+        self.schedule = schedule;
+        Ok(())
+    }
+
+    /// The schedule in use.
+    pub fn schedule(&self) -> Schedule {
+        self.schedule
     }
 
     /// The program for `key`, built on first use.
@@ -230,9 +351,29 @@ impl Resolver {
             }
             attachments.push((rule, kind));
         }
-        let write_depth = target.attachments.iter().any(|(_, t)| t.format.is_depth());
         let s = params.settings;
-        let key = ResolveProgramKey {
+        if let Some(flag) = s.selection.flag {
+            match inputs.colors.get(flag.attachment) {
+                None => {
+                    return Err(Error::invalid(format!(
+                        "the selective-AA flag is in colour attachment {}, but the resolve has {} colour attachments",
+                        flag.attachment,
+                        inputs.colors.len()
+                    )));
+                }
+                Some(tex) if tex.format.sample_kind() != SampleKind::Float => {
+                    return Err(Error::UnsupportedFormat {
+                        attachment: format!("colour attachment {}", flag.attachment),
+                        format: tex.format.name().into(),
+                        reason: "the selective-AA flag must be in a float or normalised format"
+                            .into(),
+                    });
+                }
+                Some(_) => {}
+            }
+        }
+        let write_depth = target.attachments.iter().any(|(_, t)| t.format.is_depth());
+        let base = ResolveProgramKey {
             samples: inputs.samples,
             samples_as_layers: inputs.depth.target == glow::TEXTURE_2D_ARRAY,
             attachments,
@@ -247,18 +388,111 @@ impl Resolver {
             write_depth,
             blend_depth: s.blend_depth && write_depth,
             complex_output,
+            pass: ResolvePass::Single,
+            selection: SelectionKey::of(&s.selection),
         };
-        let vao = self.vao.raw;
-        let program = self.program(gl, &key)?;
-
+        // Splitting pays off only when some pixels may take one sample.
+        let splits = s.fast_path || s.selection.is_active();
+        let schedule = if splits {
+            self.schedule
+        } else {
+            Schedule::OnePass
+        };
         let state = SavedState::capture(gl);
+        let result = match schedule {
+            Schedule::OnePass => self.draw(gl, &base, inputs, target, params, None),
+            Schedule::Tiles(tile_size) => {
+                self.run_tiled(gl, base, inputs, target, params, tile_size)
+            }
+        };
+        unsafe {
+            for k in 0..=inputs.colors.len() as u32 + 1 {
+                gl.active_texture(glow::TEXTURE0 + k);
+                gl.bind_texture(inputs.depth.target, None);
+                gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
+                gl.bind_texture(glow::TEXTURE_2D, None);
+            }
+        }
+        state.restore(gl);
+        result?;
+        check_error(gl, "the resolve pass")
+    }
+
+    /// The tiled schedule: classify, then one-sample tiles, then slow tiles.
+    fn run_tiled(
+        &mut self,
+        gl: &glow::Context,
+        base: ResolveProgramKey,
+        inputs: &ResolveInputs<'_>,
+        target: &Framebuffer,
+        params: &ResolveParams,
+        tile_size: u32,
+    ) -> Result<()> {
+        let size = (target.width, target.height);
+        let stale = self
+            .tiles
+            .as_ref()
+            .is_some_and(|t| t.target != size || t.tile_size != tile_size);
+        if stale {
+            if let Some(old) = self.tiles.take() {
+                old.destroy(gl);
+            }
+        }
+        if self.tiles.is_none() {
+            self.tiles = Some(TileMask::new(gl, size.0, size.1, tile_size)?);
+        }
+        let Some(mask) = self.tiles.take() else {
+            return Err(Error::invalid("the resolve tile mask is missing"));
+        };
+        let result = (|| {
+            let classify = ResolveProgramKey {
+                pass: ResolvePass::ClassifyTiles { tile_size },
+                write_depth: false,
+                blend_depth: false,
+                complex_output: false,
+                ..base.clone()
+            };
+            self.draw(gl, &classify, inputs, mask.framebuffer(), params, None)?;
+            // Sample 0 everywhere, over a full-screen triangle: cheaper than
+            // drawing the one-sample tiles apart, whose two triangles each
+            // would make a rasteriser shade the blocks on their shared
+            // diagonal twice. The slow tiles are then drawn over it.
+            let one = ResolveProgramKey {
+                pass: ResolvePass::OneSample,
+                ..base.clone()
+            };
+            self.draw(gl, &one, inputs, target, params, None)?;
+            let slow = ResolveProgramKey {
+                pass: ResolvePass::SlowTiles { tile_size },
+                ..base
+            };
+            self.draw(gl, &slow, inputs, target, params, Some(&mask))
+        })();
+        self.tiles = Some(mask);
+        result
+    }
+
+    /// One draw of the program for `key` into `target`; over the tile grid
+    /// of `tiles` when given, else a full-screen triangle.
+    fn draw(
+        &mut self,
+        gl: &glow::Context,
+        key: &ResolveProgramKey,
+        inputs: &ResolveInputs<'_>,
+        target: &Framebuffer,
+        params: &ResolveParams,
+        tiles: Option<&TileMask>,
+    ) -> Result<()> {
+        let vao = self.vao.raw;
+        let program = self.program(gl, key)?;
+        let s = params.settings;
         unsafe {
             target.bind(gl);
             gl.disable(glow::BLEND);
             gl.disable(glow::CULL_FACE);
             gl.disable(glow::SCISSOR_TEST);
             gl.disable(glow::STENCIL_TEST);
-            if write_depth {
+            if key.write_depth {
                 gl.enable(glow::DEPTH_TEST);
                 gl.depth_func(glow::ALWAYS);
                 gl.depth_mask(true);
@@ -285,52 +519,79 @@ impl Resolver {
             program.set_f32(gl, "u_footprint", params.footprint() as f32);
             program.set_f32(gl, "u_c", s.c as f32);
             program.set_f32(gl, "u_c_in", s.c_in as f32);
+            program.set_f32(gl, "u_infinity", f32::INFINITY);
+            if let Some(region) = s.selection.region {
+                let u = region.window_uniform(params.height_px);
+                program.set_vec4(gl, "u_region", u.map(|v| v as f32));
+            }
+            if let Some(d) = s.selection.max_depth {
+                program.set_f32(gl, "u_max_depth", d as f32);
+            }
+            if let Some(loc) = program.uniform(gl, "u_size") {
+                // The resolved pixels' extent (the inputs' size).
+                let (w, h) = (inputs.depth.width as i32, inputs.depth.height as i32);
+                gl.uniform_2_i32(Some(&loc), w, h);
+            }
             gl.bind_vertex_array(Some(vao));
-            gl.draw_arrays(glow::TRIANGLES, 0, 3);
-            for k in 0..=inputs.colors.len() as u32 {
-                gl.active_texture(glow::TEXTURE0 + k);
-                gl.bind_texture(inputs.depth.target, None);
-                gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
+            match tiles {
+                None => gl.draw_arrays(glow::TRIANGLES, 0, 3),
+                Some(mask) => {
+                    let unit = 1 + inputs.colors.len() as u32;
+                    mask.texture().bind(gl, unit);
+                    program.set_i32(gl, "u_tiles", unit as i32);
+                    gl.draw_arrays(glow::TRIANGLES, 0, 6 * mask.tiles() as i32);
+                }
             }
         }
-        state.restore(gl);
-        check_error(gl, "the resolve pass")
+        Ok(())
     }
 
-    /// Free the programs and the vertex array.
+    /// Free the programs, the vertex array and the tile mask.
     pub fn destroy(self, gl: &glow::Context) {
         for (_, program) in self.programs {
             program.destroy(gl);
         }
         self.vao.destroy(gl);
+        if let Some(t) = self.tiles {
+            t.destroy(gl);
+        }
     }
 }
 
 fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program> {
-    let outputs: Vec<String> = (0..key.attachments.len())
-        .map(|k| format!("o_att{k}"))
-        .collect();
-    let mut frag_outputs: Vec<(&str, u32)> = outputs
-        .iter()
-        .enumerate()
-        .map(|(k, name)| (name.as_str(), k as u32))
-        .collect();
-    if key.complex_output {
-        frag_outputs.push(("o_complex", key.attachments.len() as u32));
+    let mut frag_outputs: Vec<(String, u32)> = Vec::new();
+    if matches!(key.pass, ResolvePass::ClassifyTiles { .. }) {
+        frag_outputs.push(("o_tile".into(), 0));
+    } else {
+        for k in 0..key.attachments.len() {
+            frag_outputs.push((format!("o_att{k}"), k as u32));
+        }
+        if key.complex_output {
+            frag_outputs.push(("o_complex".into(), key.attachments.len() as u32));
+        }
     }
+    let frag_outputs: Vec<(&str, u32)> = frag_outputs
+        .iter()
+        .map(|(name, k)| (name.as_str(), *k))
+        .collect();
     let label = format!(
-        "resolve {}x {} {} ({} attachments)",
+        "resolve {}x {} {} ({} attachments, {:?})",
         key.samples,
         key.method,
         key.window,
-        key.attachments.len()
+        key.attachments.len(),
+        key.pass
     );
     Program::build(
         gl,
         &label,
         &preamble(&[], &key.defines()),
         &[
-            (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
+            (
+                ShaderStage::Vertex,
+                key.vertex_shader().0,
+                key.vertex_shader().1,
+            ),
             (ShaderStage::Fragment, "resolve.frag", RESOLVE_FRAG),
         ],
         &frag_outputs,
@@ -352,6 +613,10 @@ pub(crate) struct SavedState {
     cull: bool,
     scissor: bool,
     stencil: bool,
+    color_mask: [bool; 4],
+    /// Per face (front, back): stencil func, ref, value mask, fail/zfail/zpass
+    /// ops, write mask.
+    stencil_state: [[i32; 7]; 2],
 }
 
 impl SavedState {
@@ -372,6 +637,33 @@ impl SavedState {
                 cull: gl.is_enabled(glow::CULL_FACE),
                 scissor: gl.is_enabled(glow::SCISSOR_TEST),
                 stencil: gl.is_enabled(glow::STENCIL_TEST),
+                color_mask: {
+                    let mut m = [0i32; 4];
+                    gl.get_parameter_i32_slice(glow::COLOR_WRITEMASK, &mut m);
+                    m.map(|c| c != 0)
+                },
+                stencil_state: [
+                    [
+                        glow::STENCIL_FUNC,
+                        glow::STENCIL_REF,
+                        glow::STENCIL_VALUE_MASK,
+                        glow::STENCIL_FAIL,
+                        glow::STENCIL_PASS_DEPTH_FAIL,
+                        glow::STENCIL_PASS_DEPTH_PASS,
+                        glow::STENCIL_WRITEMASK,
+                    ]
+                    .map(|p| gl.get_parameter_i32(p)),
+                    [
+                        glow::STENCIL_BACK_FUNC,
+                        glow::STENCIL_BACK_REF,
+                        glow::STENCIL_BACK_VALUE_MASK,
+                        glow::STENCIL_BACK_FAIL,
+                        glow::STENCIL_BACK_PASS_DEPTH_FAIL,
+                        glow::STENCIL_BACK_PASS_DEPTH_PASS,
+                        glow::STENCIL_BACK_WRITEMASK,
+                    ]
+                    .map(|p| gl.get_parameter_i32(p)),
+                ],
             }
         }
     }
@@ -398,6 +690,17 @@ impl SavedState {
             );
             gl.depth_func(self.depth_func as u32);
             gl.depth_mask(self.depth_mask);
+            let [r, g, b, a] = self.color_mask;
+            gl.color_mask(r, g, b, a);
+            for (face, state) in [glow::FRONT, glow::BACK]
+                .into_iter()
+                .zip(self.stencil_state)
+            {
+                let [func, reference, mask, fail, zfail, zpass, write] = state;
+                gl.stencil_func_separate(face, func as u32, reference, mask as u32);
+                gl.stencil_op_separate(face, fail as u32, zfail as u32, zpass as u32);
+                gl.stencil_mask_separate(face, write as u32);
+            }
         }
         set(gl, glow::DEPTH_TEST, self.depth_test);
         set(gl, glow::BLEND, self.blend);

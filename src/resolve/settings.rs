@@ -86,6 +86,198 @@ pub struct ResolveSettings {
     pub fast_path: bool,
     /// Blend the depth attachment's value instead of selecting the reference's.
     pub blend_depth: bool,
+    /// Selective anti-aliasing: which pixels are resolved at all; the others
+    /// take one sample, as a uniform pixel does (default: every pixel).
+    pub selection: Selection,
+}
+
+/// Selective anti-aliasing (issue 7): outside the selection a pixel takes one
+/// sample — sample 0 of every attachment and of depth, exactly as a uniform
+/// pixel on the fast path does. The criteria combine: a pixel is resolved
+/// only when it passes every one that is set.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Selection {
+    /// Resolve only pixels whose centre lies in this screen region (a VR
+    /// lens's sweet spot, a HUD-free area).
+    pub region: Option<Region>,
+    /// Resolve only pixels with a geometry sample at most this far away
+    /// (the depth key's units: view-space distance).
+    pub max_depth: Option<f64>,
+    /// Resolve only pixels where some sample of this attachment component is
+    /// at least 0.5: a per-object flag the host's model shader writes (the
+    /// demo renderer writes the object's `antialias` flag into `color.a`).
+    pub flag: Option<SelectionFlag>,
+}
+
+/// A screen region, in pixels with the origin at the top-left corner (as
+/// images are read); pixel `(x, y)` is inside when its centre is.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case", tag = "shape")]
+pub enum Region {
+    /// `x <= cx < x + width`, `y <= cy < y + height` for the pixel centre `(cx, cy)`.
+    Rect {
+        /// Left edge.
+        x: f64,
+        /// Top edge.
+        y: f64,
+        /// Width.
+        width: f64,
+        /// Height.
+        height: f64,
+    },
+    /// `((cx − x) / rx)² + ((cy − y) / ry)² <= 1`.
+    Ellipse {
+        /// Centre, x.
+        x: f64,
+        /// Centre, y (from the top).
+        y: f64,
+        /// Horizontal radius.
+        rx: f64,
+        /// Vertical radius.
+        ry: f64,
+    },
+}
+
+/// The attachment component that carries a per-object anti-aliasing flag.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub struct SelectionFlag {
+    /// Colour attachment number (a float format).
+    pub attachment: usize,
+    /// Component, 0..=3 (x, y, z, w).
+    pub component: u8,
+}
+
+impl Selection {
+    /// Whether any criterion is set.
+    pub fn is_active(&self) -> bool {
+        self.region.is_some() || self.max_depth.is_some() || self.flag.is_some()
+    }
+
+    fn validate(&self) -> crate::Result<()> {
+        if let Some(d) = self.max_depth.filter(|d| !(d.is_finite() && *d > 0.0)) {
+            return Err(crate::Error::invalid(format!(
+                "the selective-AA depth threshold must be a finite distance above 0, got {d}"
+            )));
+        }
+        if let Some(f) = self.flag.filter(|f| f.component > 3) {
+            return Err(crate::Error::invalid(format!(
+                "the selective-AA flag component must be 0..=3 (x, y, z, w), got {}",
+                f.component
+            )));
+        }
+        match &self.region {
+            Some(region) => region.validate(),
+            None => Ok(()),
+        }
+    }
+}
+
+impl FromStr for Region {
+    type Err = crate::Error;
+
+    /// `rect:X,Y,W,H` or `ellipse:CX,CY,RX,RY`, in pixels from the top-left corner.
+    fn from_str(s: &str) -> crate::Result<Self> {
+        let bad = |why: &str| {
+            crate::Error::invalid(format!(
+                "region `{s}`: {why}; expected rect:X,Y,W,H or ellipse:CX,CY,RX,RY (pixels, origin top-left)"
+            ))
+        };
+        let (shape, numbers) = s.split_once(':').ok_or_else(|| bad("no shape"))?;
+        let v: Vec<f64> = numbers
+            .split(',')
+            .map(|n| n.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| bad("not four numbers"))?;
+        let [a, b, c, d] = v[..] else {
+            return Err(bad("not four numbers"));
+        };
+        let region = match shape {
+            "rect" => Region::Rect {
+                x: a,
+                y: b,
+                width: c,
+                height: d,
+            },
+            "ellipse" => Region::Ellipse {
+                x: a,
+                y: b,
+                rx: c,
+                ry: d,
+            },
+            _ => return Err(bad("unknown shape")),
+        };
+        region.validate().map_err(|e| match e {
+            crate::Error::InvalidArgument(why) => bad(&why),
+            other => other,
+        })?;
+        Ok(region)
+    }
+}
+
+impl Region {
+    /// Check that the numbers are finite and the size or radii positive.
+    pub fn validate(&self) -> crate::Result<()> {
+        match *self {
+            Region::Rect {
+                x,
+                y,
+                width,
+                height,
+            } if !([x, y, width, height].iter().all(|v| v.is_finite())
+                && width >= 0.0
+                && height >= 0.0) =>
+            {
+                Err(crate::Error::invalid(format!(
+                    "a selective-AA rectangle needs finite numbers and a size of at least 0, got {x},{y} {width}x{height}"
+                )))
+            }
+            Region::Ellipse { x, y, rx, ry }
+                if !([x, y, rx, ry].iter().all(|v| v.is_finite()) && rx > 0.0 && ry > 0.0) =>
+            {
+                Err(crate::Error::invalid(format!(
+                    "a selective-AA ellipse needs a finite centre and radii above 0, got ({x},{y}) radii {rx},{ry}"
+                )))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Whether pixel (`x`, `y`) (row 0 at the top) of an image `height`
+    /// pixels high is inside: the very test the shaders make.
+    pub fn contains_pixel(&self, x: u32, y: u32, height: u32) -> bool {
+        let u = self.window_uniform(height);
+        let (cx, cy) = (f64::from(x) + 0.5, f64::from(height) - f64::from(y) - 0.5);
+        !self.outside_window(u, cx, cy)
+    }
+
+    /// The shader's `u_region` for a target `height_px` tall, in window
+    /// coordinates (origin bottom-left): a rectangle as `(x0, y0, x1, y1)`
+    /// (inside: `x0 <= c < x1`), an ellipse as `(cx, cy, 1/rx, 1/ry)`.
+    /// The CPU reference uses the same numbers.
+    pub fn window_uniform(&self, height_px: u32) -> [f64; 4] {
+        let h = height_px as f64;
+        match *self {
+            Region::Rect {
+                x,
+                y,
+                width,
+                height,
+            } => [x, h - (y + height), x + width, h - y],
+            Region::Ellipse { x, y, rx, ry } => [x, h - y, 1.0 / rx, 1.0 / ry],
+        }
+    }
+
+    /// Whether the pixel whose window-coordinate centre is `(cx, cy)` (origin
+    /// bottom-left) is outside, for [`Region::window_uniform`]'s numbers `u`.
+    pub fn outside_window(&self, u: [f64; 4], cx: f64, cy: f64) -> bool {
+        match self {
+            Region::Rect { .. } => cx < u[0] || cy < u[1] || cx >= u[2] || cy >= u[3],
+            Region::Ellipse { .. } => {
+                let (dx, dy) = ((cx - u[0]) * u[2], (cy - u[1]) * u[3]);
+                dx * dx + dy * dy > 1.0
+            }
+        }
+    }
 }
 
 impl Default for ResolveSettings {
@@ -97,6 +289,7 @@ impl Default for ResolveSettings {
             c_in: 2.5,
             fast_path: true,
             blend_depth: false,
+            selection: Selection::default(),
         }
     }
 }
@@ -116,7 +309,7 @@ impl ResolveSettings {
                 self.c, self.c_in
             )));
         }
-        Ok(())
+        self.selection.validate()
     }
 }
 
@@ -185,3 +378,62 @@ name_table!(ResolveRule, "resolve rule",
     ResolveRule::BlendHdr => "blend-hdr",
     ResolveRule::Select => "select",
 );
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn regions_contain_the_pixels_whose_centres_they_cover() {
+        let r = Region::Rect {
+            x: 2.0,
+            y: 1.0,
+            width: 3.0,
+            height: 2.0,
+        };
+        let inside: Vec<(u32, u32)> = (0..8)
+            .flat_map(|y| (0..8).map(move |x| (x, y)))
+            .filter(|&(x, y)| r.contains_pixel(x, y, 8))
+            .collect();
+        assert_eq!(inside, [(2, 1), (3, 1), (4, 1), (2, 2), (3, 2), (4, 2)]);
+        // Rows 1 and 2 from the top of an 8-pixel image are rows 6 and 5
+        // from the bottom in window coordinates.
+        assert_eq!(r.window_uniform(8), [2.0, 5.0, 5.0, 7.0]);
+        let e = Region::Ellipse {
+            x: 4.0,
+            y: 4.0,
+            rx: 2.0,
+            ry: 1.0,
+        };
+        let at = |x, y| e.contains_pixel(x, y, 8);
+        assert!(at(3, 3) && at(4, 3) && at(3, 4));
+        assert!(!at(3, 5) && !at(1, 3) && !at(6, 4));
+    }
+
+    #[test]
+    fn regions_parse_and_bad_ones_are_one_line_errors() {
+        let r: Region = "rect:1,2,30,40".parse().expect("a rectangle");
+        assert_eq!(
+            r,
+            Region::Rect {
+                x: 1.0,
+                y: 2.0,
+                width: 30.0,
+                height: 40.0
+            }
+        );
+        let e: Region = "ellipse:5,6,7,8".parse().expect("an ellipse");
+        assert!(matches!(e, Region::Ellipse { rx, .. } if rx == 7.0));
+        for bad in [
+            "square:1,2,3,4",
+            "rect:1,2,3",
+            "rect:a,b,c,d",
+            "ellipse:1,1,0,1",
+            "rect",
+        ] {
+            let err = bad.parse::<Region>().expect_err(bad).to_string();
+            assert_eq!(err.lines().count(), 1, "{err}");
+            assert!(err.contains(bad), "{err}");
+        }
+    }
+}
