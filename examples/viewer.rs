@@ -63,6 +63,9 @@ use winit::window::{Window, WindowAttributes, WindowId};
 
 type AnyResult<T> = Result<T, Box<dyn Error>>;
 
+/// Frames of a scripted run after which resident memory is the baseline.
+const WARMUP_FRAMES: u32 = 100;
+
 const USAGE: &str = "usage: viewer [SCENE] [--size WxH] [--samples N] [--method M] [--fxaa] [--frames N --screenshot FILE] [--keys KEYS]";
 
 /// The methods, in key order (`0` … `4`).
@@ -109,11 +112,31 @@ fn run() -> AnyResult<()> {
         viewer: None,
         error: None,
     };
+    let scripted = app.args.frames.is_some();
     event_loop.run_app(&mut app)?;
-    match app.error {
-        Some(e) => Err(e.into()),
-        None => Ok(()),
+    if let Some(e) = app.error {
+        return Err(e.into());
     }
+    if scripted {
+        // The whole run's resources are gone: reported for the long-run test.
+        let live = deferred_msaa::gl::live_objects();
+        println!(
+            "viewer: live GL objects at exit: {} ({live:?})",
+            live.total()
+        );
+    }
+    Ok(())
+}
+
+/// Resident set size in bytes (Linux; 0 elsewhere).
+fn resident_bytes() -> u64 {
+    let statm = std::fs::read_to_string("/proc/self/statm").unwrap_or_default();
+    let pages: u64 = statm
+        .split_whitespace()
+        .nth(1)
+        .and_then(|p| p.parse().ok())
+        .unwrap_or(0);
+    pages * 4096
 }
 
 /// The command line.
@@ -481,6 +504,8 @@ struct Viewer {
     frame_ms: f64,
     frames_left: Option<u32>,
     frame_index: u32,
+    /// Resident memory after the warm-up frames of a scripted run.
+    resident_after_warmup: Option<u64>,
     screenshot: Option<PathBuf>,
     /// Save the next frame (the `P` key).
     screenshot_requested: bool,
@@ -598,6 +623,7 @@ impl Viewer {
             frame_ms: 0.0,
             frames_left: args.frames,
             frame_index: 0,
+            resident_after_warmup: None,
             screenshot: args.screenshot.clone(),
             screenshot_requested: false,
             keys: args.keys.clone().into_iter(),
@@ -612,7 +638,8 @@ impl Viewer {
 
     fn views(&self) -> Vec<View> {
         let mut views = vec![View::Final];
-        views.extend((0..self.options.layout.colors.len()).map(View::Attachment));
+        // The attachments the scene-adaptive plan kept.
+        views.extend((0..self.renderer.layout().colors.len()).map(View::Attachment));
         views.extend([View::Depth, View::Complex]);
         views
     }
@@ -620,7 +647,7 @@ impl Viewer {
     fn view_name(&self, view: View) -> String {
         match view {
             View::Final => "final".into(),
-            View::Attachment(k) => self.options.layout.colors[k].name.clone(),
+            View::Attachment(k) => self.renderer.layout().colors[k].name.clone(),
             View::Depth => "depth".into(),
             View::Complex if self.renderer.retrofit().is_none() => "complex (needs MSAA)".into(),
             View::Complex => "complex".into(),
@@ -773,9 +800,21 @@ impl Viewer {
                 .into());
             }
             *left -= 1;
+            // After every mode has been built once, memory should stay flat.
+            if self.frame_index == WARMUP_FRAMES {
+                self.resident_after_warmup = Some(resident_bytes());
+            }
             if *left == 0 {
                 save = self.screenshot.is_some();
                 outcome = FrameOutcome::Done;
+                if let Some(start) = self.resident_after_warmup {
+                    let grown = resident_bytes() as i64 - start as i64;
+                    println!(
+                        "viewer: resident memory changed by {} KiB from frame {WARMUP_FRAMES} to frame {}",
+                        grown / 1024,
+                        self.frame_index
+                    );
+                }
             }
         }
         if save {
@@ -993,7 +1032,7 @@ impl Presenter {
         window: PhysicalSize<u32>,
     ) -> AnyResult<()> {
         let gbuffer = renderer.gbuffer();
-        let layout = &renderer.options().layout;
+        let layout = renderer.layout();
         let final_texture = renderer.final_texture().raw;
         // The complex view needs the multisampled key; without MSAA it shows the final image.
         let complex_key = match (view, renderer.retrofit()) {

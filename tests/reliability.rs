@@ -258,3 +258,54 @@ fn two_contexts_on_two_threads_render_at_once_without_disturbing_each_other() {
         );
     }
 }
+
+/// A texture far beyond memory (16384² RGBA32F, every layer the driver
+/// allows: terabytes) is GL_OUT_OF_MEMORY from the driver, which comes back
+/// as a typed one-line error naming the texture; nothing is left allocated
+/// and the context keeps working.
+#[test]
+fn gl_out_of_memory_is_a_typed_error_and_the_context_survives() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let (size, layers) = unsafe {
+        (
+            gl.get_parameter_i32(glow::MAX_TEXTURE_SIZE) as u32,
+            gl.get_parameter_i32(glow::MAX_ARRAY_TEXTURE_LAYERS) as u32,
+        )
+    };
+    let bytes = u64::from(size) * u64::from(size) * u64::from(layers) * 16;
+    assert!(
+        bytes > 1 << 40,
+        "the driver's limits allow only {bytes} bytes"
+    );
+    let err = deferred_msaa::gl::Texture2dArray::new(
+        gl,
+        "far too big",
+        Format::Rgba32f,
+        size,
+        size,
+        layers,
+        None,
+    )
+    .expect_err("terabytes of texture were allocated");
+    match &err {
+        deferred_msaa::Error::Gl { code_name, .. } => {
+            assert_eq!(*code_name, "GL_OUT_OF_MEMORY", "{err}")
+        }
+        other => panic!("not a GL error: {other}"),
+    }
+    let message = err.to_string();
+    assert!(
+        !message.contains('\n') && message.contains("far too big"),
+        "{message}"
+    );
+    assert_eq!(live_objects(), before, "the failed texture was not freed");
+    // The context still works.
+    let small = deferred_msaa::gl::Texture2d::new(gl, "small", Format::Rgba8, 4, 4)
+        .expect("a small texture after the failure");
+    small.destroy(gl);
+    assert_eq!(live_objects(), before);
+}
