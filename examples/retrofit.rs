@@ -11,7 +11,7 @@
 //!
 //! ```text
 //! let mut msaa = MsaaRetrofit::new(gl, engine.gbuffer_fbo(), &RetrofitOptions {  // once
-//!     samples, rules: vec![(1, ResolveRule::BlendNormal), (2, ResolveRule::BlendHdr)],
+//!     samples, rules: vec![(1, ResolveRule::Select), (2, ResolveRule::BlendHdr)],
 //!     position_attachment: None,                  // no position target: the key is linearised depth
 //! })?;
 //! engine.geometry_pass(gl, msaa.framebuffer());   // was: engine.geometry_pass(gl, engine.gbuffer_fbo())
@@ -76,7 +76,11 @@ fn run() -> AnyResult<()> {
                 engine.gbuffer_fbo(),
                 &RetrofitOptions {
                     samples: args.samples,
-                    rules: vec![(1, ResolveRule::BlendNormal), (2, ResolveRule::BlendHdr)],
+                    // Normals from the reference sample, as the crate's
+                    // recommended layout takes them (a blended, renormalised
+                    // normal over-lights convex edges; see
+                    // `GBufferLayout::recommended`); emission blended as HDR.
+                    rules: vec![(1, ResolveRule::Select), (2, ResolveRule::BlendHdr)],
                     position_attachment: None,
                 },
             )?;

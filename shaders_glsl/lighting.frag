@@ -134,26 +134,52 @@ vec3 shade_surface(vec3 base, vec3 p, vec4 normal_gloss, vec4 specular, vec3 emi
 uniform sampler2D u_color;
 uniform sampler2D u_position;
 uniform sampler2D u_normal;
+#ifdef GBUFFER_NO_SPECULAR
+uniform vec4 u_specular_constant;   // the one value every material writes
+#else
 uniform sampler2D u_specular;
+#endif
+#ifdef GBUFFER_NO_EMISSIVE
+uniform sampler2D u_background;     // no material emits: the background's own texture
+#else
 uniform sampler2D u_emissive;
+#endif
 uniform sampler2D u_depth;
 uniform float u_clear_depth;
 
 out vec4 o_color;
 
+// The attachments a scene-adaptive G-buffer may leave out
+// (GBUFFER_NO_SPECULAR, GBUFFER_NO_EMISSIVE), read as if they were there.
+vec4 gbuffer_specular(ivec2 pixel) {
+#ifdef GBUFFER_NO_SPECULAR
+    return u_specular_constant;
+#else
+    return texelFetch(u_specular, pixel, 0);
+#endif
+}
+
+vec3 gbuffer_emissive(ivec2 pixel, bool background) {
+#ifdef GBUFFER_NO_EMISSIVE
+    // The emissive attachment would hold the background copy there, else zero.
+    return background ? texelFetch(u_background, pixel, 0).rgb : vec3(0.0);
+#else
+    return texelFetch(u_emissive, pixel, 0).rgb;
+#endif
+}
+
 void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
-    vec3 emissive = texelFetch(u_emissive, pixel, 0).rgb;
     if (texelFetch(u_depth, pixel, 0).r == u_clear_depth) {
-        o_color = vec4(shade_background(emissive), 1.0);
+        o_color = vec4(shade_background(gbuffer_emissive(pixel, true)), 1.0);
         return;
     }
     vec3 radiance = shade_surface(
         texelFetch(u_color, pixel, 0).rgb,
         texelFetch(u_position, pixel, 0).xyz,
         texelFetch(u_normal, pixel, 0),
-        texelFetch(u_specular, pixel, 0),
-        emissive);
+        gbuffer_specular(pixel),
+        gbuffer_emissive(pixel, false));
     o_color = vec4(radiance, 1.0);
 }
 

@@ -21,8 +21,16 @@
 uniform sampler2DMS u_color;
 uniform sampler2DMS u_position;
 uniform sampler2DMS u_normal;
+#ifdef GBUFFER_NO_SPECULAR
+uniform vec4 u_specular_constant;   // the one value every material writes
+#else
 uniform sampler2DMS u_specular;
+#endif
+#ifdef GBUFFER_NO_EMISSIVE
+uniform sampler2D u_background;     // no material emits: the background's own texture
+#else
 uniform sampler2DMS u_emissive;
+#endif
 uniform sampler2DMS u_depth;
 uniform float u_clear_depth;
 uniform int u_samples;              // samples 0 .. u_samples-1 are lit and averaged
@@ -30,17 +38,34 @@ uniform int u_tonemapped_average;   // 1: average after the tonemap curve
 
 out vec4 o_color;
 
+// The attachments a scene-adaptive G-buffer may leave out, read as if there.
+vec4 sample_specular(ivec2 pixel, int i) {
+#ifdef GBUFFER_NO_SPECULAR
+    return u_specular_constant;
+#else
+    return texelFetch(u_specular, pixel, i);
+#endif
+}
+
+vec3 sample_emissive(ivec2 pixel, int i, bool background) {
+#ifdef GBUFFER_NO_EMISSIVE
+    // The background copy wrote the same texel into every sample.
+    return background ? texelFetch(u_background, pixel, 0).rgb : vec3(0.0);
+#else
+    return texelFetch(u_emissive, pixel, i).rgb;
+#endif
+}
+
 vec3 shade_sample(ivec2 pixel, int i) {
-    vec3 emissive = texelFetch(u_emissive, pixel, i).rgb;
     if (texelFetch(u_depth, pixel, i).r == u_clear_depth) {
-        return shade_background(emissive);
+        return shade_background(sample_emissive(pixel, i, true));
     }
     return shade_surface(
         texelFetch(u_color, pixel, i).rgb,
         texelFetch(u_position, pixel, i).xyz,
         texelFetch(u_normal, pixel, i),
-        texelFetch(u_specular, pixel, i),
-        emissive);
+        sample_specular(pixel, i),
+        sample_emissive(pixel, i, false));
 }
 
 void main() {

@@ -66,7 +66,8 @@
 //! [`retrofit::MsaaRetrofit::new`] reads the engine's FBO (attachments,
 //! formats, draw buffers) and makes `GL_TEXTURE_2D_MULTISAMPLE` twins with
 //! the same layout; [`retrofit::RetrofitOptions`] sets the sample count, a
-//! resolve rule per attachment (normals: [`resolve::ResolveRule::BlendNormal`])
+//! resolve rule per attachment (normals: [`resolve::ResolveRule::Select`], as
+//! [`gbuffer::GBufferLayout::recommended`] explains, or `BlendNormal`)
 //! and where the depth key comes from (a view-space position attachment, or
 //! the depth buffer linearised with the projection, as here).
 //! [`retrofit::MsaaRetrofit::resolve`] blends, per pixel, only the samples
@@ -94,6 +95,7 @@ pub mod dump;
 pub mod error;
 pub mod gbuffer;
 pub mod gl;
+pub mod plan;
 pub mod readback;
 pub mod renderer;
 pub mod resolve;

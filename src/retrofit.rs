@@ -8,9 +8,9 @@
 //! The host's model and lighting shaders do not change: the twins have the
 //! same formats, attachment points and draw-buffer mapping as the host's FBO.
 
-use crate::gbuffer::{MultisampleTwin, TwinSpec};
+use crate::gbuffer::{MemoryBudget, MultisampleTwin, TwinSpec, budget_twins};
 use crate::gl::{Attachment, Format, Framebuffer, TextureRef, check_error};
-use crate::resolve::{KeySource, ResolveInputs, ResolveParams, ResolveRule, Resolver};
+use crate::resolve::{KeySource, ResolveInputs, ResolveParams, ResolveRule, Resolver, Schedule};
 use crate::{Error, Result};
 use glow::HasContext;
 
@@ -292,9 +292,64 @@ pub struct MsaaRetrofit {
     rules: Vec<ResolveRule>,
     key: KeySource,
     resolver: Resolver,
+    /// The memory budget of [`MsaaRetrofit::with_budget`], applied again on
+    /// every rebuild.
+    budget: Option<MemoryBudget>,
+    /// What the budget did (a stepped-down sample count), one line each.
+    warnings: Vec<String>,
 }
 
 impl MsaaRetrofit {
+    /// [`MsaaRetrofit::new`] under a memory budget: the twins' bytes
+    /// (formats × size × samples) are estimated before they are allocated
+    /// and, over `budget`, the sample count steps down to the highest count
+    /// the driver offers that fits, with a `log::warn!` line kept in
+    /// [`MsaaRetrofit::warnings`]; with a strict budget, or when no
+    /// multisampled count fits (the retrofit cannot render single-sample
+    /// for the host), it refuses with [`Error::MemoryBudget`]. The budget
+    /// holds for [`MsaaRetrofit::set_samples`] and
+    /// [`MsaaRetrofit::refresh`] too.
+    pub fn with_budget(
+        gl: &glow::Context,
+        host_fbo: glow::Framebuffer,
+        options: &RetrofitOptions,
+        budget: &MemoryBudget,
+    ) -> Result<Self> {
+        let (samples, warning) = Self::budgeted(gl, host_fbo, options.samples, budget)?;
+        let mut retrofit = Self::new(
+            gl,
+            host_fbo,
+            &RetrofitOptions {
+                samples,
+                ..options.clone()
+            },
+        )?;
+        retrofit.options.samples = options.samples;
+        retrofit.budget = Some(*budget);
+        retrofit.warnings = warning.into_iter().collect();
+        Ok(retrofit)
+    }
+
+    /// The sample count `budget` allows for twins of `host_fbo`'s attachments.
+    fn budgeted(
+        gl: &glow::Context,
+        host_fbo: glow::Framebuffer,
+        requested: u32,
+        budget: &MemoryBudget,
+    ) -> Result<(u32, Option<String>)> {
+        let host = introspect(gl, host_fbo)?;
+        let mut formats: Vec<Format> = host.colors.iter().map(|a| a.format).collect();
+        formats.push(host.depth.format);
+        let (w, h) = host.size();
+        budget_twins(gl, &formats, w, h, requested, budget)
+    }
+
+    /// What the memory budget did, one line each (empty without one, or
+    /// when the requested count fit).
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
     /// Introspect `host_fbo` and build its multisampled twin.
     pub fn new(
         gl: &glow::Context,
@@ -311,6 +366,8 @@ impl MsaaRetrofit {
                 rules,
                 key,
                 resolver,
+                budget: None,
+                warnings: Vec::new(),
             }),
             Err(e) => {
                 resolver.destroy(gl);
@@ -483,6 +540,18 @@ impl MsaaRetrofit {
         self.resolver.run(gl, &inputs, &self.target, params, false)
     }
 
+    /// How the resolve finds its one-sample pixels (uniform pixels,
+    /// pixels outside a selective-AA selection). The results are identical;
+    /// which is fastest depends on the GPU ([`Schedule`] says why).
+    pub fn set_schedule(&mut self, schedule: Schedule) -> Result<()> {
+        self.resolver.set_schedule(schedule)
+    }
+
+    /// The resolve's schedule.
+    pub fn schedule(&self) -> Schedule {
+        self.resolver.schedule()
+    }
+
     /// Resolve into another target (its colour `k` receives host attachment
     /// `k`; with `complex_output`, draw buffer `colors.len()` gets the
     /// complex-pixel mask).
@@ -521,7 +590,14 @@ impl MsaaRetrofit {
     }
 
     fn rebuild(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
-        let (host, twin, target, rules, key) = Self::build(gl, self.host.fbo, options)?;
+        let (mut budgeted, mut warnings) = (options.clone(), Vec::new());
+        if let Some(budget) = &self.budget {
+            let (samples, warning) = Self::budgeted(gl, self.host.fbo, options.samples, budget)?;
+            budgeted.samples = samples;
+            warnings.extend(warning);
+        }
+        let (host, twin, target, rules, key) = Self::build(gl, self.host.fbo, &budgeted)?;
+        self.warnings = warnings;
         let old_twin = std::mem::replace(&mut self.twin, twin);
         let old_target = std::mem::replace(&mut self.target, target);
         old_twin.destroy(gl);

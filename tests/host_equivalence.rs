@@ -387,7 +387,10 @@ fn a_host_retrofitted_through_the_public_api_matches_the_builtin_pipeline() {
         aa: AaMode::Resolve(settings),
         fxaa: false,
         layout: layout.clone(),
+        // The host has every attachment: compare like with like.
+        adaptive: false,
         depth_mode: DepthMode::Standard,
+        ..RenderOptions::default()
     };
 
     // The built-in pipeline.

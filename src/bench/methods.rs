@@ -9,16 +9,21 @@
 //! | `front`, `median`, `back` | the depth-aware resolve with that reference sample |
 //! | `per-sample`          | lighting evaluated for every sample (needs renderer support) |
 //! | `complex`             | per-sample lighting only on complex pixels (needs renderer support) |
+//! | `gbaa`                | geometry-buffer anti-aliasing: a single-sample G-buffer plus edge distances, blended across triangle edges after the tonemap |
+//! | `sparse`              | the multisampled G-buffer as per-pixel linked lists of blocks, one per visible triangle, lit once each (OpenGL 4.3 and post-depth coverage); `:pool=N` sets the pool to N blocks |
 //!
 //! Options of the resolve methods: `:hard` / `:smooth` (the closeness
 //! window), `:c=F` (outer width; when given without `c_in`, `c_in` becomes
 //! `min(2.5, c/2)`), `:c_in=F` (also spelt `c-in`), `:nofast` (no
 //! uniform-pixel fast path). `+fxaa` after any entry runs the crate's FXAA
-//! after tonemapping: `median:hard+fxaa`, `none+fxaa`.
+//! after tonemapping: `median:hard+fxaa`, `none+fxaa`. `:full` after any
+//! method renders with every attachment of the layout instead of the
+//! scene-adaptive plan (see [`crate::plan`]): `median` against
+//! `median:full` shows what the plan saves (its `gbuffer_bytes`) and costs.
 //!
 //! A run's `method` field in the report is the entry exactly as written.
 
-use crate::renderer::AaMode;
+use crate::renderer::{AaMode, SparseOptions};
 use crate::resolve::{ResolveMethod, ResolveSettings, Window};
 use crate::{Error, Result};
 use std::fmt;
@@ -36,10 +41,15 @@ pub const BASE_DEFAULT_METHODS: &[&str] = &[
     "median:hard",
     "median:nofast",
     "median+fxaa",
+    "gbaa",
 ];
 
 /// Default entries that join the default list once the renderer has them.
-pub const OPTIONAL_DEFAULT_METHODS: &[&str] = &["per-sample", "complex"];
+///
+/// `sparse` needs shader storage buffers and post-depth coverage: on a
+/// context without them [`run`](super::run) leaves it out of the default
+/// list with a warning (a list given with `--methods` fails instead).
+pub const OPTIONAL_DEFAULT_METHODS: &[&str] = &["per-sample", "complex", "sparse"];
 
 /// Every method name an entry may start with.
 pub const METHOD_NAMES: &[&str] = &[
@@ -50,11 +60,14 @@ pub const METHOD_NAMES: &[&str] = &[
     "back",
     "per-sample",
     "complex",
+    "gbaa",
+    "sparse",
 ];
 
 /// What the accepted entries look like, for error messages.
-const ACCEPTED: &str = "accepted: none, average, front, median, back, per-sample, complex; \
-resolve options after colons (:hard, :smooth, :c=F, :c_in=F, :nofast); +fxaa after any entry";
+const ACCEPTED: &str = "accepted: none, average, front, median, back, per-sample, complex, gbaa, sparse; \
+resolve options after colons (:hard, :smooth, :c=F, :c_in=F, :nofast); sparse's :pool=N; :full (the full G-buffer layout) \
+and +fxaa after any entry";
 
 /// How a method anti-aliases, before FXAA.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,6 +81,12 @@ pub enum AaMethod {
     PerSample,
     /// Per-sample lighting on complex pixels only, per-pixel lighting elsewhere.
     Complex,
+    /// Geometry-buffer anti-aliasing: a single-sample G-buffer with edge
+    /// distances, blended across triangle edges after the tonemap.
+    Gbaa,
+    /// The multisampled G-buffer as per-pixel linked lists of blocks, lit
+    /// once per block ([`AaMode::Sparse`]).
+    Sparse(SparseOptions),
 }
 
 impl AaMethod {
@@ -78,18 +97,29 @@ impl AaMethod {
             AaMethod::Resolve(s) => s.method.name(),
             AaMethod::PerSample => "per-sample",
             AaMethod::Complex => "complex",
+            AaMethod::Gbaa => "gbaa",
+            AaMethod::Sparse(_) => "sparse",
         }
     }
 
     /// Whether the method renders into a multisampled G-buffer.
     pub fn is_multisampled(&self) -> bool {
-        !matches!(self, AaMethod::None)
+        !matches!(self, AaMethod::None | AaMethod::Gbaa)
+    }
+
+    /// Whether the method's G-buffer pass does more than `none`'s (its
+    /// `ms_aa` then includes its G-buffer time minus `none`'s).
+    pub fn adds_geometry(&self) -> bool {
+        matches!(self, AaMethod::Gbaa | AaMethod::Sparse(_))
     }
 
     /// Whether the method does lighting work beyond the per-pixel pass of
     /// `none` (its `ms_aa` then includes its lighting time minus `none`'s).
     pub fn adds_lighting(&self) -> bool {
-        matches!(self, AaMethod::PerSample | AaMethod::Complex)
+        matches!(
+            self,
+            AaMethod::PerSample | AaMethod::Complex | AaMethod::Sparse(_)
+        )
     }
 
     /// The renderer mode this method runs with. (A method whose renderer
@@ -101,6 +131,8 @@ impl AaMethod {
             AaMethod::Resolve(s) => Ok(AaMode::Resolve(*s)),
             AaMethod::PerSample => Ok(AaMode::PerSample),
             AaMethod::Complex => Ok(AaMode::Complex),
+            AaMethod::Gbaa => Ok(AaMode::Gbaa),
+            AaMethod::Sparse(o) => Ok(AaMode::Sparse(*o)),
         }
     }
 
@@ -117,6 +149,8 @@ impl AaMethod {
             AaMethod::Resolve(_) => "resolve",
             AaMethod::PerSample => "per-sample",
             AaMethod::Complex => "complex",
+            AaMethod::Gbaa => "gbaa",
+            AaMethod::Sparse(_) => "sparse",
         }
     }
 }
@@ -130,6 +164,15 @@ pub struct MethodEntry {
     pub method: AaMethod,
     /// Whether FXAA runs after tonemapping.
     pub fxaa: bool,
+}
+
+impl MethodEntry {
+    /// Whether the entry carries `:full`: every attachment of the layout,
+    /// not the scene-adaptive plan's.
+    pub fn full_layout(&self) -> bool {
+        let body = self.label.split('+').next().unwrap_or("");
+        body.split(':').skip(1).any(|o| o == "full")
+    }
 }
 
 impl fmt::Display for MethodEntry {
@@ -174,10 +217,11 @@ impl FromStr for MethodEntry {
         };
         let mut parts = body.split(':');
         let name = parts.next().unwrap_or("");
-        let options: Vec<&str> = parts.collect();
+        // `:full` is about the layout, not the method: any entry takes it.
+        let options: Vec<&str> = parts.filter(|o| *o != "full").collect();
         let unknown = || Error::invalid(format!("unknown method `{label}`; {ACCEPTED}"));
         let method = match name {
-            "none" | "per-sample" | "complex" => {
+            "none" | "per-sample" | "complex" | "gbaa" => {
                 if let Some(o) = options.first() {
                     return Err(Error::invalid(format!(
                         "method `{label}`: `{name}` takes no options (got `:{o}`); {ACCEPTED}"
@@ -186,8 +230,30 @@ impl FromStr for MethodEntry {
                 match name {
                     "none" => AaMethod::None,
                     "per-sample" => AaMethod::PerSample,
+                    "gbaa" => AaMethod::Gbaa,
                     _ => AaMethod::Complex,
                 }
+            }
+            "sparse" => {
+                let mut sparse = SparseOptions::default();
+                for option in &options {
+                    match option.split_once('=') {
+                        Some(("pool", v)) => {
+                            let blocks = v.trim().parse::<u32>().map_err(|_| {
+                                Error::invalid(format!(
+                                    "method `{label}`: `pool={v}` is not a number of blocks"
+                                ))
+                            })?;
+                            sparse.pool_blocks = Some(blocks);
+                        }
+                        _ => {
+                            return Err(Error::invalid(format!(
+                                "method `{label}`: unknown option `:{option}`; {ACCEPTED}"
+                            )));
+                        }
+                    }
+                }
+                AaMethod::Sparse(sparse)
             }
             _ => {
                 let method: ResolveMethod = name.parse().map_err(|_| unknown())?;
@@ -288,6 +354,20 @@ mod tests {
 
         let e: MethodEntry = "none+fxaa".parse().unwrap();
         assert_eq!((e.method, e.fxaa), (AaMethod::None, true));
+        let e: MethodEntry = "gbaa+fxaa".parse().unwrap();
+        assert_eq!((e.method, e.fxaa), (AaMethod::Gbaa, true));
+        assert!(!e.method.is_multisampled() && e.method.adds_geometry());
+        assert!("gbaa:hard".parse::<MethodEntry>().is_err());
+        let e: MethodEntry = "sparse:pool=16".parse().unwrap();
+        match e.method {
+            AaMethod::Sparse(o) => assert_eq!(o.pool_blocks, Some(16)),
+            other => panic!("{other:?} is not sparse"),
+        }
+        assert!(e.method.is_multisampled() && e.method.adds_geometry() && e.method.adds_lighting());
+        for bad in ["sparse:pool=x", "sparse:hard", "sparse:pool=-1"] {
+            let err = bad.parse::<MethodEntry>().unwrap_err().to_string();
+            assert_eq!(err.lines().count(), 1, "{bad}: {err}");
+        }
         assert_eq!(
             "average".parse::<MethodEntry>().unwrap().method.base_name(),
             "average"

@@ -40,21 +40,21 @@ pub use report::{Reference, Report, Run, pareto_front};
 use crate::compare;
 use crate::context::{Backend, GlVersion, HeadlessContext};
 use crate::gbuffer::GBufferLayout;
-use crate::gl::{TextureRef, TimerKind};
-use crate::readback::Readback;
+use crate::gl::TimerKind;
 use crate::renderer::{AaMode, FrameTimings, RenderOptions, Renderer};
-use crate::resolve::KeySource;
 use crate::scene::{Aabb, Light, Scene};
 use crate::{Error, Result};
 use glam::Vec3;
 use glow::HasContext;
 use image::RgbaImage;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::collections::HashMap;
 use std::path::Path;
 
-/// The scenes benchmarked when none is named.
-pub const DEFAULT_SCENES: &[&str] = &["builtin:greebles", "builtin:thin"];
+/// The scenes benchmarked when none is named: the two the report's claims
+/// are about, `hull` (detail inside a model, where the depth-aware resolve
+/// blends) and `halo` (the paper's Figure 4, where averaging lights the gap
+/// behind an edge).
+pub const DEFAULT_SCENES: &[&str] = &["builtin:hull", "builtin:halo"];
 
 /// The reference renders at this many times the width and the height.
 pub const REFERENCE_SCALE: u32 = 4;
@@ -358,6 +358,37 @@ pub fn run(config: &BenchConfig) -> Result<BenchOutput> {
     let ctx = HeadlessContext::new(config.backend)?;
     let gl = ctx.gl();
     let version = GlVersion::query(gl);
+    // The default list leaves out what this context cannot run (`sparse`
+    // below OpenGL 4.3), with a warning; a list given explicitly fails on it
+    // when its renderer is made.
+    let trimmed;
+    let config = if config.methods == default_methods() {
+        let (kept, dropped): (Vec<&MethodEntry>, Vec<&MethodEntry>) =
+            config.methods.iter().partition(|e| {
+                e.method
+                    .aa_mode()
+                    .is_ok_and(|aa| Renderer::check_support(gl, &aa).is_ok())
+            });
+        for e in dropped {
+            if let Err(why) = e
+                .method
+                .aa_mode()
+                .and_then(|aa| Renderer::check_support(gl, &aa))
+            {
+                log::warn!(
+                    "bench: `{}` left out of the default methods: {why}",
+                    e.label
+                );
+            }
+        }
+        trimmed = BenchConfig {
+            methods: kept.into_iter().cloned().collect(),
+            ..config.clone()
+        };
+        &trimmed
+    } else {
+        config
+    };
     let rounds = (config.warmup + config.frames) as u64;
     let ms_entries = config
         .methods
@@ -439,20 +470,29 @@ struct Job<'a> {
     frames: Vec<FrameTimings>,
     image: Option<RgbaImage>,
     gbuffer_bytes: u64,
+    /// The fraction of pixels the method treated as complex in the last
+    /// frame ([`Renderer::complex_pixel_fraction`]).
+    complex_fraction: Option<f64>,
+    /// `sparse`: the pixels that fell back to one sample in the last frame.
+    sparse_overflow_pixels: Option<u64>,
 }
 
-/// Renderers shared by jobs of the same class, FXAA setting and sample count.
+/// Renderers shared by jobs of the same class, FXAA setting, sample count
+/// and layout (adaptive or full).
 #[derive(Default)]
 struct Pool {
-    renderers: Vec<((&'static str, bool, u32), Renderer)>,
+    renderers: Vec<(PoolKey, Renderer)>,
 }
+
+/// A pool slot's method class, FXAA, requested samples and adaptive layout.
+type PoolKey = (&'static str, bool, u32, bool);
 
 impl Pool {
     fn slot(
         &mut self,
         ctx: &HeadlessContext,
         scene: &Scene,
-        key: (&'static str, bool, u32),
+        key: PoolKey,
         options: &RenderOptions,
     ) -> Result<usize> {
         if let Some(i) = self.renderers.iter().position(|(k, _)| *k == key) {
@@ -529,38 +569,6 @@ fn render_reference(
     downsample_srgb(&image?, REFERENCE_SCALE)
 }
 
-/// The fraction of pixels whose depth-key samples are not all bitwise equal.
-fn complex_fraction(gl: &glow::Context, renderer: &Renderer) -> Result<Option<f64>> {
-    let Some(retrofit) = renderer.retrofit() else {
-        return Ok(None);
-    };
-    let (depth, colors) = retrofit.inputs()?;
-    let (texture, channel): (TextureRef, usize) = match retrofit.key() {
-        KeySource::Position(k) => match colors.get(k) {
-            Some(t) => (*t, 2),
-            None => (depth, 0),
-        },
-        KeySource::Depth => (depth, 0),
-    };
-    let mut readback = Readback::new(gl)?;
-    let image = readback.read(gl, texture, 1);
-    readback.destroy(gl);
-    let image = image?;
-    let pixels = (image.width * image.height) as usize;
-    if pixels == 0 {
-        return Ok(Some(0.0));
-    }
-    let mut complex = 0usize;
-    for p in 0..pixels {
-        let key = |s: u32| image.plane(s)[p * 4 + channel].to_bits();
-        let first = key(0);
-        if (1..image.samples).any(|s| key(s) != first) {
-            complex += 1;
-        }
-    }
-    Ok(Some(complex as f64 / pixels as f64))
-}
-
 fn bench_scene(
     ctx: &HeadlessContext,
     config: &BenchConfig,
@@ -599,16 +607,18 @@ fn time_scene(
     rounds: u64,
 ) -> Result<Vec<(Run, RgbaImage)>> {
     let gl = ctx.gl();
-    // The jobs, with a hidden `none` as the lighting baseline when a method
-    // that adds lighting has no `none` entry beside it.
-    let hidden_none: Option<MethodEntry> =
-        (config.methods.iter().any(|e| e.method.adds_lighting())
-            && !config.methods.iter().any(|e| e.method == AaMethod::None))
-        .then(|| MethodEntry {
-            label: "none".into(),
-            method: AaMethod::None,
-            fxaa: false,
-        });
+    // The jobs, with a hidden `none` as the lighting (and G-buffer pass)
+    // baseline when a method that adds to them has no `none` entry beside it.
+    let hidden_none: Option<MethodEntry> = (config
+        .methods
+        .iter()
+        .any(|e| e.method.adds_lighting() || e.method.adds_geometry())
+        && !config.methods.iter().any(|e| e.method == AaMethod::None))
+    .then(|| MethodEntry {
+        label: "none".into(),
+        method: AaMethod::None,
+        fxaa: false,
+    });
     let mut jobs: Vec<Job> = Vec::new();
     let entries = config
         .methods
@@ -622,8 +632,16 @@ fn time_scene(
             vec![1]
         };
         for requested in counts {
-            let options = render_options(config, entry.method.aa_mode()?, entry.fxaa, requested);
-            let key = (entry.method.class(), entry.fxaa, requested);
+            let mut options =
+                render_options(config, entry.method.aa_mode()?, entry.fxaa, requested);
+            // `:full`: every attachment of the layout, not the plan's.
+            options.adaptive = !entry.full_layout();
+            let key = (
+                entry.method.class(),
+                entry.fxaa,
+                requested,
+                options.adaptive,
+            );
             let slot = pool.slot(ctx, scene, key, &options)?;
             let renderer = pool.get(slot)?;
             if renderer.options() != &options {
@@ -641,8 +659,13 @@ fn time_scene(
                 pb.set_length(pb.length().unwrap_or(0).saturating_sub(rounds));
                 continue;
             }
-            let gbuffer_bytes = options.layout.bytes(config.width, config.height, 1)
-                + renderer.retrofit().map_or(0, |r| r.twin().bytes());
+            // The planned G-buffer: single-sample textures plus the twins
+            // (and `gbaa`'s edge buffers); `sparse`: what it really
+            // allocates (heads, blocks, pool, MS depth).
+            let gbuffer_bytes = match renderer.sparse_memory() {
+                Some(m) => m.total(),
+                None => renderer.plan().gbuffer_bytes,
+            };
             jobs.push(Job {
                 entry,
                 reported,
@@ -653,12 +676,13 @@ fn time_scene(
                 frames: Vec::new(),
                 image: None,
                 gbuffer_bytes,
+                complex_fraction: None,
+                sparse_overflow_pixels: None,
             });
         }
     }
 
     // Round-robin: every job renders once per round.
-    let mut complex: HashMap<u32, Option<f64>> = HashMap::new();
     for round in 0..rounds {
         let timed = round >= config.warmup as u64;
         let last = round + 1 == rounds;
@@ -679,9 +703,10 @@ fn time_scene(
             }
             if last {
                 job.image = Some(renderer.read_final(gl)?);
-                if job.entry.method.is_multisampled() && !complex.contains_key(&job.samples) {
-                    complex.insert(job.samples, complex_fraction(gl, renderer)?);
-                }
+                job.complex_fraction = renderer.complex_pixel_fraction(gl)?;
+                job.sparse_overflow_pixels = renderer
+                    .sparse_stats(gl)?
+                    .map(|s| u64::from(s.overflow_pixels));
             }
             pb.inc(1);
         }
@@ -692,6 +717,13 @@ fn time_scene(
         jobs.iter()
             .filter(|j| j.entry.method == AaMethod::None)
             .flat_map(|j| j.frames.iter().map(|t| t.lighting_ms))
+            .collect(),
+    );
+    // The G-buffer pass baseline: `none`'s median G-buffer time.
+    let base_geometry = median(
+        jobs.iter()
+            .filter(|j| j.entry.method == AaMethod::None)
+            .flat_map(|j| j.frames.iter().map(|t| t.geometry_ms))
             .collect(),
     );
     pb.set_message(format!("{spec}: measuring error"));
@@ -713,7 +745,12 @@ fn time_scene(
                     } else {
                         0.0
                     };
-                    t.resolve_ms + t.fxaa_ms + extra
+                    let extra_geometry = if job.entry.method.adds_geometry() {
+                        (t.geometry_ms - base_geometry).max(0.0)
+                    } else {
+                        0.0
+                    };
+                    t.resolve_ms + t.fxaa_ms + t.gbaa_ms + extra + extra_geometry
                 })
                 .collect(),
         );
@@ -739,11 +776,13 @@ fn time_scene(
             ms_fxaa: median(job.frames.iter().map(|t| t.fxaa_ms).collect()),
             ms_lighting: median(job.frames.iter().map(|t| t.lighting_ms).collect()),
             flip_p95: flip.p95 as f64,
-            complex_fraction: if job.entry.method.is_multisampled() {
-                complex.get(&job.samples).copied().flatten()
-            } else {
-                None
-            },
+            complex_fraction: job.complex_fraction,
+            sparse_overflow_pixels: job.sparse_overflow_pixels,
+            full_ms_gbuffer_bytes: matches!(job.entry.method, AaMethod::Sparse(_)).then(|| {
+                config
+                    .layout
+                    .bytes(config.width, config.height, job.samples)
+            }),
             samples_requested: job.samples_requested,
             lights: scene.lights.len() as u32,
         };

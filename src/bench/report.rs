@@ -77,10 +77,21 @@ pub struct Run {
     pub ms_lighting: f64,
     /// 95th percentile of the per-pixel FLIP error (extra key).
     pub flip_p95: f64,
-    /// Fraction of pixels whose depth-key samples are not all equal, i.e.
-    /// that the resolve cannot take its fast path on (extra key; `null`
-    /// without multisampling).
+    /// Fraction of pixels the method treated as complex in its last frame
+    /// ([`Renderer::complex_pixel_fraction`](crate::renderer::Renderer::complex_pixel_fraction)):
+    /// for the resolve methods those it took its slow path on (depth keys
+    /// not all equal; all of them with `:nofast`), for `complex` those lit
+    /// per sample, 1 for `per-sample` (extra key; `null` without multisampling).
     pub complex_fraction: Option<f64>,
+    /// `sparse`: pixels that fell back to one sample because the block pool
+    /// ran out in the last frame (extra key; `null` for other methods).
+    #[serde(default)]
+    pub sparse_overflow_pixels: Option<u64>,
+    /// `sparse`: the bytes of the full layout's multisampled G-buffer at
+    /// the same size and sample count, what `sparse` stands in for (extra
+    /// key; `null` for other methods).
+    #[serde(default)]
+    pub full_ms_gbuffer_bytes: Option<u64>,
     /// The requested sample count (extra key; the driver may round it).
     pub samples_requested: u32,
     /// Lights in the scene as rendered, `--lights` included (extra key).
@@ -168,27 +179,26 @@ impl Report {
                     .collect::<Vec<_>>(),
             );
             let _ = writeln!(md, "## `{scene}`\n");
-            if let Some(c) = runs.iter().find_map(|r| r.complex_fraction) {
-                let _ = writeln!(
-                    md,
-                    "{:.1} % of pixels are complex (their samples differ in depth); {} lights.\n",
-                    c * 100.0,
-                    runs.first().map_or(0, |r| r.lights)
-                );
-            }
             let _ = writeln!(
                 md,
-                "| method | samples | ms total | × none | ms AA | FLIP mean | × none | PSNR dB | halo px | G-buffer MiB | × none |"
+                "{} lights. Complex %: the pixels a method treated as complex (the resolve's slow path; \
+                 `complex`: lit per sample). G-buffer: single-sample textures plus the twins \
+                 (`:full`: every attachment of the layout, else the scene-adaptive plan's).\n",
+                runs.first().map_or(0, |r| r.lights)
             );
             let _ = writeln!(
                 md,
-                "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+                "| method | samples | ms total | × none | ms AA | FLIP mean | × none | PSNR dB | halo px | complex % | G-buffer MiB | × none |"
+            );
+            let _ = writeln!(
+                md,
+                "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
             );
             for (run, on_front) in runs.iter().zip(&front) {
                 let psnr = run.psnr_db.map_or("∞".to_string(), |p| format!("{p:.2}"));
                 let _ = writeln!(
                     md,
-                    "| `{}`{} | {} | {:.2} | {} | {:.2} | {:.4} | {} | {} | {} | {:.1} | {} |",
+                    "| `{}`{} | {} | {:.2} | {} | {:.2} | {:.4} | {} | {} | {} | {} | {:.1} | {} |",
                     run.method,
                     if *on_front { " ★" } else { "" },
                     run.samples,
@@ -199,6 +209,8 @@ impl Report {
                     ratio(run.flip_mean, base.map(|b| b.flip_mean)),
                     psnr,
                     run.halo_pixels,
+                    run.complex_fraction
+                        .map_or("–".to_string(), |c| format!("{:.1}", c * 100.0)),
                     run.gbuffer_bytes as f64 / (1024.0 * 1024.0),
                     ratio(
                         run.gbuffer_bytes as f64,
@@ -207,6 +219,23 @@ impl Report {
                 );
             }
             let _ = writeln!(md);
+            for run in runs.iter().filter(|r| r.full_ms_gbuffer_bytes.is_some()) {
+                let full = run.full_ms_gbuffer_bytes.unwrap_or(0);
+                let _ = writeln!(
+                    md,
+                    "`{}` {}x: its G-buffer (heads, first blocks, pool, multisampled depth) takes \
+                     {:.1} MiB against {:.1} MiB for the full {}x multisampled G-buffer ({} ×); \
+                     {} pixels fell back to one sample (block pool ran out).\n",
+                    run.method,
+                    run.samples,
+                    run.gbuffer_bytes as f64 / (1024.0 * 1024.0),
+                    full as f64 / (1024.0 * 1024.0),
+                    run.samples,
+                    ratio(run.gbuffer_bytes as f64, Some(full as f64)),
+                    run.sparse_overflow_pixels
+                        .map_or("–".to_string(), |n| n.to_string()),
+                );
+            }
         }
         md
     }

@@ -2,11 +2,12 @@
 
 use super::CommonArgs;
 use crate::context::HeadlessContext;
-use crate::gbuffer::GBufferLayout;
+use crate::gbuffer::{GBufferLayout, MemoryBudget};
 use crate::gl::TextureRef;
+use crate::plan::{Plan, PlanContext};
 use crate::readback::{Readback, SampleImage};
-use crate::renderer::{AaMode, DepthMode, RenderOptions, Renderer};
-use crate::resolve::{ResolveMethod, ResolveSettings, Window};
+use crate::renderer::{AaMode, DepthMode, RenderOptions, Renderer, SparseOptions};
+use crate::resolve::{Region, ResolveMethod, ResolveSettings, Selection, Window};
 use crate::scene::Scene;
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -25,7 +26,7 @@ pub struct RenderArgs {
     /// Samples per pixel (the driver's real count is used and reported).
     #[arg(long, default_value_t = 4)]
     samples: u32,
-    /// none, average, front, median or back.
+    /// none, average, front, median, back, per-sample, complex, gbaa or sparse.
     #[arg(long, default_value = "median")]
     method: String,
     /// Closeness window: hard or smooth.
@@ -40,13 +41,36 @@ pub struct RenderArgs {
     /// Resolve uniform pixels the slow way too.
     #[arg(long)]
     no_fast_path: bool,
+    /// Selective anti-aliasing for the resolve methods and sparse: only pixels inside
+    /// this region are resolved, the others take one sample;
+    /// `rect:X,Y,W,H` or `ellipse:CX,CY,RX,RY` in pixels from the top-left.
+    #[arg(long, value_parser = parse_region)]
+    aa_region: Option<Region>,
+    /// Selective anti-aliasing: pixels with no geometry nearer than this
+    /// view-space distance take one sample.
+    #[arg(long)]
+    aa_max_depth: Option<f64>,
     /// Apply the crate's FXAA after tonemapping.
     #[arg(long)]
     fxaa: bool,
     /// Use FreeSpace Open's G-buffer layout (FP16 position, D24) instead of the recommended one.
     #[arg(long)]
     fso_layout: bool,
-    /// What to write: final, an attachment name, depth.
+    /// Keep every attachment of the layout instead of leaving out what the
+    /// scene does not need (the scene-adaptive plan, see --explain).
+    #[arg(long)]
+    full_layout: bool,
+    /// Memory budget for the G-buffer, e.g. 512MiB or 2GiB (default: half
+    /// the free video memory the driver reports, else 1GiB); over it the
+    /// sample count steps down with a warning.
+    #[arg(long, value_parser = parse_budget)]
+    memory_budget: Option<u64>,
+    /// Refuse, instead of stepping the sample count down, when the G-buffer
+    /// would exceed the memory budget.
+    #[arg(long)]
+    strict_memory: bool,
+    /// What to write: final, an attachment name, depth, complex (the pixels
+    /// the method treated as complex), or (with --method gbaa) edges.
     #[arg(long, default_value = "final")]
     view: String,
 }
@@ -59,6 +83,13 @@ pub struct RenderCmd {
     /// The PNG to write (default: target/deferred-msaa/render.png).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Print the scene-adaptive plan (attachments, passes, what is left out
+    /// and why, G-buffer bytes) instead of rendering.
+    #[arg(long)]
+    explain: bool,
+    /// With --explain: print the plan as JSON.
+    #[arg(long, requires = "explain")]
+    json: bool,
 }
 
 /// Arguments of `dump`.
@@ -87,6 +118,14 @@ impl RenderCmd {
     }
 }
 
+fn parse_region(s: &str) -> std::result::Result<Region, String> {
+    s.parse().map_err(|e: Error| e.to_string())
+}
+
+fn parse_budget(s: &str) -> std::result::Result<u64, String> {
+    crate::gbuffer::parse_bytes(s).map_err(|e| e.to_string())
+}
+
 fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
@@ -105,12 +144,32 @@ fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-const METHODS: &str = "none, average, front, median, back";
+const METHODS: &str = "none, average, front, median, back, per-sample, complex, gbaa, sparse";
 
 impl RenderArgs {
     fn options(&self) -> Result<RenderOptions> {
+        let selective =
+            self.method == "sparse" || ResolveMethod::all().iter().any(|m| m.name() == self.method);
+        if !selective && (self.aa_region.is_some() || self.aa_max_depth.is_some()) {
+            return Err(Error::invalid(format!(
+                "--aa-region and --aa-max-depth select pixels for the resolve methods (average, front, median, back) and sparse, not `{}`",
+                self.method
+            )));
+        }
         let aa = if self.method == "none" {
             AaMode::None
+        } else if self.method == "gbaa" {
+            AaMode::Gbaa
+        } else if self.method == "per-sample" {
+            AaMode::PerSample
+        } else if self.method == "complex" {
+            AaMode::Complex
+        } else if self.method == "sparse" {
+            AaMode::Sparse(SparseOptions {
+                region: self.aa_region,
+                max_depth: self.aa_max_depth.map(|d| d as f32),
+                ..SparseOptions::default()
+            })
         } else {
             let method: ResolveMethod = self.method.parse().map_err(|_| {
                 Error::invalid(format!(
@@ -126,6 +185,11 @@ impl RenderArgs {
                 c_in: self.c_in,
                 fast_path: !self.no_fast_path,
                 blend_depth: false,
+                selection: Selection {
+                    region: self.aa_region,
+                    max_depth: self.aa_max_depth,
+                    flag: None,
+                },
             };
             settings.validate()?;
             AaMode::Resolve(settings)
@@ -145,6 +209,11 @@ impl RenderArgs {
                 GBufferLayout::recommended()
             },
             depth_mode: DepthMode::Auto,
+            adaptive: !self.full_layout,
+            memory_budget: MemoryBudget {
+                bytes: self.memory_budget,
+                strict: self.strict_memory,
+            },
         })
     }
 }
@@ -241,8 +310,21 @@ fn resolved_view(session: &Session, view: &str) -> Result<image::RgbaImage> {
     if view == "final" {
         return renderer.read_final(gl);
     }
+    if view == "edges" {
+        return renderer.read_gbaa_edges(gl)?.ok_or_else(|| {
+            Error::invalid("the `edges` view shows gbaa's edge buffers; use it with --method gbaa")
+        });
+    }
     let gbuffer = renderer.gbuffer();
-    let layout = &renderer.options().layout;
+    let layout = renderer.layout();
+    if matches!(renderer.effective_options().aa, AaMode::Sparse(_))
+        && layout.index_of(view).is_some()
+    {
+        return Err(Error::invalid(format!(
+            "view `{view}` shows a G-buffer attachment, which method `sparse` leaves empty \
+             (its attributes live in per-pixel lists); with sparse: final, depth"
+        )));
+    }
     let (texture, channels) = if view == "depth" {
         (TextureRef::from(&gbuffer.depth), 1)
     } else if let Some(k) = layout.index_of(view) {
@@ -253,7 +335,7 @@ fn resolved_view(session: &Session, view: &str) -> Result<image::RgbaImage> {
     } else {
         let names: Vec<&str> = layout.colors.iter().map(|a| a.name.as_str()).collect();
         return Err(Error::invalid(format!(
-            "unknown view `{view}`; available: final, {}, depth",
+            "unknown view `{view}`; available: final, {}, depth, complex, edges (with --method gbaa)",
             names.join(", ")
         )));
     };
@@ -263,17 +345,71 @@ fn resolved_view(session: &Session, view: &str) -> Result<image::RgbaImage> {
     Ok(view_image(&img?, view, channels))
 }
 
+/// The `complex` view: which pixels the method treated as complex (the
+/// resolve's slow path; `complex`'s per-sample pixels), white on black.
+fn complex_view(session: &mut Session) -> Result<image::RgbaImage> {
+    let Session { ctx, renderer } = session;
+    let renderer = renderer
+        .as_mut()
+        .ok_or_else(|| Error::invalid("the renderer is gone"))?;
+    let mask = renderer.read_complex_pixels(ctx.gl())?.ok_or_else(|| {
+        Error::invalid(format!(
+            "the `complex` view needs a multisampled method (average, front, median, back, per-sample or complex); this frame ran `{}`",
+            renderer.effective_options().aa.name()
+        ))
+    })?;
+    Ok(image::RgbaImage::from_fn(
+        mask.width(),
+        mask.height(),
+        |x, y| {
+            let v = mask.get_pixel(x, y)[0];
+            image::Rgba([v, v, v, 255])
+        },
+    ))
+}
+
+/// Run `render --explain`: the plan, as text or JSON, without rendering.
+fn run_explain(cmd: &RenderCmd) -> Result<()> {
+    let args = &cmd.render;
+    let options = args.options()?;
+    let scene = Scene::load(&args.scene)?;
+    for w in &scene.warnings {
+        log::warn!("{}: {w}", args.scene);
+    }
+    let ctx = HeadlessContext::new(args.common.backend)?;
+    let context = PlanContext::query(ctx.gl(), &options.layout);
+    let plan = Plan::for_scene(&scene, &context, &options)?;
+    for w in &plan.warnings {
+        log::warn!("{w}");
+    }
+    if cmd.json {
+        let text = serde_json::to_string_pretty(&plan.to_json())
+            .map_err(|e| Error::invalid(e.to_string()))?;
+        println!("{text}");
+    } else {
+        print!("{}", plan.to_text());
+    }
+    Ok(())
+}
+
 /// Run `render`.
 pub fn run_render(cmd: &RenderCmd) -> Result<()> {
-    let session = Session::open(&cmd.render)?;
-    let img = resolved_view(&session, &cmd.render.view)?;
+    if cmd.explain {
+        return run_explain(cmd);
+    }
+    let mut session = Session::open(&cmd.render)?;
+    let img = if cmd.render.view == "complex" {
+        complex_view(&mut session)?
+    } else {
+        resolved_view(&session, &cmd.render.view)?
+    };
     let out = cmd
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("target/deferred-msaa/render.png"));
     save_png(&img, &out)?;
     let renderer = session.renderer()?;
-    let samples = renderer.retrofit().map_or(1, |r| r.samples());
+    let samples = renderer.samples();
     println!(
         "{}: {}x{} {} {}x -> {}",
         cmd.render.scene,
@@ -288,12 +424,27 @@ pub fn run_render(cmd: &RenderCmd) -> Result<()> {
 
 /// Run `dump`.
 pub fn run_dump(cmd: &DumpCmd) -> Result<()> {
-    let session = Session::open(&cmd.render)?;
+    if cmd.render.method == "sparse" {
+        return Err(Error::invalid(
+            "dump writes every sample of the multisampled G-buffer, which method `sparse` does \
+             not have (its G-buffer is per-pixel lists of blocks); use render",
+        ));
+    }
+    let mut session = Session::open(&cmd.render)?;
+    // The fraction of pixels the method treated as complex (the resolve's
+    // slow path; `complex`'s per-sample pixels), before the read-only borrows.
+    let complex_fraction = match &mut session {
+        Session {
+            ctx,
+            renderer: Some(r),
+        } => r.complex_pixel_fraction(ctx.gl())?,
+        Session { renderer: None, .. } => None,
+    };
     let renderer = session.renderer()?;
     let gl = session.ctx.gl();
     let dir = &cmd.out;
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let layout = renderer.options().layout.clone();
+    let layout = renderer.layout().clone();
     let gbuffer = renderer.gbuffer();
     let mut readback = Readback::new(gl)?;
     let result = (|| -> Result<serde_json::Value> {
@@ -342,7 +493,11 @@ pub fn run_dump(cmd: &DumpCmd) -> Result<()> {
         save_png(&renderer.read_final(gl)?, &dir.join("final.png"))?;
 
         let camera = renderer.camera();
-        let settings = renderer.options().aa.settings().unwrap_or_default();
+        let settings = renderer
+            .effective_options()
+            .aa
+            .settings()
+            .unwrap_or_default();
         let key_source = match layout.key_attachment() {
             Some(a) => a.name.clone(),
             None => "depth".into(),
@@ -367,6 +522,7 @@ pub fn run_dump(cmd: &DumpCmd) -> Result<()> {
             "c_in": settings.c_in,
             "fast_path": settings.fast_path,
             "key_source": key_source,
+            "complex_fraction": complex_fraction,
             "attachments": layout.colors.iter().map(|a| serde_json::json!({
                 "name": a.name, "format": a.format.name(), "rule": a.rule.name(),
             })).collect::<Vec<_>>(),

@@ -22,7 +22,9 @@ pub const GEOMETRY_VERT: &str = include_str!("../../shaders_glsl/geometry.vert")
 /// `o_color`, `o_position`, `o_normal`, `o_specular`, `o_emissive`, bound by
 /// name to the layout's attachment numbers; material uniforms as set by the
 /// renderer. Compiled after [`preamble`](crate::gl::preamble) with no
-/// extensions or defines, with and without MSAA alike.
+/// extensions, with and without MSAA alike; a layout the scene-adaptive
+/// plan trimmed adds `GBUFFER_NO_SPECULAR` / `GBUFFER_NO_EMISSIVE`, which
+/// drop those outputs (the full layout: no defines).
 pub const GEOMETRY_FRAG: &str = include_str!("../../shaders_glsl/geometry.frag");
 
 /// The model program, its outputs bound to the layout's attachment numbers.
@@ -68,18 +70,12 @@ impl GeometryPass {
         (frag_name, frag_body): (&str, &str),
         extra_outputs: &[(&str, u32)],
     ) -> Result<Self> {
-        let mut outputs = vec![
-            ("o_color", slots.color),
-            ("o_position", slots.position),
-            ("o_normal", slots.normal),
-            ("o_specular", slots.specular),
-            ("o_emissive", slots.emissive),
-        ];
+        let mut outputs = slots.outputs();
         outputs.extend_from_slice(extra_outputs);
         let program = Program::build(
             gl,
             label,
-            &preamble(extensions, &[]),
+            &preamble(extensions, &slots.defines()),
             &[
                 (ShaderStage::Vertex, "geometry.vert", GEOMETRY_VERT),
                 (ShaderStage::Fragment, frag_name, frag_body),
@@ -99,13 +95,9 @@ impl GeometryPass {
         &self.program
     }
 
-    fn preamble() -> String {
-        preamble(&[], &[])
-    }
-
-    /// The fragment shader's full source as compiled.
-    pub(crate) fn fragment_source() -> String {
-        format!("{}{GEOMETRY_FRAG}", Self::preamble())
+    /// The fragment shader's full source as compiled for `slots`.
+    pub(crate) fn fragment_source(slots: GBufferSlots) -> String {
+        format!("{}{GEOMETRY_FRAG}", preamble(&[], &slots.defines()))
     }
 
     /// The attachment numbers the outputs are bound to.
@@ -161,6 +153,7 @@ impl GeometryPass {
             p.set_mat4(gl, "u_model_view", &model_view);
             p.set_mat4(gl, "u_normal_matrix", &normal);
             scene.bind_material(gl, p, &item.material);
+            p.set_f32(gl, "u_no_antialias", if item.antialias { 0.0 } else { 1.0 });
             set_culling(gl, &item.material);
             scene.meshes[item.mesh].draw(gl, self.locations);
         }

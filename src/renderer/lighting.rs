@@ -7,7 +7,7 @@ use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_s
 use super::targets::ColorTarget;
 use crate::Result;
 use crate::gbuffer::GBuffer;
-use crate::gl::{Program, VertexArray, check_error, preamble};
+use crate::gl::{Program, Texture2d, VertexArray, check_error, preamble};
 use crate::scene::{Light, LightKind};
 use glam::DMat4;
 use glow::HasContext;
@@ -18,7 +18,10 @@ use glow::HasContext;
 /// resolved G-buffer through `u_color`, `u_position`, `u_normal`,
 /// `u_specular`, `u_emissive` and `u_depth` with `texelFetch` at
 /// `gl_FragCoord`, treats pixels whose depth equals `u_clear_depth` as
-/// background, and writes `o_color`.
+/// background, and writes `o_color`. A layout the scene-adaptive plan
+/// trimmed adds `GBUFFER_NO_SPECULAR` (`u_specular_constant` instead of
+/// `u_specular`) and `GBUFFER_NO_EMISSIVE` (`u_background`, the
+/// background's own texture, instead of `u_emissive`).
 pub const LIGHTING_FRAG: &str = include_str!("../../shaders_glsl/lighting.frag");
 
 /// Lights per batch (one draw each); sized to fit GL 3.2's minimum of 1024
@@ -145,29 +148,53 @@ pub(crate) fn set_batch_blend(gl: &glow::Context, index: usize, alpha_blend: boo
     }
 }
 
-/// The lighting program.
+/// What stands in for the attachments a scene-adaptive layout leaves out.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StandIns<'a> {
+    /// The background's own single-sample texture, read for background
+    /// pixels when there is no `emissive` attachment to carry it.
+    pub(crate) background: &'a Texture2d,
+    /// The specular value (F0 rgb, metallic) every material writes, used
+    /// when there is no `specular` attachment.
+    pub(crate) specular: [f32; 4],
+}
+
+/// The lighting program, compiled for one attachment set.
 #[derive(Debug)]
 pub(crate) struct LightingPass {
     program: Program,
+    slots: GBufferSlots,
 }
 
 impl LightingPass {
-    /// Build the program.
-    pub(crate) fn new(gl: &glow::Context) -> Result<Self> {
+    /// Build the program for the attachments at `slots`.
+    pub(crate) fn new(gl: &glow::Context, slots: GBufferSlots) -> Result<Self> {
         let program = fullscreen_program(
             gl,
             "deferred lighting",
             "lighting.frag",
             LIGHTING_FRAG,
-            &lighting_defines(),
+            &Self::defines(slots),
             "o_color",
         )?;
-        Ok(LightingPass { program })
+        Ok(LightingPass { program, slots })
     }
 
-    /// The fragment shader's full source as compiled: preamble, defines, body.
-    pub(crate) fn source() -> String {
-        format!("{}{LIGHTING_FRAG}", preamble(&[], &lighting_defines()))
+    fn defines(slots: GBufferSlots) -> Vec<(String, String)> {
+        let mut d = lighting_defines();
+        d.extend(slots.defines());
+        d
+    }
+
+    /// The attachment set the program was built for.
+    pub(crate) fn slots(&self) -> GBufferSlots {
+        self.slots
+    }
+
+    /// The fragment shader's full source as compiled for `slots`: preamble,
+    /// defines, body.
+    pub(crate) fn source(slots: GBufferSlots) -> String {
+        format!("{}{LIGHTING_FRAG}", preamble(&[], &Self::defines(slots)))
     }
 
     /// Light the resolved `gbuffer` into `target`, one draw per light batch;
@@ -182,6 +209,7 @@ impl LightingPass {
         slots: GBufferSlots,
         batches: &[LightBatch],
         clear_depth: f32,
+        stand_ins: StandIns<'_>,
     ) -> Result<()> {
         bind_target(
             gl,
@@ -192,14 +220,20 @@ impl LightingPass {
         fullscreen_state(gl);
         let p = &self.program;
         p.bind(gl);
-        let inputs = [
+        let mut inputs = vec![
             ("u_color", &gbuffer.colors[slots.color as usize]),
             ("u_position", &gbuffer.colors[slots.position as usize]),
             ("u_normal", &gbuffer.colors[slots.normal as usize]),
-            ("u_specular", &gbuffer.colors[slots.specular as usize]),
-            ("u_emissive", &gbuffer.colors[slots.emissive as usize]),
             ("u_depth", &gbuffer.depth),
         ];
+        if let Some(k) = slots.specular {
+            inputs.push(("u_specular", &gbuffer.colors[k as usize]));
+        }
+        inputs.push(match slots.emissive {
+            Some(k) => ("u_emissive", &gbuffer.colors[k as usize]),
+            None => ("u_background", stand_ins.background),
+        });
+        p.set_vec4(gl, "u_specular_constant", stand_ins.specular);
         for (unit, (name, texture)) in inputs.iter().enumerate() {
             unsafe {
                 gl.active_texture(glow::TEXTURE0 + unit as u32);

@@ -8,7 +8,7 @@
 //! one uniform block; the tonemap curve and its inverse are `tonemap.frag`'s.
 
 use super::GBufferSlots;
-use super::lighting::{AMBIENT, LIGHTING_FRAG, LightBatch, set_batch_blend};
+use super::lighting::{AMBIENT, LIGHTING_FRAG, LightBatch, StandIns, set_batch_blend};
 use super::pass::{LightTarget, draw_fullscreen};
 use super::tonemap::{EXPOSURE, TONEMAP_FRAG, WHITE};
 use crate::gl::{Buffer, Program, ShaderStage, TextureRef, VertexArray, check_error, preamble};
@@ -32,10 +32,10 @@ pub(crate) struct SampleInputs {
     pub(crate) position: TextureRef,
     /// Normal and gloss.
     pub(crate) normal: TextureRef,
-    /// F0 and metallic.
-    pub(crate) specular: TextureRef,
-    /// Emission (and the background).
-    pub(crate) emissive: TextureRef,
+    /// F0 and metallic (`None`: the layout has none, see [`StandIns`]).
+    pub(crate) specular: Option<TextureRef>,
+    /// Emission and the background (`None`: the layout has none).
+    pub(crate) emissive: Option<TextureRef>,
     /// Depth.
     pub(crate) depth: TextureRef,
     /// The real sample count.
@@ -61,8 +61,8 @@ impl SampleInputs {
             color: get(slots.color, "color")?,
             position: get(slots.position, "position")?,
             normal: get(slots.normal, "normal")?,
-            specular: get(slots.specular, "specular")?,
-            emissive: get(slots.emissive, "emissive")?,
+            specular: slots.specular.map(|k| get(k, "specular")).transpose()?,
+            emissive: slots.emissive.map(|k| get(k, "emissive")).transpose()?,
             depth,
             samples: retrofit.samples(),
         })
@@ -80,23 +80,85 @@ const LIGHT_BLOCK_BINDING: u32 = 0;
 /// Bytes of the light block: four arrays of [`LIGHTS_PER_DRAW`] `vec4`s.
 const LIGHT_BLOCK_BYTES: usize = 4 * LIGHTS_PER_DRAW * 16;
 
+/// The std140 `LightBlock` uniform block of `lighting.frag` (built with
+/// `LIGHT_BLOCK`), shared by every pass that lights all lights per draw:
+/// its buffer, bound to one binding point.
+#[derive(Debug)]
+pub(crate) struct LightBlock {
+    buffer: Buffer,
+}
+
+impl LightBlock {
+    /// Bind `program`'s `LightBlock` to the binding point and allocate the
+    /// buffer (`what` names the pass in errors and labels). On failure
+    /// nothing is left allocated; the program stays the caller's.
+    pub(crate) fn new(gl: &glow::Context, program: &Program, what: &str) -> Result<Self> {
+        let block = unsafe { gl.get_uniform_block_index(program.raw, "LightBlock") };
+        let Some(block) = block else {
+            return Err(Error::invalid(format!(
+                "the {what} program has no `LightBlock` uniform block"
+            )));
+        };
+        unsafe { gl.uniform_block_binding(program.raw, block, LIGHT_BLOCK_BINDING) };
+        let buffer = Buffer::with_size(
+            gl,
+            &format!("{what} light block"),
+            glow::UNIFORM_BUFFER,
+            LIGHT_BLOCK_BYTES,
+            glow::DYNAMIC_DRAW,
+        )?;
+        Ok(LightBlock { buffer })
+    }
+
+    /// Bind the buffer to the block's binding point.
+    pub(crate) fn bind(&self, gl: &glow::Context) {
+        unsafe {
+            gl.bind_buffer_base(
+                glow::UNIFORM_BUFFER,
+                LIGHT_BLOCK_BINDING,
+                Some(self.buffer.raw),
+            )
+        };
+    }
+
+    /// Upload up to [`LIGHTS_PER_DRAW`] lights for the next draw.
+    pub(crate) fn upload(&self, gl: &glow::Context, lights: &[[[f32; 4]; 4]]) {
+        unsafe {
+            gl.bind_buffer(glow::UNIFORM_BUFFER, Some(self.buffer.raw));
+            gl.buffer_sub_data_u8_slice(glow::UNIFORM_BUFFER, 0, &pack_block(lights));
+            gl.bind_buffer(glow::UNIFORM_BUFFER, None);
+        }
+    }
+
+    /// Unbind the binding point.
+    pub(crate) fn unbind(gl: &glow::Context) {
+        unsafe { gl.bind_buffer_base(glow::UNIFORM_BUFFER, LIGHT_BLOCK_BINDING, None) };
+    }
+
+    /// Free the buffer.
+    pub(crate) fn destroy(self, gl: &glow::Context) {
+        self.buffer.destroy(gl);
+    }
+}
+
 /// The per-sample lighting program, its light block, and the occlusion
 /// query that counts the pixels it lights.
 #[derive(Debug)]
 pub(crate) struct PerSampleLightingPass {
     program: Program,
-    lights: Buffer,
+    slots: GBufferSlots,
+    lights: LightBlock,
     query: Option<glow::Query>,
 }
 
 impl PerSampleLightingPass {
     /// Build the program and the light block's buffer (and the
     /// `GL_SAMPLES_PASSED` query; without one the pass still runs, uncounted).
-    pub(crate) fn new(gl: &glow::Context) -> Result<Self> {
+    pub(crate) fn new(gl: &glow::Context, slots: GBufferSlots) -> Result<Self> {
         let program = Program::build(
             gl,
             "per-sample lighting",
-            &preamble(&[], &Self::defines()),
+            &preamble(&[], &Self::defines(slots)),
             &[
                 (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
                 (
@@ -107,21 +169,7 @@ impl PerSampleLightingPass {
             ],
             &[("o_color", 0)],
         )?;
-        let block = unsafe { gl.get_uniform_block_index(program.raw, "LightBlock") };
-        let Some(block) = block else {
-            program.destroy(gl);
-            return Err(Error::invalid(
-                "the per-sample lighting program has no `LightBlock` uniform block",
-            ));
-        };
-        unsafe { gl.uniform_block_binding(program.raw, block, LIGHT_BLOCK_BINDING) };
-        let lights = match Buffer::with_size(
-            gl,
-            "per-sample light block",
-            glow::UNIFORM_BUFFER,
-            LIGHT_BLOCK_BYTES,
-            glow::DYNAMIC_DRAW,
-        ) {
+        let lights = match LightBlock::new(gl, &program, "per-sample lighting") {
             Ok(b) => b,
             Err(e) => {
                 program.destroy(gl);
@@ -131,18 +179,26 @@ impl PerSampleLightingPass {
         let query = unsafe { gl.create_query() }.ok();
         Ok(PerSampleLightingPass {
             program,
+            slots,
             lights,
             query,
         })
     }
 
-    fn defines() -> Vec<(String, String)> {
-        vec![
+    fn defines(slots: GBufferSlots) -> Vec<(String, String)> {
+        let mut d: Vec<(String, String)> = vec![
             ("MAX_LIGHTS".into(), LIGHTS_PER_DRAW.to_string()),
             ("LIGHT_BLOCK".into(), "1".into()),
             ("LIGHTING_FUNCTIONS_ONLY".into(), "1".into()),
             ("TONEMAP_FUNCTIONS_ONLY".into(), "1".into()),
-        ]
+        ];
+        d.extend(slots.defines());
+        d
+    }
+
+    /// The attachment set the program was built for.
+    pub(crate) fn slots(&self) -> GBufferSlots {
+        self.slots
     }
 
     /// `lighting.frag`'s shared part, `tonemap.frag`'s, then this pass's
@@ -152,8 +208,8 @@ impl PerSampleLightingPass {
     }
 
     /// The fragment shader's full source as compiled: preamble, defines, body.
-    pub(crate) fn source() -> String {
-        format!("{}{}", preamble(&[], &Self::defines()), Self::body())
+    pub(crate) fn source(slots: GBufferSlots) -> String {
+        format!("{}{}", preamble(&[], &Self::defines(slots)), Self::body())
     }
 
     /// Light samples `0..samples` of `inputs` (every sample: `inputs.samples`;
@@ -174,6 +230,7 @@ impl PerSampleLightingPass {
         batches: &[LightBatch],
         clear_depth: f32,
         count: bool,
+        stand_ins: StandIns<'_>,
     ) -> Result<Option<u64>> {
         let lights: Vec<[[f32; 4]; 4]> = batches.iter().flat_map(LightBatch::lights).collect();
         let blocks: Vec<&[[[f32; 4]; 4]]> = if lights.is_empty() {
@@ -184,14 +241,20 @@ impl PerSampleLightingPass {
         target.bind(gl);
         let p = &self.program;
         p.bind(gl);
-        let textures = [
+        let mut textures = vec![
             ("u_color", inputs.color),
             ("u_position", inputs.position),
             ("u_normal", inputs.normal),
-            ("u_specular", inputs.specular),
-            ("u_emissive", inputs.emissive),
             ("u_depth", inputs.depth),
         ];
+        if let Some(t) = inputs.specular {
+            textures.push(("u_specular", t));
+        }
+        textures.push(match inputs.emissive {
+            Some(t) => ("u_emissive", t),
+            None => ("u_background", TextureRef::from(stand_ins.background)),
+        });
+        p.set_vec4(gl, "u_specular_constant", stand_ins.specular);
         for (unit, (name, texture)) in textures.iter().enumerate() {
             texture.bind(gl, unit as u32);
             p.set_i32(gl, name, unit as i32);
@@ -202,20 +265,10 @@ impl PerSampleLightingPass {
         p.set_f32(gl, "u_exposure", EXPOSURE);
         p.set_f32(gl, "u_white", WHITE);
         p.set_vec3(gl, "u_ambient", AMBIENT);
-        unsafe {
-            gl.bind_buffer_base(
-                glow::UNIFORM_BUFFER,
-                LIGHT_BLOCK_BINDING,
-                Some(self.lights.raw),
-            );
-        }
+        self.lights.bind(gl);
         let query = self.query.filter(|_| count);
         for (index, block) in blocks.iter().enumerate() {
-            unsafe {
-                gl.bind_buffer(glow::UNIFORM_BUFFER, Some(self.lights.raw));
-                gl.buffer_sub_data_u8_slice(glow::UNIFORM_BUFFER, 0, &pack_block(block));
-                gl.bind_buffer(glow::UNIFORM_BUFFER, None);
-            }
+            self.lights.upload(gl, block);
             set_batch_blend(gl, index, false);
             p.set_i32(gl, "u_light_count", block.len() as i32);
             p.set_i32(gl, "u_first_batch", i32::from(index == 0));
@@ -228,11 +281,12 @@ impl PerSampleLightingPass {
                 unsafe { gl.end_query(glow::SAMPLES_PASSED) };
             }
         }
+        LightBlock::unbind(gl);
         unsafe {
-            gl.bind_buffer_base(glow::UNIFORM_BUFFER, LIGHT_BLOCK_BINDING, None);
             for unit in 0..textures.len() as u32 {
                 gl.active_texture(glow::TEXTURE0 + unit);
                 gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
+                gl.bind_texture(glow::TEXTURE_2D, None);
             }
         }
         check_error(gl, "the per-sample lighting pass")?;

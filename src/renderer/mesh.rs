@@ -179,6 +179,8 @@ pub(crate) struct DrawItem {
     pub(crate) material: Material,
     /// World-space centre of its bounds (for sorting transparent objects).
     pub(crate) center: DVec3,
+    /// The object's [`Object::antialias`] flag (selective anti-aliasing).
+    pub(crate) antialias: bool,
 }
 
 impl DrawItem {
@@ -308,6 +310,7 @@ impl GpuScene {
                 mesh,
                 model: object.transform.as_dmat4(),
                 center: object.world_bounds().center().as_dvec3(),
+                antialias: object.antialias,
                 material,
             };
             if item.material.alpha_mode == AlphaMode::Blend {

@@ -42,6 +42,17 @@
 //! 8. **Tonemap** (`tonemap.frag`) into an RGBA8 sRGB-encoded image.
 //! 9. **FXAA** (`fxaa.frag`), optional, into a second RGBA8 image.
 //!
+//! With [`AaMode::Sparse`] steps 2 (the copy) to 4 become a multisampled
+//! depth pre-pass, a set-up pass and a G-buffer pass that writes per-pixel
+//! lists of blocks, and step 6 lights the lists (`sparse*.frag`; see
+//! [`SparseOptions`]).
+//!
+//! With [`AaMode::Gbaa`] step 3 also writes two edge buffers (its program
+//! adds a geometry stage, `gbaa_geometry.geom`, and wraps `geometry.frag`
+//! in `gbaa_geometry.frag`), step 8 tonemaps into an sRGB texture, and a
+//! post pass (`gbaa.frag`) blends across the edges into the RGBA8 image
+//! before FXAA.
+//!
 //! Each pass sets all the GL state it relies on.
 //!
 //! # Depth
@@ -59,22 +70,27 @@ mod background_copy;
 mod complex_mask;
 mod depth;
 mod fxaa;
+pub(crate) mod gbaa;
+mod gbaa_geometry;
 mod geometry;
 mod geometry_coverage;
 mod lighting;
 mod lighting_per_sample;
 mod mesh;
 mod pass;
+mod slow_path;
+mod sparse;
 mod targets;
 mod tonemap;
 mod transparent;
 
-use crate::gbuffer::{GBuffer, GBufferLayout};
+use crate::gbuffer::{GBuffer, GBufferLayout, MemoryBudget};
 use crate::gl::{
     Attachment, Capabilities, Framebuffer, GpuTimer, Texture2d, TextureRef, TimerKind, VertexArray,
     check_error, framebuffer_status_name,
 };
-use crate::resolve::{DepthProjection, KeySource, ResolveParams, ResolveSettings};
+use crate::plan::{Pass, Plan, PlanContext, SceneNeeds};
+use crate::resolve::{DepthProjection, KeySource, ResolveParams, ResolveSettings, SelectionFlag};
 use crate::retrofit::{MsaaRetrofit, RetrofitOptions};
 use crate::scene::{Background, Camera, Light, Scene};
 use crate::{Error, Result};
@@ -84,14 +100,19 @@ use complex_mask::{ComplexMaskPass, MaskTarget};
 pub use depth::DepthMode;
 use depth::{ClipControl, SceneExtent};
 use fxaa::FxaaPass;
+use gbaa::{GbaaPasses, GbaaTargets};
 use geometry::{GeometryPass, GeometryTarget};
 use geometry_coverage::CoverageGeometryPass;
 use glam::Mat4;
 use glow::HasContext;
-use lighting::{LightingPass, light_batches};
+use lighting::{LightingPass, StandIns, light_batches};
 use lighting_per_sample::{PerSampleLightingPass, SampleInputs};
 use mesh::GpuScene;
 use pass::{LightTarget, StencilSelect};
+pub use sparse::{
+    DEFAULT_POOL_BLOCKS_PER_PIXEL, MASK_OVERFLOW, MASK_SINGLE, MAX_SPARSE_SAMPLES, SparseMemory,
+    SparseOptions, SparseStats,
+};
 use std::ffi::c_void;
 use targets::{ComplexTargets, Targets};
 use tonemap::TonemapPass;
@@ -143,17 +164,43 @@ pub enum AaMode {
     /// [`AaMode::PerSample`] (decals are not lit either). See
     /// [`Renderer::complex_fraction`] and [`Renderer::read_complex_mask`].
     Complex,
+    /// Geometry-buffer anti-aliasing (method `gbaa`, after Persson's GBAA,
+    /// with fixes for converging edges): no multisampling. The G-buffer
+    /// pass runs the unchanged model shaders through a geometry stage that
+    /// also writes, per pixel, the distance to its triangle's nearest edge
+    /// along x or y (`RG16F`) and to the triangle's far side (`R16F`);
+    /// after the tonemap a post pass blends each pixel an edge crosses with
+    /// the neighbour beyond it by the covered fraction, in linear light, in
+    /// one bilinear fetch (two where a triangle thinner than a pixel puts
+    /// both of its sides in the pixel), and leaves two pixels their own
+    /// colours when their edges point at each other across a gap (a thin
+    /// triangle between their centres). See [`Renderer::gbaa_edge_textures`]
+    /// and [`Renderer::read_gbaa_edges`].
+    Gbaa,
+    /// The multisampled G-buffer without its redundancy (method `sparse`):
+    /// a multisampled depth pre-pass, then one G-buffer block per pixel and
+    /// visible triangle, with the count of samples it covers, in per-pixel
+    /// linked lists in shader storage buffers; lighting shades each block
+    /// once and averages the blocks by their counts as
+    /// [`AaMode::PerSample`] averages samples. Needs shader storage buffers,
+    /// atomic counters and post-depth coverage; selective anti-aliasing by
+    /// screen region, depth and object flag comes with it; no multisampled
+    /// twins. See [`SparseOptions`] for how it works and what it needs,
+    /// [`Renderer::sparse_memory`] and [`Renderer::sparse_stats`].
+    Sparse(SparseOptions),
 }
 
 impl AaMode {
     /// `none`, the resolve method's name (`average`, `front`, `median`,
-    /// `back`), `per-sample` or `complex`.
+    /// `back`), `per-sample`, `complex` or `gbaa`.
     pub fn name(&self) -> &'static str {
         match self {
             AaMode::None => "none",
             AaMode::Resolve(s) => s.method.name(),
             AaMode::PerSample => "per-sample",
             AaMode::Complex => "complex",
+            AaMode::Gbaa => "gbaa",
+            AaMode::Sparse(_) => "sparse",
         }
     }
 
@@ -163,7 +210,7 @@ impl AaMode {
     /// G-buffer serves decals and transparent objects.
     pub fn settings(&self) -> Option<ResolveSettings> {
         match self {
-            AaMode::None => None,
+            AaMode::None | AaMode::Gbaa | AaMode::Sparse(_) => None,
             AaMode::Resolve(s) => Some(*s),
             AaMode::PerSample | AaMode::Complex => Some(ResolveSettings::default()),
         }
@@ -171,7 +218,7 @@ impl AaMode {
 
     /// Whether the G-buffer pass draws into the multisampled twins.
     pub fn is_multisampled(&self) -> bool {
-        !matches!(self, AaMode::None)
+        !matches!(self, AaMode::None | AaMode::Gbaa | AaMode::Sparse(_))
     }
 
     /// Whether the lighting pass lights samples of the multisampled
@@ -196,10 +243,22 @@ pub struct RenderOptions {
     pub aa: AaMode,
     /// Run the FXAA-style post filter after tonemapping.
     pub fxaa: bool,
-    /// The G-buffer layout. It must have colour attachments named `color`,
-    /// `position`, `normal`, `specular` and `emissive` (in any order; others
-    /// are allowed and left cleared). Default: [`GBufferLayout::recommended`].
+    /// The full G-buffer layout. It must have colour attachments named
+    /// `color`, `position` and `normal`, and `specular` and `emissive`
+    /// unless the scene does without them (in any order; others are allowed
+    /// and left cleared). Default: [`GBufferLayout::recommended`].
     pub layout: GBufferLayout,
+    /// Build the G-buffer from the scene-adaptive [`Plan`]: `layout` less
+    /// what the scene does not need (see [`crate::plan`];
+    /// [`Renderer::layout`] is what it became). `false`: `layout` as given.
+    /// Default: `true`.
+    pub adaptive: bool,
+    /// The memory safety valve: the G-buffer's bytes are estimated before
+    /// allocating and, over this budget, the sample count steps down with a
+    /// warning ([`Renderer::warnings`]) or, when strict, the renderer
+    /// refuses with [`Error::MemoryBudget`]. Default: half the free video
+    /// memory the driver reports, else 1 GiB, not strict.
+    pub memory_budget: MemoryBudget,
     /// Standard depth or reversed-Z. Default: [`DepthMode::Auto`] (reversed-Z
     /// where the context and the layout's depth format allow it); see
     /// [`Renderer::depth_mode`] for what it became.
@@ -208,7 +267,8 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     /// 640×360, 4x MSAA with the default (median, smooth) resolve, no FXAA,
-    /// the recommended layout, [`DepthMode::Auto`].
+    /// the recommended layout adapted to the scene, the default memory
+    /// budget, [`DepthMode::Auto`].
     fn default() -> Self {
         RenderOptions {
             width: 640,
@@ -217,6 +277,8 @@ impl Default for RenderOptions {
             aa: AaMode::Resolve(ResolveSettings::default()),
             fxaa: false,
             layout: GBufferLayout::recommended(),
+            adaptive: true,
+            memory_budget: MemoryBudget::default(),
             depth_mode: DepthMode::Auto,
         }
     }
@@ -238,6 +300,14 @@ impl RenderOptions {
                 ));
             }
             settings.validate()?;
+        }
+        if let AaMode::Sparse(sparse) = &self.aa {
+            if self.samples == 0 {
+                return Err(Error::invalid(
+                    "a sample count of 0 is not a count; use 1 or more (or the `none` method)",
+                ));
+            }
+            sparse.validate(self.samples)?;
         }
         self.layout.validate()?;
         GBufferSlots::of(&self.layout).map(|_| ())
@@ -269,8 +339,10 @@ pub(crate) struct GBufferSlots {
     pub(crate) color: u32,
     pub(crate) position: u32,
     pub(crate) normal: u32,
-    pub(crate) specular: u32,
-    pub(crate) emissive: u32,
+    /// `None`: the layout has none (the scene-adaptive plan left it out).
+    pub(crate) specular: Option<u32>,
+    /// `None`: the layout has none (the scene-adaptive plan left it out).
+    pub(crate) emissive: Option<u32>,
 }
 
 impl GBufferSlots {
@@ -292,9 +364,35 @@ impl GBufferSlots {
             color: find("color")?,
             position: find("position")?,
             normal: find("normal")?,
-            specular: find("specular")?,
-            emissive: find("emissive")?,
+            specular: layout.index_of("specular").map(|k| k as u32),
+            emissive: layout.index_of("emissive").map(|k| k as u32),
         })
+    }
+
+    /// The model shader's outputs the layout has, with their attachment numbers.
+    pub(crate) fn outputs(&self) -> Vec<(&'static str, u32)> {
+        let mut outputs = vec![
+            ("o_color", self.color),
+            ("o_position", self.position),
+            ("o_normal", self.normal),
+        ];
+        outputs.extend(self.specular.map(|k| ("o_specular", k)));
+        outputs.extend(self.emissive.map(|k| ("o_emissive", k)));
+        outputs
+    }
+
+    /// The defines the model and lighting shaders are compiled with for
+    /// this attachment set: `GBUFFER_NO_SPECULAR`, `GBUFFER_NO_EMISSIVE`
+    /// (none for the full layout).
+    pub(crate) fn defines(&self) -> Vec<(String, String)> {
+        let mut d = Vec::new();
+        if self.specular.is_none() {
+            d.push(("GBUFFER_NO_SPECULAR".to_string(), "1".to_string()));
+        }
+        if self.emissive.is_none() {
+            d.push(("GBUFFER_NO_EMISSIVE".to_string(), "1".to_string()));
+        }
+        d
     }
 }
 
@@ -320,6 +418,9 @@ pub struct FrameTimings {
     pub tonemap_ms: f64,
     /// The FXAA pass (0 when off).
     pub fxaa_ms: f64,
+    /// The post pass of [`AaMode::Gbaa`] (0 with other modes; its G-buffer
+    /// pass is in `geometry_ms`).
+    pub gbaa_ms: f64,
     /// How the times were measured.
     pub timer: TimerKind,
 }
@@ -340,6 +441,8 @@ struct Passes {
     fullscreen: VertexArray,
     timer: GpuTimer,
     sample: SampleLightingPasses,
+    /// The programs of [`AaMode::Gbaa`], built when first needed.
+    gbaa: Option<GbaaPasses>,
 }
 
 impl Passes {
@@ -359,7 +462,12 @@ impl Passes {
         let background = BackgroundPass::new(gl)?;
         let background_copy = step!(BackgroundCopyPass::new(gl), background);
         let geometry = step!(GeometryPass::new(gl, slots), background, background_copy);
-        let lighting = step!(LightingPass::new(gl), background, background_copy, geometry);
+        let lighting = step!(
+            LightingPass::new(gl, slots),
+            background,
+            background_copy,
+            geometry
+        );
         let transparent = step!(
             TransparentPass::new(gl),
             background,
@@ -416,6 +524,7 @@ impl Passes {
             fullscreen,
             timer,
             sample: SampleLightingPasses::default(),
+            gbaa: None,
         })
     }
 
@@ -430,6 +539,9 @@ impl Passes {
         self.fullscreen.destroy(gl);
         self.timer.destroy(gl);
         self.sample.destroy(gl);
+        if let Some(p) = self.gbaa {
+            p.destroy(gl);
+        }
     }
 }
 
@@ -467,8 +579,11 @@ impl SampleLightingPasses {
         if !aa.lights_per_sample() {
             return Ok(());
         }
-        if self.lighting.is_none() {
-            self.lighting = Some(PerSampleLightingPass::new(gl)?);
+        if self.lighting.as_ref().map(PerSampleLightingPass::slots) != Some(slots) {
+            let pass = PerSampleLightingPass::new(gl, slots)?;
+            if let Some(old) = self.lighting.replace(pass) {
+                old.destroy(gl);
+            }
         }
         if *aa != AaMode::Complex {
             return Ok(());
@@ -531,6 +646,9 @@ struct Frame {
     /// The targets of [`AaMode::Complex`], allocated by the first such frame
     /// after a change of options (they refer to the twins and the HDR target).
     complex: Option<ComplexTargets>,
+    /// The targets of [`AaMode::Gbaa`], allocated by the first such frame
+    /// after a change of options (they refer to the G-buffer's textures).
+    gbaa: Option<GbaaTargets>,
 }
 
 impl Frame {
@@ -553,6 +671,7 @@ impl Frame {
                 retrofit,
                 targets,
                 complex: None,
+                gbaa: None,
             }),
             Err(e) => {
                 if let Some(r) = retrofit {
@@ -567,6 +686,9 @@ impl Frame {
     fn destroy(self, gl: &glow::Context) {
         if let Some(c) = self.complex {
             c.destroy(gl);
+        }
+        if let Some(g) = self.gbaa {
+            g.destroy(gl);
         }
         if let Some(r) = self.retrofit {
             r.destroy(gl);
@@ -686,7 +808,14 @@ fn timed(gl: &glow::Context, timer: &mut GpuTimer, f: impl FnOnce() -> Result<()
 
 /// The demo deferred renderer; see the [module documentation](self).
 pub struct Renderer {
+    /// The options the frame runs with: those asked for with the plan's
+    /// layout, sample count and method.
     options: RenderOptions,
+    /// The options as asked for ([`Renderer::options`]).
+    requested: RenderOptions,
+    plan: Plan,
+    needs: SceneNeeds,
+    plan_context: PlanContext,
     /// `options.depth_mode` as decided for this context and layout (never `Auto`).
     depth_mode: DepthMode,
     clip: ClipControl,
@@ -700,6 +829,8 @@ pub struct Renderer {
     passes: Passes,
     frame: Frame,
     decal_hook: Option<DecalHook>,
+    /// The programs and targets of [`AaMode::Sparse`].
+    sparse: sparse::SparseState,
     /// Pixels the per-sample lighting pass lit in the last frame
     /// (`GL_SAMPLES_PASSED`), with [`AaMode::PerSample`] and [`AaMode::Complex`].
     per_sample_pixels: Option<u64>,
@@ -728,23 +859,33 @@ impl Renderer {
     /// `|name| ctx.get_proc_address(name)` with a
     /// [`HeadlessContext`](crate::context::HeadlessContext).
     ///
-    /// Before allocating, the layout is checked against how far the scene
-    /// reaches from the camera; each finding is logged with `log::warn!` and
-    /// kept ([`Renderer::warnings`]). Errors: invalid options, and
+    /// Before allocating, the scene-adaptive [`Plan`] picks the layout and
+    /// applies the memory budget, and the layout is checked against how far
+    /// the scene reaches from the camera; each finding is logged with
+    /// `log::warn!` and kept ([`Renderer::warnings`]). Errors: invalid
+    /// options, a layout the scene cannot do without,
+    /// [`Error::MemoryBudget`] with a strict budget, and
     /// [`Error::Unsupported`] for [`DepthMode::Reversed`] on a context
     /// without `glClipControl`.
     pub fn new(
         gl: &glow::Context,
         loader: impl Fn(&str) -> *const c_void,
         scene: &Scene,
-        options: &RenderOptions,
+        requested: &RenderOptions,
     ) -> Result<Self> {
-        options.validate()?;
+        requested.validate()?;
+        sparse::check_support(gl, &requested.aa)?;
+        let needs = SceneNeeds::of(scene);
+        let plan_context = PlanContext::query(gl, &requested.layout);
+        let plan = Plan::for_needs(&needs, &plan_context, requested)?;
+        let active = plan.apply(requested);
+        let options = &active;
         let slots = GBufferSlots::of(&options.layout)?;
         let clip = ClipControl::load(&loader, Capabilities::query(gl).clip_control);
         let depth_mode = depth::resolve_mode(gl, options.depth_mode, &clip, options.layout.depth)?;
         let extent = SceneExtent::of(scene);
-        let warnings = depth::warnings(&options.layout, &scene.camera, depth_mode, extent);
+        let mut warnings = depth::warnings(&options.layout, &scene.camera, depth_mode, extent);
+        warnings.extend(plan.warnings.iter().cloned());
         for w in &warnings {
             log::warn!("scene `{}` ({depth_mode} depth): {w}", scene.name);
         }
@@ -769,8 +910,12 @@ impl Renderer {
                 return Err(e);
             }
         };
-        Ok(Renderer {
+        let mut renderer = Renderer {
             options: options.clone(),
+            requested: requested.clone(),
+            plan,
+            needs,
+            plan_context,
             depth_mode,
             clip,
             scene_name: scene.name.clone(),
@@ -784,12 +929,38 @@ impl Renderer {
             frame,
             decal_hook: None,
             per_sample_pixels: None,
-        })
+            sparse: sparse::SparseState::default(),
+        };
+        if let Err(e) = renderer.sparse.prepare(gl, &renderer.options) {
+            renderer.destroy(gl);
+            return Err(e);
+        }
+        Ok(renderer)
     }
 
-    /// The options in effect.
+    /// The options as given to [`Renderer::new`] or [`Renderer::set_options`].
+    // The field `options` holds what the frame runs with (the plan applied).
+    #[allow(clippy::misnamed_getters)]
     pub fn options(&self) -> &RenderOptions {
+        &self.requested
+    }
+
+    /// The options the frame runs with: [`Renderer::options`] with the
+    /// plan's layout, sample count and method (they differ where the plan
+    /// trimmed the layout or the memory budget stepped the count down).
+    pub fn effective_options(&self) -> &RenderOptions {
         &self.options
+    }
+
+    /// The scene-adaptive plan in effect (see [`crate::plan`]).
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// The G-buffer layout in use: the plan's (attachment `k` of
+    /// [`Renderer::gbuffer`] is `layout().colors[k]`).
+    pub fn layout(&self) -> &GBufferLayout {
+        &self.options.layout
     }
 
     /// The scene camera the frame is rendered with.
@@ -820,6 +991,9 @@ impl Renderer {
 
     /// The real samples per pixel of the G-buffer pass (1 without multisampling).
     pub fn samples(&self) -> u32 {
+        if let (AaMode::Sparse(_), Some(n)) = (self.options.aa, self.sparse.samples()) {
+            return n;
+        }
         self.frame
             .retrofit
             .as_ref()
@@ -852,9 +1026,19 @@ impl Renderer {
         let slots = self.passes.geometry.slots();
         let colors = self.frame.gbuffer.colors.len() as u32;
         self.passes.sample.prepare(gl, &aa, slots, colors)?;
+        let runs_transparent = self.plan.runs(Pass::Transparent);
+        let specular_constant = self
+            .plan
+            .constant_specular
+            .unwrap_or([0.04, 0.04, 0.04, 0.0]);
         if aa == AaMode::Complex {
             self.prepare_complex_targets(gl)?;
         }
+        if aa == AaMode::Gbaa {
+            self.prepare_gbaa(gl)?;
+        }
+        self.sparse.prepare(gl, &self.options)?;
+        let sparse_state = &self.sparse;
         let Passes {
             background,
             background_copy,
@@ -866,12 +1050,14 @@ impl Renderer {
             fullscreen,
             timer,
             sample,
+            gbaa: gbaa_passes,
         } = &mut self.passes;
         let Frame {
             gbuffer,
             retrofit,
             targets,
             complex,
+            gbaa: gbaa_targets,
         } = &mut self.frame;
         let mut t = FrameTimings {
             total_ms: 0.0,
@@ -882,6 +1068,7 @@ impl Renderer {
             transparent_ms: 0.0,
             tonemap_ms: 0.0,
             fxaa_ms: 0.0,
+            gbaa_ms: 0.0,
             timer: timer.kind(),
         };
 
@@ -893,10 +1080,16 @@ impl Renderer {
             (AaMode::Complex, Some(pass), Some(c)) => c.coverage.as_ref().map(|c| (pass, c)),
             _ => None,
         };
-        let (fbo, draw_buffers) = match (coverage, retrofit.as_ref()) {
-            (Some((_, c)), _) => (c.fbo.raw, c.draw_buffers.clone()),
-            (None, Some(r)) => (r.framebuffer(), r.host().draw_buffers.clone()),
-            (None, None) => (
+        // `gbaa` draws the G-buffer plus its edge buffers.
+        let gbaa = match (aa, gbaa_passes.as_ref(), gbaa_targets.as_ref()) {
+            (AaMode::Gbaa, Some(p), Some(g)) => Some((p, g)),
+            _ => None,
+        };
+        let (fbo, draw_buffers) = match (gbaa, coverage, retrofit.as_ref()) {
+            (Some((_, g)), _, _) => (g.fbo.raw, g.draw_buffers.clone()),
+            (None, Some((_, c)), _) => (c.fbo.raw, c.draw_buffers.clone()),
+            (None, None, Some(r)) => (r.framebuffer(), r.host().draw_buffers.clone()),
+            (None, None, None) => (
                 gbuffer.fbo.raw,
                 (0..gbuffer.colors.len() as u32).map(Some).collect(),
             ),
@@ -908,6 +1101,9 @@ impl Renderer {
         let target = GeometryTarget { fbo, width, height };
         t.geometry_ms = timed(gl, timer, || {
             GeometryPass::clear(gl, target, clear_depth);
+            if let Some((_, g)) = gbaa {
+                g.clear_edges(gl);
+            }
             background.draw(
                 gl,
                 &targets.background,
@@ -916,14 +1112,47 @@ impl Renderer {
                 &view,
                 &projection,
             )?;
-            let copy = CopyTarget {
-                fbo,
-                width,
-                height,
-                emissive: slots.emissive,
-                draw_buffers: &draw_buffers,
-            };
-            background_copy.draw(gl, copy, fullscreen, &targets.background.texture)?;
+            // `sparse` builds its lists instead of filling the G-buffer (whose
+            // colours stay cleared; the set-up pass writes its depth).
+            if let AaMode::Sparse(o) = aa {
+                let build = sparse::BuildParams {
+                    view: &view,
+                    projection: &projection,
+                    nearer_func: depth_mode.nearer_func(),
+                    clear_depth,
+                    region: o.region,
+                    max_depth: o.max_depth.unwrap_or(f32::MAX),
+                };
+                return sparse_state.build_lists(
+                    gl,
+                    &self.scene,
+                    gbuffer.fbo.raw,
+                    fullscreen,
+                    &build,
+                );
+            }
+            // Without an emissive attachment the lighting pass reads the
+            // background texture itself.
+            if let Some(emissive) = slots.emissive {
+                let copy = CopyTarget {
+                    fbo,
+                    width,
+                    height,
+                    emissive,
+                    draw_buffers: &draw_buffers,
+                };
+                background_copy.draw(gl, copy, fullscreen, &targets.background.texture)?;
+            }
+            if let Some((p, _)) = gbaa {
+                return p.geometry().draw(
+                    gl,
+                    target,
+                    &self.scene,
+                    &view,
+                    &projection,
+                    depth_mode.nearer_func(),
+                );
+            }
             model.draw(
                 gl,
                 target,
@@ -953,9 +1182,13 @@ impl Renderer {
             height,
             stencil: StencilSelect::All,
         };
+        let stand_ins = StandIns {
+            background: &targets.background.texture,
+            specular: specular_constant,
+        };
         let mut lit_per_sample = None;
         t.lighting_ms = timed(gl, timer, || match aa {
-            AaMode::None | AaMode::Resolve(_) => lighting.draw(
+            AaMode::None | AaMode::Resolve(_) | AaMode::Gbaa => lighting.draw(
                 gl,
                 &targets.hdr,
                 fullscreen,
@@ -963,6 +1196,7 @@ impl Renderer {
                 slots,
                 &batches,
                 clear_depth,
+                stand_ins,
             ),
             AaMode::PerSample => {
                 let (pass, inputs) = per_sample_inputs(sample, retrofit.as_ref(), slots)?;
@@ -975,6 +1209,7 @@ impl Renderer {
                     &batches,
                     clear_depth,
                     true,
+                    stand_ins,
                 )?;
                 Ok(())
             }
@@ -1008,6 +1243,7 @@ impl Renderer {
                     &batches,
                     clear_depth,
                     false,
+                    stand_ins,
                 )?;
                 // Complex pixels: every sample, averaged.
                 lit_per_sample = pass.draw(
@@ -1019,6 +1255,7 @@ impl Renderer {
                     &batches,
                     clear_depth,
                     true,
+                    stand_ins,
                 )?;
                 unsafe {
                     gl.disable(glow::STENCIL_TEST);
@@ -1026,22 +1263,40 @@ impl Renderer {
                 }
                 Ok(())
             }
+            AaMode::Sparse(o) => {
+                let params = sparse::LightParams {
+                    background: &targets.background.texture,
+                    projection: &projection,
+                    region: o.region,
+                };
+                sparse_state.light(gl, hdr, fullscreen, &batches, &params)
+            }
         })?;
         self.per_sample_pixels = lit_per_sample;
-        t.transparent_ms = timed(gl, timer, || {
-            transparent.draw(
-                gl,
-                &targets.hdr_with_depth,
-                &self.scene,
-                &view,
-                &projection,
-                &batches,
-                depth_mode.nearer_func(),
-            )
-        })?;
+        if runs_transparent {
+            t.transparent_ms = timed(gl, timer, || {
+                transparent.draw(
+                    gl,
+                    &targets.hdr_with_depth,
+                    &self.scene,
+                    &view,
+                    &projection,
+                    &batches,
+                    depth_mode.nearer_func(),
+                )
+            })?;
+        }
+        // `gbaa` tonemaps into its sRGB texture, then blends across the
+        // edges into the LDR image (where FXAA, if on, finds it).
+        let tonemapped = gbaa.map_or(&targets.ldr, |(_, g)| &g.tonemapped);
         t.tonemap_ms = timed(gl, timer, || {
-            tonemap.draw(gl, &targets.ldr, fullscreen, &targets.hdr.texture)
+            tonemap.draw(gl, tonemapped, fullscreen, &targets.hdr.texture)
         })?;
+        if let Some((p, g)) = gbaa {
+            t.gbaa_ms = timed(gl, timer, || {
+                p.draw_post(gl, &targets.ldr, fullscreen, g, false)
+            })?;
+        }
         if let Some(out) = targets.fxaa.as_ref() {
             t.fxaa_ms = timed(gl, timer, || {
                 fxaa.draw(gl, out, fullscreen, &targets.ldr.texture)
@@ -1058,8 +1313,61 @@ impl Renderer {
             + t.lighting_ms
             + t.transparent_ms
             + t.tonemap_ms
+            + t.gbaa_ms
             + t.fxaa_ms;
         Ok(t)
+    }
+
+    /// Build `gbaa`'s programs (for the current attachment numbers) and
+    /// allocate its targets unless they are there.
+    fn prepare_gbaa(&mut self, gl: &glow::Context) -> Result<()> {
+        let slots = self.passes.geometry.slots();
+        let colors = self.frame.gbuffer.colors.len() as u32;
+        GbaaPasses::prepare(&mut self.passes.gbaa, gl, slots, colors)?;
+        if self.frame.gbaa.is_none() {
+            self.frame.gbaa = Some(GbaaTargets::new(gl, &self.frame.gbuffer)?);
+        }
+        Ok(())
+    }
+
+    /// The edge buffers of [`AaMode::Gbaa`] as the last frame wrote them:
+    /// `RG16F`, the signed distance in pixels from each pixel centre to its
+    /// triangle's nearest edge along x (`.r`) or y (`.g`), the other channel
+    /// (and both where nothing was drawn) 4.0, meaning no edge; and `R16F`,
+    /// the distance to the triangle's boundary the opposite way along the
+    /// same axis. Distances are capped at 2 pixels. `None` with other modes
+    /// or before the first frame after [`Renderer::set_options`].
+    pub fn gbaa_edge_textures(&self) -> Option<(TextureRef, TextureRef)> {
+        match (&self.options.aa, &self.frame.gbaa) {
+            (AaMode::Gbaa, Some(g)) => Some((TextureRef::from(&g.edge), TextureRef::from(&g.far))),
+            _ => None,
+        }
+    }
+
+    /// The last frame's edges as [`AaMode::Gbaa`]'s post pass sees them
+    /// (`render --view edges`), row 0 at the top: red is the share of the
+    /// pixel taken from its left or right neighbour, green from the one
+    /// above or below, blue from the second neighbour of a pixel that a
+    /// triangle thinner than a pixel crosses (each doubled: a full half
+    /// pixel shows as 255); black pixels are left as they are. `None` with
+    /// other modes or before the first frame after [`Renderer::set_options`].
+    pub fn read_gbaa_edges(&self, gl: &glow::Context) -> Result<Option<image::RgbaImage>> {
+        match (&self.options.aa, &self.passes.gbaa, &self.frame.gbaa) {
+            (AaMode::Gbaa, Some(p), Some(g)) => {
+                g.read_edges_view(gl, p, &self.passes.fullscreen).map(Some)
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// The bytes [`AaMode::Gbaa`]'s edge buffers add to the G-buffer at
+    /// the current size (0 with other modes).
+    pub fn gbaa_edge_bytes(&self) -> u64 {
+        if self.options.aa == AaMode::Gbaa {
+            gbaa::edge_bytes(self.options.width, self.options.height)
+        } else {
+            0
+        }
     }
 
     /// Allocate `complex`'s stencil mask (and coverage flags, when the
@@ -1127,6 +1435,42 @@ impl Renderer {
         }
     }
 
+    /// Which pixels the method treated as complex in the last frame, row 0
+    /// at the top (255 = complex, 0 = simple):
+    /// - resolve methods: the pixels the resolve took its slow path on
+    ///   (samples whose depth keys differ; every pixel with the fast path
+    ///   off), found by running the last frame's resolve again with its
+    ///   complex-pixel output into a scratch mask (the G-buffer is untouched);
+    /// - [`AaMode::Complex`]: its stencil mask ([`Renderer::read_complex_mask`]);
+    /// - [`AaMode::PerSample`]: every pixel (each is lit per sample).
+    ///
+    /// `None` without multisampling or before the first frame after
+    /// [`Renderer::set_options`] (`complex`).
+    pub fn read_complex_pixels(&mut self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
+        let (w, h) = (self.options.width, self.options.height);
+        match self.options.aa {
+            AaMode::Resolve(_) => {
+                let (Some(params), Some(retrofit)) =
+                    (self.resolve_params(), self.frame.retrofit.as_mut())
+                else {
+                    return Ok(None);
+                };
+                slow_path::slow_path_mask(gl, retrofit, &params).map(Some)
+            }
+            AaMode::Complex => self.read_complex_mask(gl),
+            AaMode::PerSample => Ok(Some(image::GrayImage::from_pixel(w, h, image::Luma([255])))),
+            _ => Ok(None),
+        }
+    }
+
+    /// The fraction of pixels [`Renderer::read_complex_pixels`] marks.
+    pub fn complex_pixel_fraction(&mut self, gl: &glow::Context) -> Result<Option<f64>> {
+        Ok(self.read_complex_pixels(gl)?.map(|mask| {
+            let marked = mask.pixels().filter(|p| p[0] != 0).count();
+            marked as f64 / (mask.width() as f64 * mask.height() as f64).max(1.0)
+        }))
+    }
+
     /// Install (or remove, with `None`) the decal hook.
     ///
     /// It is called once per frame after the resolve (without multisampling:
@@ -1150,6 +1494,7 @@ impl Renderer {
     /// against it), but lighting reads the multisampled samples, so what
     /// the hook draws is not lit.
     pub fn set_decal_hook(&mut self, hook: Option<DecalHook>) {
+        self.plan.set_decals(hook.is_some());
         self.decal_hook = hook;
     }
 
@@ -1173,15 +1518,27 @@ impl Renderer {
     /// The precision check runs again before allocating; new findings are
     /// logged. New objects are made before old ones are freed: on error the
     /// renderer keeps rendering with its previous options.
-    pub fn set_options(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
-        options.validate()?;
+    pub fn set_options(&mut self, gl: &glow::Context, requested: &RenderOptions) -> Result<()> {
+        requested.validate()?;
+        sparse::check_support(gl, &requested.aa)?;
+        let plan_context = if requested.layout == self.requested.layout {
+            self.plan_context.clone()
+        } else {
+            PlanContext::query(gl, &requested.layout)
+        };
+        let mut plan = Plan::for_needs(&self.needs, &plan_context, requested)?;
+        plan.set_decals(self.decal_hook.is_some());
+        let active = plan.apply(requested);
+        let options = &active;
         // The programs a per-sample mode needs, first: they are kept either way.
         let slots = GBufferSlots::of(&options.layout)?;
         let colors = options.layout.colors.len() as u32;
         self.passes.sample.prepare(gl, &options.aa, slots, colors)?;
+        self.sparse.prepare(gl, options)?;
         let depth_mode =
             depth::resolve_mode(gl, options.depth_mode, &self.clip, options.layout.depth)?;
-        let warnings = depth::warnings(&options.layout, &self.camera, depth_mode, self.extent);
+        let mut warnings = depth::warnings(&options.layout, &self.camera, depth_mode, self.extent);
+        warnings.extend(plan.warnings.iter().cloned());
         if warnings != self.warnings {
             for w in &warnings {
                 log::warn!("scene `{}` ({depth_mode} depth): {w}", self.scene_name);
@@ -1195,12 +1552,18 @@ impl Renderer {
             self.update_in_place(gl, options)?;
         }
         self.options = options.clone();
+        self.requested = requested.clone();
+        self.plan = plan;
+        self.plan_context = plan_context;
         self.depth_mode = depth_mode;
         self.warnings = warnings;
         // They refer to the twins and targets that may have changed; the
         // next `complex` frame allocates them again.
         if let Some(c) = self.frame.complex.take() {
             c.destroy(gl);
+        }
+        if let Some(g) = self.frame.gbaa.take() {
+            g.destroy(gl);
         }
         self.per_sample_pixels = None;
         Ok(())
@@ -1222,9 +1585,27 @@ impl Renderer {
         } else {
             None
         };
+        // The lighting program follows the attachment set too.
+        let lighting = if slots != self.passes.lighting.slots() {
+            match LightingPass::new(gl, slots) {
+                Ok(l) => Some(l),
+                Err(e) => {
+                    frame.destroy(gl);
+                    if let Some(g) = geometry {
+                        g.destroy(gl);
+                    }
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
         std::mem::replace(&mut self.frame, frame).destroy(gl);
         if let Some(g) = geometry {
             std::mem::replace(&mut self.passes.geometry, g).destroy(gl);
+        }
+        if let Some(l) = lighting {
+            std::mem::replace(&mut self.passes.lighting, l).destroy(gl);
         }
         Ok(())
     }
@@ -1341,7 +1722,18 @@ impl Renderer {
 
     /// What the resolve is given each frame, when multisampling.
     pub fn resolve_params(&self) -> Option<ResolveParams> {
-        let settings = self.options.aa.settings()?;
+        let mut settings = self.options.aa.settings()?;
+        // Objects that opted out of anti-aliasing (`Object::antialias`, a
+        // glTF `extras` field) write 0 into `color.a`: the resolve reads it
+        // as its selective-AA flag unless the caller chose another.
+        if settings.selection.flag.is_none()
+            && self.scene.gbuffer_items.iter().any(|i| !i.antialias)
+        {
+            settings.selection.flag = Some(SelectionFlag {
+                attachment: self.passes.geometry.slots().color as usize,
+                component: 3,
+            });
+        }
         Some(ResolveParams {
             settings,
             projection: DepthProjection::from_matrix(
@@ -1355,10 +1747,11 @@ impl Renderer {
     }
 
     /// The lighting fragment shader exactly as compiled (preamble, defines
-    /// and body). It does not depend on the options: the same source lights
-    /// the G-buffer with and without MSAA.
+    /// and body). It does not depend on multisampling: the same source
+    /// lights the G-buffer with and without MSAA (its defines follow only
+    /// the attachment set of [`Renderer::layout`]).
     pub fn lighting_program_source(&self) -> String {
-        LightingPass::source()
+        LightingPass::source(self.passes.lighting.slots())
     }
 
     /// The fragment shader of [`AaMode::PerSample`] and [`AaMode::Complex`]'s
@@ -1367,13 +1760,13 @@ impl Renderer {
     /// `lighting_per_sample.frag`'s loop over the samples. The per-pixel
     /// [`Renderer::lighting_program_source`] is not changed by these modes.
     pub fn per_sample_lighting_program_source(&self) -> String {
-        PerSampleLightingPass::source()
+        PerSampleLightingPass::source(self.passes.geometry.slots())
     }
 
     /// The model fragment shader exactly as compiled; like the lighting
     /// source it does not change with MSAA.
     pub fn geometry_program_source(&self) -> String {
-        GeometryPass::fragment_source()
+        GeometryPass::fragment_source(self.passes.geometry.slots())
     }
 
     /// Read the final image (after tonemapping and FXAA); row 0 is the top.
@@ -1425,5 +1818,6 @@ impl Renderer {
         self.passes.destroy(gl);
         self.scene.destroy(gl);
         self.frame.destroy(gl);
+        self.sparse.destroy(gl);
     }
 }
