@@ -583,7 +583,6 @@ fn stats(times: &[f64]) -> Stats {
 #[derive(Clone, Copy, PartialEq)]
 enum Method {
     ResolveFast,
-    ResolveFastSinglePass,
     ResolveFastTiles,
     ResolveNoFast,
     Blit,
@@ -592,9 +591,8 @@ enum Method {
 }
 
 impl Method {
-    const ALL: [Method; 7] = [
+    const ALL: [Method; 6] = [
         Method::ResolveFast,
-        Method::ResolveFastSinglePass,
         Method::ResolveFastTiles,
         Method::ResolveNoFast,
         Method::Blit,
@@ -604,7 +602,6 @@ impl Method {
     fn key(self) -> &'static str {
         match self {
             Method::ResolveFast => "resolve_median_smooth_fast",
-            Method::ResolveFastSinglePass => "resolve_median_smooth_fast_one_pass",
             Method::ResolveFastTiles => "resolve_median_smooth_fast_tiles",
             Method::ResolveNoFast => "resolve_median_smooth_nofast",
             Method::Blit => "blit_x3_depth",
@@ -614,8 +611,7 @@ impl Method {
     }
     fn label(self) -> &'static str {
         match self {
-            Method::ResolveFast => "resolve median smooth, fast path on (default schedule)",
-            Method::ResolveFastSinglePass => "resolve median smooth, fast path on, one pass",
+            Method::ResolveFast => "resolve median smooth, fast path on (one pass, the default)",
             Method::ResolveFastTiles => "resolve median smooth, fast path on, 8x8 tiles",
             Method::ResolveNoFast => "resolve median smooth, fast path off",
             Method::Blit => "3x glBlitFramebuffer + depth (hardware resolve)",
@@ -713,16 +709,10 @@ fn run(args: &Args) -> Result<(), String> {
         }
         match m {
             Method::ResolveFast => msaa.resolve(gl, &fast)?,
-            Method::ResolveFastSinglePass => {
-                msaa.set_schedule(Schedule::OnePass)?;
-                let result = msaa.resolve(gl, &fast);
-                msaa.set_schedule(Schedule::Tiles(TILE_SIZE))?;
-                result?
-            }
             Method::ResolveFastTiles => {
                 msaa.set_schedule(Schedule::Tiles(TILE_SIZE))?;
                 let result = msaa.resolve(gl, &fast);
-                msaa.set_schedule(Schedule::Tiles(TILE_SIZE))?;
+                msaa.set_schedule(Schedule::OnePass)?;
                 result?
             }
             Method::ResolveNoFast => msaa.resolve(gl, &nofast)?,

@@ -167,7 +167,7 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
         }
     }
     let median = ResolveSettings::default();
-    for schedule in [Schedule::OnePass, Schedule::Tiles(3), Schedule::Tiles(16)] {
+    for schedule in [Schedule::Tiles(8), Schedule::Tiles(3), Schedule::Tiles(16)] {
         cases.push((median, schedule));
     }
     let selections = [

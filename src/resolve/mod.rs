@@ -14,7 +14,7 @@ pub use settings::{
     DepthProjection, Region, ResolveMethod, ResolveRule, ResolveSettings, Selection, SelectionFlag,
     Window,
 };
-use tiles::{RESOLVE_TILES_VERT, TILE_SIZE, TileMask};
+use tiles::{RESOLVE_TILES_VERT, TileMask};
 
 use crate::gl::format::SampleKind;
 use crate::gl::{
@@ -259,23 +259,29 @@ pub struct Resolver {
 /// gives the same values; they differ in speed, by GPU.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Schedule {
-    /// One full-screen pass; a per-pixel branch skips the slow path. Best
-    /// where branches are real (GPUs run 32–64 pixels per branch).
+    /// One full-screen pass; a per-pixel branch skips the slow path (the
+    /// default). Where branches are real (GPUs take them 32–64 pixels at a
+    /// time) uniform regions skip it.
     OnePass,
-    /// Classify tiles of this many pixels, then draw one-sample tiles and
-    /// slow tiles apart ([`tiles`]): a SIMD software rasteriser (llvmpipe)
-    /// runs both sides of a branch, but never visits a tile it is not given.
+    /// Classify tiles of this many pixels ([`tiles::TILE_SIZE`] is the size
+    /// measured), copy sample 0 everywhere, then draw only the slow tiles
+    /// with the full program ([`tiles`]): for a rasteriser that runs both
+    /// sides of every branch, as llvmpipe does, but never visits a tile it
+    /// is not given. Measured on llvmpipe (README, "What the resolve
+    /// costs") it wins only where slow tiles are few, by less than the
+    /// noise, and loses 2x where they are many, because classifying costs
+    /// about what the slow path saves there.
     Tiles(u32),
 }
 
 impl Resolver {
-    /// Create the pass (programs are built on first use). One-sample pixels
-    /// are found per tile of [`TILE_SIZE`] pixels (see [`tiles`]).
+    /// Create the pass (programs are built on first use), with the
+    /// one-pass schedule ([`Schedule`]).
     pub fn new(gl: &glow::Context) -> Result<Self> {
         Ok(Resolver {
             programs: HashMap::new(),
             vao: VertexArray::new(gl, "resolve full-screen triangle")?,
-            schedule: Schedule::Tiles(TILE_SIZE),
+            schedule: Schedule::OnePass,
             tiles: None,
         })
     }
