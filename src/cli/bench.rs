@@ -13,7 +13,7 @@ pub struct BenchCmd {
     #[command(flatten)]
     common: CommonArgs,
     /// A scene to measure: `builtin:NAME` or a .gltf/.glb path; repeat for
-    /// more (default: builtin:greebles and builtin:thin).
+    /// more (default: builtin:hull and builtin:halo).
     #[arg(long = "scene", value_name = "S")]
     scenes: Vec<String>,
     /// Image size, WIDTHxHEIGHT.
@@ -23,7 +23,11 @@ pub struct BenchCmd {
     #[arg(long = "samples", value_name = "N")]
     samples: Vec<u32>,
     /// Comma-separated method entries, e.g. `none,median:hard,median+fxaa`
-    /// (default: none,none+fxaa,average,front,median,back,median:hard,median:nofast,median+fxaa).
+    /// (default: none,none+fxaa,average,front,median,back,median:hard,
+    /// median:nofast,median+fxaa,gbaa, then per-sample, complex and sparse
+    /// where the context has what they need). Options: `:hard`, `:c=F`,
+    /// `:c_in=F`, `:nofast`, `:full` (the whole layout, not the plan's),
+    /// `sparse:pool=N`; `+fxaa` after any entry.
     #[arg(long, value_name = "LIST")]
     methods: Option<String>,
     /// Point lights to add around each scene.

@@ -1,11 +1,15 @@
-//! Tile classification for the resolve's one-sample pixels.
+//! Tile classification for the resolve's one-sample pixels
+//! ([`super::Schedule::Tiles`]).
 //!
 //! A uniform pixel (and one outside a selective-AA selection) takes sample 0
 //! of everything. On GPUs a branch in one shader skips the slow path for
-//! such pixels, but a SIMD software rasteriser such as llvmpipe runs both
-//! sides of a branch whenever any lane takes the slow one, and never skips
-//! work after a `discard`: there the branch costs more than it saves. So the
-//! resolve runs in three passes instead:
+//! such pixels (the default schedule), but a SIMD software rasteriser such
+//! as llvmpipe runs both sides of a branch whenever any lane takes the slow
+//! one, and never skips work after a `discard`. This schedule runs three
+//! passes instead, so that the slow program is never given the tiles that
+//! do not need it (measured on llvmpipe it gains little where slow tiles
+//! are few and loses where they are many: README, "What the resolve
+//! costs"):
 //!
 //! 1. **classify** (`resolve.frag` with `PASS_CLASSIFY_TILES`): one fragment
 //!    per [`TILE_SIZE`]² tile reads the depth keys of the tile's pixels and
