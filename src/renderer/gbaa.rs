@@ -277,7 +277,7 @@ impl GbaaTargets {
         let scratch = ColorTarget::new(gl, "gbaa edges view", Format::Rgba8, w, h)?;
         let result = passes
             .draw_post(gl, &scratch, vao, self, true)
-            .and_then(|()| read_rgba8(gl, &scratch));
+            .and_then(|()| scratch.read_rgba8(gl, "the gbaa edges view"));
         scratch.destroy(gl);
         result
     }
@@ -289,36 +289,4 @@ impl GbaaTargets {
         self.far.destroy(gl);
         self.tonemapped.destroy(gl);
     }
-}
-
-/// Read an RGBA8 target back, row 0 at the top.
-fn read_rgba8(gl: &glow::Context, target: &ColorTarget) -> Result<image::RgbaImage> {
-    let (w, h) = (target.texture.width, target.texture.height);
-    let row = w as usize * 4;
-    let mut data = vec![0u8; row * h as usize];
-    unsafe {
-        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(target.fbo.raw));
-        gl.read_buffer(glow::COLOR_ATTACHMENT0);
-        gl.bind_buffer(glow::PIXEL_PACK_BUFFER, None);
-        gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
-        gl.pixel_store_i32(glow::PACK_ROW_LENGTH, 0);
-        gl.read_pixels(
-            0,
-            0,
-            w as i32,
-            h as i32,
-            glow::RGBA,
-            glow::UNSIGNED_BYTE,
-            glow::PixelPackData::Slice(Some(&mut data)),
-        );
-        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
-    }
-    check_error(gl, "reading the gbaa edges view")?;
-    // GL's rows run bottom-up.
-    let flipped: Vec<u8> = data.chunks_exact(row).rev().flatten().copied().collect();
-    image::RgbaImage::from_raw(w, h, flipped).ok_or_else(|| {
-        Error::invalid(format!(
-            "the gbaa edges view's buffer does not hold {w}x{h} pixels"
-        ))
-    })
 }

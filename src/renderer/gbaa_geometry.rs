@@ -9,15 +9,11 @@
 //! the floor.
 
 use super::GBufferSlots;
-use super::geometry::{GEOMETRY_FRAG, GEOMETRY_VERT, GeometryTarget};
-use super::mesh::{
-    AttribLocations, BASE_TEXTURE_UNIT, EMISSIVE_TEXTURE_UNIT, GpuScene, set_culling,
-};
-use super::pass::bind_target;
+use super::geometry::{GEOMETRY_FRAG, GEOMETRY_VERT, GeometryTarget, ModelDraw, draw_models};
+use super::mesh::{AttribLocations, GpuScene};
 use crate::Result;
 use crate::gl::{Program, ShaderStage, check_error, preamble};
 use glam::{DMat4, Mat4};
-use glow::HasContext;
 
 /// The geometry stage's body.
 pub(crate) const GBAA_GEOMETRY_GEOM: &str = include_str!("../../shaders_glsl/gbaa_geometry.geom");
@@ -122,37 +118,25 @@ impl GbaaGeometryPass {
         projection: &Mat4,
         depth_func: u32,
     ) -> Result<()> {
-        bind_target(gl, target.fbo, target.width, target.height);
-        unsafe {
-            gl.enable(glow::DEPTH_TEST);
-            gl.depth_func(depth_func);
-            gl.depth_mask(true);
-            gl.disable(glow::BLEND);
-            gl.disable(glow::SCISSOR_TEST);
-            gl.disable(glow::STENCIL_TEST);
-            gl.disable(glow::FRAMEBUFFER_SRGB);
-            gl.disable(glow::SAMPLE_ALPHA_TO_COVERAGE);
-            gl.color_mask(true, true, true, true);
-        }
-        let p = &self.program;
-        p.bind(gl);
-        p.set_mat4(gl, "u_projection", &projection.to_cols_array());
-        p.set_i32(gl, "u_base_texture", BASE_TEXTURE_UNIT as i32);
-        p.set_i32(gl, "u_emissive_texture", EMISSIVE_TEXTURE_UNIT as i32);
-        p.set_vec2(
+        // The geometry stage needs the viewport to measure edges in pixels.
+        self.program.bind(gl);
+        self.program.set_vec2(
             gl,
             "u_viewport",
             [target.width as f32, target.height as f32],
         );
-        for item in &scene.gbuffer_items {
-            let (model_view, normal) = item.matrices(view);
-            p.set_mat4(gl, "u_model_view", &model_view);
-            p.set_mat4(gl, "u_normal_matrix", &normal);
-            scene.bind_material(gl, p, &item.material);
-            set_culling(gl, &item.material);
-            scene.meshes[item.mesh].draw(gl, self.locations);
-        }
-        unsafe { gl.bind_vertex_array(None) };
+        draw_models(
+            gl,
+            &self.program,
+            self.locations,
+            target,
+            ModelDraw {
+                scene,
+                view,
+                projection,
+                depth_func,
+            },
+        );
         check_error(gl, "the G-buffer pass of gbaa")
     }
 

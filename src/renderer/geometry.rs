@@ -130,34 +130,19 @@ impl GeometryPass {
         projection: &Mat4,
         depth_func: u32,
     ) -> Result<()> {
-        bind_target(gl, target.fbo, target.width, target.height);
-        unsafe {
-            gl.enable(glow::DEPTH_TEST);
-            gl.depth_func(depth_func);
-            gl.depth_mask(true);
-            gl.disable(glow::BLEND);
-            gl.disable(glow::SCISSOR_TEST);
-            gl.disable(glow::STENCIL_TEST);
-            gl.disable(glow::FRAMEBUFFER_SRGB);
-            gl.disable(glow::SAMPLE_ALPHA_TO_COVERAGE);
-            gl.enable(glow::MULTISAMPLE);
-            gl.color_mask(true, true, true, true);
-        }
-        let p = &self.program;
-        p.bind(gl);
-        p.set_mat4(gl, "u_projection", &projection.to_cols_array());
-        p.set_i32(gl, "u_base_texture", BASE_TEXTURE_UNIT as i32);
-        p.set_i32(gl, "u_emissive_texture", EMISSIVE_TEXTURE_UNIT as i32);
-        for item in &scene.gbuffer_items {
-            let (model_view, normal) = item.matrices(view);
-            p.set_mat4(gl, "u_model_view", &model_view);
-            p.set_mat4(gl, "u_normal_matrix", &normal);
-            scene.bind_material(gl, p, &item.material);
-            p.set_f32(gl, "u_no_antialias", if item.antialias { 0.0 } else { 1.0 });
-            set_culling(gl, &item.material);
-            scene.meshes[item.mesh].draw(gl, self.locations);
-        }
-        unsafe { gl.bind_vertex_array(None) };
+        unsafe { gl.enable(glow::MULTISAMPLE) };
+        draw_models(
+            gl,
+            &self.program,
+            self.locations,
+            target,
+            ModelDraw {
+                scene,
+                view,
+                projection,
+                depth_func,
+            },
+        );
         check_error(gl, "the G-buffer pass")
     }
 
@@ -165,4 +150,55 @@ impl GeometryPass {
     pub(crate) fn destroy(self, gl: &glow::Context) {
         self.program.destroy(gl);
     }
+}
+
+/// What a model program draws: the scene's opaque and alpha-tested objects
+/// seen through `view` and `projection`, depth-tested with `depth_func`.
+#[derive(Clone, Copy)]
+pub(crate) struct ModelDraw<'a> {
+    pub(crate) scene: &'a GpuScene,
+    pub(crate) view: &'a DMat4,
+    pub(crate) projection: &'a Mat4,
+    pub(crate) depth_func: u32,
+}
+
+/// Draw every opaque and alpha-tested object with a model program built on
+/// `geometry.vert`/`geometry.frag` (any extra uniform of the program is the
+/// caller's to set, once it is bound): the G-buffer pass's state (depth
+/// test, depth written, no blending, back faces culled unless
+/// double-sided), the per-object matrices, material and anti-aliasing flag.
+pub(crate) fn draw_models(
+    gl: &glow::Context,
+    program: &Program,
+    locations: AttribLocations,
+    target: GeometryTarget,
+    draw: ModelDraw<'_>,
+) {
+    bind_target(gl, target.fbo, target.width, target.height);
+    unsafe {
+        gl.enable(glow::DEPTH_TEST);
+        gl.depth_func(draw.depth_func);
+        gl.depth_mask(true);
+        gl.disable(glow::BLEND);
+        gl.disable(glow::SCISSOR_TEST);
+        gl.disable(glow::STENCIL_TEST);
+        gl.disable(glow::FRAMEBUFFER_SRGB);
+        gl.disable(glow::SAMPLE_ALPHA_TO_COVERAGE);
+        gl.color_mask(true, true, true, true);
+    }
+    let p = program;
+    p.bind(gl);
+    p.set_mat4(gl, "u_projection", &draw.projection.to_cols_array());
+    p.set_i32(gl, "u_base_texture", BASE_TEXTURE_UNIT as i32);
+    p.set_i32(gl, "u_emissive_texture", EMISSIVE_TEXTURE_UNIT as i32);
+    for item in &draw.scene.gbuffer_items {
+        let (model_view, normal) = item.matrices(draw.view);
+        p.set_mat4(gl, "u_model_view", &model_view);
+        p.set_mat4(gl, "u_normal_matrix", &normal);
+        draw.scene.bind_material(gl, p, &item.material);
+        p.set_f32(gl, "u_no_antialias", if item.antialias { 0.0 } else { 1.0 });
+        set_culling(gl, &item.material);
+        draw.scene.meshes[item.mesh].draw(gl, locations);
+    }
+    unsafe { gl.bind_vertex_array(None) };
 }

@@ -1771,35 +1771,10 @@ impl Renderer {
 
     /// Read the final image (after tonemapping and FXAA); row 0 is the top.
     pub fn read_final(&self, gl: &glow::Context) -> Result<image::RgbaImage> {
-        let target = self.frame.targets.final_target();
-        let (w, h) = (target.texture.width, target.texture.height);
-        let row = w as usize * 4;
-        let mut data = vec![0u8; row * h as usize];
-        unsafe {
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(target.fbo.raw));
-            gl.read_buffer(glow::COLOR_ATTACHMENT0);
-            gl.bind_buffer(glow::PIXEL_PACK_BUFFER, None);
-            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
-            gl.pixel_store_i32(glow::PACK_ROW_LENGTH, 0);
-            gl.read_pixels(
-                0,
-                0,
-                w as i32,
-                h as i32,
-                glow::RGBA,
-                glow::UNSIGNED_BYTE,
-                glow::PixelPackData::Slice(Some(&mut data)),
-            );
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
-        }
-        check_error(gl, "reading the final image")?;
-        // GL's rows run bottom-up.
-        let flipped: Vec<u8> = data.chunks_exact(row).rev().flatten().copied().collect();
-        image::RgbaImage::from_raw(w, h, flipped).ok_or_else(|| {
-            Error::invalid(format!(
-                "the final image's buffer does not hold {w}x{h} pixels"
-            ))
-        })
+        self.frame
+            .targets
+            .final_target()
+            .read_rgba8(gl, "the final image")
     }
 
     /// The final image's texture (RGBA8, sRGB-encoded values).

@@ -21,6 +21,36 @@ pub(crate) struct ColorTarget {
 }
 
 impl ColorTarget {
+    /// Read the RGBA8 texture back, row 0 at the top (`what` names it in errors).
+    pub(crate) fn read_rgba8(&self, gl: &glow::Context, what: &str) -> Result<image::RgbaImage> {
+        let (w, h) = (self.texture.width, self.texture.height);
+        let row = w as usize * 4;
+        let mut data = vec![0u8; row * h as usize];
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.fbo.raw));
+            gl.read_buffer(glow::COLOR_ATTACHMENT0);
+            gl.bind_buffer(glow::PIXEL_PACK_BUFFER, None);
+            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
+            gl.pixel_store_i32(glow::PACK_ROW_LENGTH, 0);
+            gl.read_pixels(
+                0,
+                0,
+                w as i32,
+                h as i32,
+                glow::RGBA,
+                glow::UNSIGNED_BYTE,
+                glow::PixelPackData::Slice(Some(&mut data)),
+            );
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+        }
+        check_error(gl, &format!("reading {what}"))?;
+        // GL's rows run bottom-up.
+        let flipped: Vec<u8> = data.chunks_exact(row).rev().flatten().copied().collect();
+        image::RgbaImage::from_raw(w, h, flipped).ok_or_else(|| {
+            crate::Error::invalid(format!("{what}'s buffer does not hold {w}x{h} pixels"))
+        })
+    }
+
     /// Allocate a `format` texture of `width`×`height` and its framebuffer.
     pub(crate) fn new(
         gl: &glow::Context,
