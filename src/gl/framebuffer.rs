@@ -173,6 +173,49 @@ impl Framebuffer {
         }
     }
 
+    /// Read the whole framebuffer back as bytes, `channels` per pixel of
+    /// `format` (`GL_RGBA`, `GL_RED`, `GL_STENCIL_INDEX`, …) from colour
+    /// attachment 0 (or the stencil), rows top first as images are read.
+    /// `what` names it in errors.
+    pub fn read_u8(
+        &self,
+        gl: &glow::Context,
+        format: u32,
+        channels: usize,
+        what: &str,
+    ) -> Result<Vec<u8>> {
+        let (w, h) = (self.width, self.height);
+        let row = w as usize * channels;
+        let mut data = vec![0u8; row * h as usize];
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.raw));
+            if format != glow::STENCIL_INDEX && format != glow::DEPTH_COMPONENT {
+                gl.read_buffer(glow::COLOR_ATTACHMENT0);
+            }
+            gl.bind_buffer(glow::PIXEL_PACK_BUFFER, None);
+            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
+            gl.pixel_store_i32(glow::PACK_ROW_LENGTH, 0);
+            gl.read_pixels(
+                0,
+                0,
+                w as i32,
+                h as i32,
+                format,
+                glow::UNSIGNED_BYTE,
+                glow::PixelPackData::Slice(Some(&mut data)),
+            );
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+        }
+        check_error(gl, &format!("reading {what}"))?;
+        // GL's rows run bottom-up.
+        Ok(data
+            .chunks_exact(row.max(1))
+            .rev()
+            .flatten()
+            .copied()
+            .collect())
+    }
+
     /// The texture at an attachment point.
     pub fn texture(&self, point: Attachment) -> Option<TextureRef> {
         self.attachments

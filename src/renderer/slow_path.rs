@@ -4,7 +4,7 @@
 //! discarded (their draw buffers are `GL_NONE`), so the G-buffer is left as
 //! the frame made it.
 
-use crate::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef, check_error};
+use crate::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef};
 use crate::resolve::ResolveParams;
 use crate::retrofit::MsaaRetrofit;
 use crate::{Error, Result};
@@ -49,7 +49,7 @@ pub(crate) fn slow_path_mask(
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
         }
         retrofit.resolve_into(gl, &fbo, params, true)?;
-        read_r8(gl, &fbo, w, h)
+        read_r8(gl, &fbo)
     })();
     fbo.destroy(gl);
     mask.destroy(gl);
@@ -57,33 +57,13 @@ pub(crate) fn slow_path_mask(
 }
 
 /// Read colour attachment 0 of `fbo` (R8) as a grey image, row 0 at the top.
-fn read_r8(gl: &glow::Context, fbo: &Framebuffer, w: u32, h: u32) -> Result<image::GrayImage> {
-    let mut data = vec![0u8; w as usize * h as usize];
-    unsafe {
-        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(fbo.raw));
-        gl.read_buffer(glow::COLOR_ATTACHMENT0);
-        gl.bind_buffer(glow::PIXEL_PACK_BUFFER, None);
-        gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
-        gl.pixel_store_i32(glow::PACK_ROW_LENGTH, 0);
-        gl.read_pixels(
-            0,
-            0,
-            w as i32,
-            h as i32,
-            glow::RED,
-            glow::UNSIGNED_BYTE,
-            glow::PixelPackData::Slice(Some(&mut data)),
-        );
-        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
-    }
-    check_error(gl, "reading the slow-path mask")?;
-    // GL's rows run bottom-up.
-    let flipped: Vec<u8> = data
-        .chunks_exact(w.max(1) as usize)
-        .rev()
-        .flatten()
+fn read_r8(gl: &glow::Context, fbo: &Framebuffer) -> Result<image::GrayImage> {
+    let (w, h) = (fbo.width, fbo.height);
+    let data = fbo.read_u8(gl, glow::RED, 1, "the slow-path mask")?;
+    let mask = data
+        .iter()
         .map(|&v| if v >= 128 { 255 } else { 0 })
         .collect();
-    image::GrayImage::from_raw(w, h, flipped)
+    image::GrayImage::from_raw(w, h, mask)
         .ok_or_else(|| Error::invalid(format!("the slow-path mask does not hold {w}x{h} pixels")))
 }

@@ -5,11 +5,8 @@
 //! with a stencil mask, and the coverage flags.
 
 use crate::Result;
-use crate::gl::{
-    Attachment, Format, Framebuffer, Texture2d, Texture2dMultisample, TextureRef, check_error,
-};
+use crate::gl::{Attachment, Format, Framebuffer, Texture2d, Texture2dMultisample, TextureRef};
 use crate::retrofit::MsaaRetrofit;
-use glow::HasContext;
 
 /// A texture and a framebuffer with it as colour attachment 0.
 #[derive(Debug)]
@@ -23,30 +20,9 @@ pub(crate) struct ColorTarget {
 impl ColorTarget {
     /// Read the RGBA8 texture back, row 0 at the top (`what` names it in errors).
     pub(crate) fn read_rgba8(&self, gl: &glow::Context, what: &str) -> Result<image::RgbaImage> {
-        let (w, h) = (self.texture.width, self.texture.height);
-        let row = w as usize * 4;
-        let mut data = vec![0u8; row * h as usize];
-        unsafe {
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.fbo.raw));
-            gl.read_buffer(glow::COLOR_ATTACHMENT0);
-            gl.bind_buffer(glow::PIXEL_PACK_BUFFER, None);
-            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
-            gl.pixel_store_i32(glow::PACK_ROW_LENGTH, 0);
-            gl.read_pixels(
-                0,
-                0,
-                w as i32,
-                h as i32,
-                glow::RGBA,
-                glow::UNSIGNED_BYTE,
-                glow::PixelPackData::Slice(Some(&mut data)),
-            );
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
-        }
-        check_error(gl, &format!("reading {what}"))?;
-        // GL's rows run bottom-up.
-        let flipped: Vec<u8> = data.chunks_exact(row).rev().flatten().copied().collect();
-        image::RgbaImage::from_raw(w, h, flipped).ok_or_else(|| {
+        let (w, h) = (self.fbo.width, self.fbo.height);
+        let data = self.fbo.read_u8(gl, glow::RGBA, 4, what)?;
+        image::RgbaImage::from_raw(w, h, data).ok_or_else(|| {
             crate::Error::invalid(format!("{what}'s buffer does not hold {w}x{h} pixels"))
         })
     }
@@ -260,34 +236,11 @@ impl ComplexTargets {
 
     /// Read the mask back (row 0 at the top): 255 for complex pixels, 0 for simple ones.
     pub(crate) fn read_mask(&self, gl: &glow::Context) -> Result<image::GrayImage> {
-        let (w, h) = (self.stencil.width, self.stencil.height);
-        let row = w as usize;
-        let mut data = vec![0u8; row * h as usize];
-        unsafe {
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.hdr_with_stencil.raw));
-            gl.bind_buffer(glow::PIXEL_PACK_BUFFER, None);
-            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
-            gl.pixel_store_i32(glow::PACK_ROW_LENGTH, 0);
-            gl.read_pixels(
-                0,
-                0,
-                w as i32,
-                h as i32,
-                glow::STENCIL_INDEX,
-                glow::UNSIGNED_BYTE,
-                glow::PixelPackData::Slice(Some(&mut data)),
-            );
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
-        }
-        check_error(gl, "reading the complex-pixel stencil")?;
-        // GL's rows run bottom-up.
-        let flipped: Vec<u8> = data
-            .chunks_exact(row)
-            .rev()
-            .flatten()
-            .map(|&v| if v != 0 { 255 } else { 0 })
-            .collect();
-        image::GrayImage::from_raw(w, h, flipped).ok_or_else(|| {
+        let fbo = &self.hdr_with_stencil;
+        let (w, h) = (fbo.width, fbo.height);
+        let data = fbo.read_u8(gl, glow::STENCIL_INDEX, 1, "the complex-pixel stencil")?;
+        let mask = data.iter().map(|&v| if v != 0 { 255 } else { 0 }).collect();
+        image::GrayImage::from_raw(w, h, mask).ok_or_else(|| {
             crate::Error::invalid(format!(
                 "the complex-pixel mask's buffer does not hold {w}x{h} pixels"
             ))
