@@ -24,20 +24,21 @@
 //! not span the pass (llvmpipe restarts it at every tile a thread rasterises).
 //! Results also go to `target/resolve_vs_blit.json`.
 
-use deferred_msaa::context::{Backend, HeadlessContext};
-use deferred_msaa::gl::{
+use deferred_msaa::{ColorAttachment, Frame};
+use deferred_msaa_lab::context::{Backend, HeadlessContext};
+use deferred_msaa_lab::gl::FULLSCREEN_VERT;
+use deferred_msaa_lab::gl::{
     Attachment, Buffer, Format, Framebuffer, GpuTimer, Program, ShaderStage, Texture2d, TextureRef,
     TimerKind, VertexArray, check_error, preamble,
 };
-use deferred_msaa::readback::Readback;
-use deferred_msaa::resolve::Schedule;
-use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
-use deferred_msaa::resolve::tiles::TILE_SIZE;
-use deferred_msaa::resolve::{
-    DepthProjection, FULLSCREEN_VERT, ResolveParams, ResolveRule, ResolveSettings,
+use deferred_msaa_lab::readback::Readback;
+use deferred_msaa_lab::resolve::Schedule;
+use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
+use deferred_msaa_lab::resolve::{
+    DepthProjection, ResolveParams, ResolveRule, ResolveSettings, TILE_SIZE,
 };
-use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions};
-use deferred_msaa::scene::{Camera, Scene};
+use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
+use deferred_msaa_lab::scene::{Camera, Scene};
 use glow::HasContext;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -333,9 +334,9 @@ impl Host {
         let vao = VertexArray::new(gl, "host vao")?;
         unsafe {
             vao.bind(gl);
-            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo.raw));
+            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo.raw()));
             for (name, offset) in [("a_position", 0), ("a_color", 12)] {
-                if let Some(loc) = gl.get_attrib_location(program.raw, name) {
+                if let Some(loc) = gl.get_attrib_location(program.raw(), name) {
                     gl.enable_vertex_attrib_array(loc);
                     gl.vertex_attrib_pointer_f32(loc, 3, glow::FLOAT, false, 24, offset);
                 }
@@ -401,6 +402,14 @@ impl Host {
         }
     }
 
+    /// The frame the resolve is given: the camera's projection as drawn.
+    fn frame(&self) -> Frame {
+        Frame::from(
+            self.camera
+                .projection(self.width as f32 / self.height as f32),
+        )
+    }
+
     fn destroy(self, gl: &glow::Context) {
         self.fbo.destroy(gl);
         for t in [self.color, self.position, self.normal, self.depth] {
@@ -419,7 +428,7 @@ fn blit_resolve(gl: &glow::Context, twin: glow::Framebuffer, host: &Host, depth:
     let (w, h) = (host.width as i32, host.height as i32);
     unsafe {
         gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(twin));
-        gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(host.fbo.raw));
+        gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(host.fbo.raw()));
         for k in 0..3 {
             gl.read_buffer(glow::COLOR_ATTACHMENT0 + k);
             gl.draw_buffers(&[glow::COLOR_ATTACHMENT0 + k]);
@@ -493,7 +502,7 @@ fn count_complex(
     params: &ResolveParams,
 ) -> deferred_msaa::Result<Complexity> {
     let mut readback = Readback::new(gl)?;
-    let (depth_ref, color_refs) = msaa.inputs()?;
+    let (depth_ref, color_refs, _) = msaa.inputs()?;
     let read = (|| {
         let colors = color_refs
             .iter()
@@ -638,10 +647,11 @@ fn run(args: &Args) -> Result<(), String> {
     let options = RetrofitOptions {
         samples: args.samples,
         // As the recommended layout resolves normals: the reference sample's.
-        rules: vec![(2, ResolveRule::Select)],
-        position_attachment: Some(1),
+        rules: vec![(ColorAttachment(2), ResolveRule::Select)],
+        position_attachment: Some(ColorAttachment(1)),
+        ..RetrofitOptions::default()
     };
-    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &options).map_err(e)?;
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).map_err(e)?;
     let samples = msaa.samples();
     let twin = msaa.framebuffer();
 
@@ -702,20 +712,40 @@ fn run(args: &Args) -> Result<(), String> {
         (TimerChoice::Auto, true) => (TimerKind::GlTimeElapsed, "the context has GL_TIME_ELAPSED"),
     };
 
+    let frame = host.frame();
+    let with = |resolve: ResolveSettings, schedule: Schedule| RetrofitOptions {
+        resolve,
+        schedule,
+        ..options.clone()
+    };
+    // The resolve's variants, all compiled now: switching between them
+    // (outside the timed region) only picks a cached program.
+    let variants = [
+        (Method::ResolveFast, with(fast.settings, Schedule::OnePass)),
+        (
+            Method::ResolveFastTiles,
+            with(fast.settings, Schedule::Tiles(TILE_SIZE)),
+        ),
+        (
+            Method::ResolveNoFast,
+            with(nofast.settings, Schedule::OnePass),
+        ),
+    ];
+    for (_, v) in &variants {
+        msaa.set_options(gl, v).map_err(e)?;
+    }
     let mut once = |m: Method| -> deferred_msaa::Result<(f64, Option<f64>)> {
+        if let Some((_, v)) = variants.iter().find(|(method, _)| *method == m) {
+            msaa.set_options(gl, v)?;
+        }
         wall.begin(gl);
         if let Some(q) = query.as_mut() {
             q.begin(gl);
         }
         match m {
-            Method::ResolveFast => msaa.resolve(gl, &fast)?,
-            Method::ResolveFastTiles => {
-                msaa.set_schedule(Schedule::Tiles(TILE_SIZE))?;
-                let result = msaa.resolve(gl, &fast);
-                msaa.set_schedule(Schedule::OnePass)?;
-                result?
+            Method::ResolveFast | Method::ResolveFastTiles | Method::ResolveNoFast => {
+                msaa.resolve(gl, &frame)?
             }
-            Method::ResolveNoFast => msaa.resolve(gl, &nofast)?,
             Method::Blit => blit_resolve(gl, twin, &host, true),
             Method::BlitColor => blit_resolve(gl, twin, &host, false),
             Method::Trivial => trivial_pass(gl, &trivial, &empty_vao, &host),

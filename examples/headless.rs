@@ -11,9 +11,9 @@
 use std::error::Error;
 use std::process::ExitCode;
 
-use deferred_msaa::context::{Backend, HeadlessContext};
-use deferred_msaa::renderer::{RenderOptions, Renderer};
-use deferred_msaa::scene::Scene;
+use deferred_msaa_lab::context::{Backend, HeadlessContext};
+use deferred_msaa_lab::renderer::{RenderOptions, Renderer};
+use deferred_msaa_lab::scene::Scene;
 
 fn run() -> Result<(), Box<dyn Error>> {
     let mut args = std::env::args().skip(1);

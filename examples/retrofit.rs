@@ -11,12 +11,11 @@
 //!
 //! ```text
 //! let mut msaa = MsaaRetrofit::new(gl, engine.gbuffer_fbo(), &RetrofitOptions {  // once
-//!     samples, rules: vec![(1, ResolveRule::Select), (2, ResolveRule::BlendHdr)],
-//!     position_attachment: None,                  // no position target: the key is linearised depth
+//!     samples, rules: vec![(ColorAttachment(1), Select), (ColorAttachment(2), BlendHdr)],
+//!     ..RetrofitOptions::default()                // no position target: the key is linearised depth
 //! })?;
 //! engine.geometry_pass(gl, msaa.framebuffer());   // was: engine.geometry_pass(gl, engine.gbuffer_fbo())
-//! msaa.resolve(gl, &ResolveParams { settings, projection: DepthProjection::from_matrix(
-//!     &engine.projection().as_dmat4(), false, 1.0), fov_y, height_px })?;  // into the engine's textures
+//! msaa.resolve(gl, &Frame::from_matrix(engine.projection().to_cols_array()))?;  // into its textures
 //! msaa.destroy(gl);                               // at shutdown
 //! ```
 //!
@@ -34,12 +33,10 @@
 use std::error::Error;
 use std::process::ExitCode;
 
-use deferred_msaa::context::{Backend, HeadlessContext};
-use deferred_msaa::resolve::{
-    DepthProjection, ResolveMethod, ResolveParams, ResolveRule, ResolveSettings,
-};
-use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions};
-use deferred_msaa::scene::{AlphaMode, Background, LightKind, Scene};
+use deferred_msaa::resolve::{ResolveMethod, ResolveRule, ResolveSettings};
+use deferred_msaa::{ColorAttachment, Frame, MsaaRetrofit, RetrofitOptions};
+use deferred_msaa_lab::context::{Backend, HeadlessContext};
+use deferred_msaa_lab::scene::{AlphaMode, Background, LightKind, Scene};
 use glam::{Mat3, Mat4, Vec3};
 use glow::HasContext;
 
@@ -80,31 +77,22 @@ fn run() -> AnyResult<()> {
                     // recommended layout takes them (a blended, renormalised
                     // normal over-lights convex edges; see
                     // `GBufferLayout::recommended`); emission blended as HDR.
-                    rules: vec![(1, ResolveRule::Select), (2, ResolveRule::BlendHdr)],
-                    position_attachment: None,
+                    rules: vec![
+                        (ColorAttachment(1), ResolveRule::Select),
+                        (ColorAttachment(2), ResolveRule::BlendHdr),
+                    ],
+                    resolve: ResolveSettings {
+                        method,
+                        ..ResolveSettings::default()
+                    },
+                    ..RetrofitOptions::default()
                 },
             )?;
-            let settings = ResolveSettings {
-                method,
-                ..ResolveSettings::default()
-            };
             let result = (|| -> AnyResult<image::RgbaImage> {
                 // MSAA (2 of 4): the unchanged geometry pass draws into the twins.
                 engine.geometry_pass(gl, msaa.framebuffer())?;
                 // MSAA (3 of 4): resolve into the engine's own G-buffer textures.
-                msaa.resolve(
-                    gl,
-                    &ResolveParams {
-                        settings,
-                        projection: DepthProjection::from_matrix(
-                            &engine.projection().as_dmat4(),
-                            false,
-                            1.0,
-                        ),
-                        fov_y: engine.camera_fov_y() as f64,
-                        height_px: args.height,
-                    },
-                )?;
+                msaa.resolve(gl, &Frame::from_matrix(engine.projection().to_cols_array()))?;
                 // The unchanged lighting pass reads the resolved G-buffer.
                 engine.lighting_pass(gl)?;
                 engine.read_output(gl)
@@ -392,7 +380,6 @@ struct Engine {
     width: u32,
     height: u32,
     view: Mat4,
-    fov_y: f32,
     projection: Mat4,
     sky: Option<([f32; 3], [f32; 3])>,
     /// View-space lights: position + range, direction + kind, colour, cone.
@@ -580,7 +567,6 @@ impl Engine {
                 width,
                 height,
                 view,
-                fov_y: scene.camera.fov_y,
                 projection,
                 sky,
                 lights,
@@ -604,10 +590,6 @@ impl Engine {
 
     fn projection(&self) -> Mat4 {
         self.projection
-    }
-
-    fn camera_fov_y(&self) -> f32 {
-        self.fov_y
     }
 
     /// Draw every opaque object into `fbo` (the G-buffer, normally).

@@ -40,10 +40,12 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use deferred_msaa::gl::Capabilities;
-use deferred_msaa::renderer::{AaMode, RenderOptions, Renderer};
-use deferred_msaa::resolve::{DepthProjection, KeySource, ResolveMethod, ResolveSettings};
-use deferred_msaa::scene::{Aabb, Camera, Scene};
+use deferred_msaa_lab::gl::Capabilities;
+use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
+use deferred_msaa_lab::resolve::{
+    DepthProjection, KeySource, ResolveMethod, ResolveSettings, ResolveSlot,
+};
+use deferred_msaa_lab::scene::{Aabb, Camera, Scene};
 use glam::Vec3;
 use glow::HasContext;
 use glutin::config::{Config, ConfigTemplateBuilder, GlConfig};
@@ -119,7 +121,7 @@ fn run() -> AnyResult<()> {
     }
     if scripted {
         // The whole run's resources are gone: reported for the long-run test.
-        let live = deferred_msaa::gl::live_objects();
+        let live = deferred_msaa_lab::gl::live_objects();
         println!(
             "viewer: live GL objects at exit: {} ({live:?})",
             live.total()
@@ -1033,14 +1035,16 @@ impl Presenter {
     ) -> AnyResult<()> {
         let gbuffer = renderer.gbuffer();
         let layout = renderer.layout();
-        let final_texture = renderer.final_texture().raw;
+        let final_texture = renderer.final_texture().raw();
         // The complex view needs the multisampled key; without MSAA it shows the final image.
         let complex_key = match (view, renderer.retrofit()) {
             (View::Complex, Some(retrofit)) => {
-                let (depth, colors) = retrofit.inputs()?;
+                let (depth, colors, _) = retrofit.inputs()?;
                 match retrofit.key() {
-                    KeySource::Position(k) => colors.get(k).map(|t| (t.raw, 2, retrofit.samples())),
-                    KeySource::Depth => Some((depth.raw, 0, retrofit.samples())),
+                    KeySource::Position(ResolveSlot(k)) => {
+                        colors.get(k).map(|t| (t.raw(), 2, retrofit.samples()))
+                    }
+                    KeySource::Depth => Some((depth.raw(), 0, retrofit.samples())),
                 }
             }
             _ => None,
@@ -1054,14 +1058,17 @@ impl Presenter {
                     "emissive" => 4,
                     _ => 1,
                 };
-                (gbuffer.colors[k].raw, mode)
+                (gbuffer.colors[k].raw(), mode)
             }
-            View::Depth => (gbuffer.depth.raw, 5),
+            View::Depth => (gbuffer.depth.raw(), 5),
         };
         let (near, far) = depth_range;
         let clear = renderer.clear_depth() as f64;
-        let depth =
-            DepthProjection::from_matrix(&renderer.projection().as_dmat4(), clear == 0.0, clear);
+        let depth = DepthProjection::from_matrix(
+            &renderer.projection().as_dmat4().to_cols_array(),
+            clear == 0.0,
+            clear,
+        );
         unsafe {
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
             gl.viewport(0, 0, window.width as i32, window.height as i32);

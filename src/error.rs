@@ -1,153 +1,23 @@
-//! The crate's one error type.
-//!
-//! Every variant carries enough context to act on: the stage, the object or
-//! attachment name, the driver's own words. `Display` is a single line for
-//! everything a user can cause (bad input, unsupported capabilities); shader
-//! build failures add the driver log and the numbered source lines around
-//! the offending ones, because that is what a shader author needs.
+//! The lab's error type: the core's and the headless layer's errors, and
+//! what only the lab can meet (scenes, files, images).
 
 use std::path::PathBuf;
 
-/// Result alias used throughout the crate.
+/// Result alias used throughout the lab.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
-/// Everything that can go wrong in `deferred-msaa`.
+/// Everything that can go wrong in the lab: the renderer, scenes, the bench,
+/// the CLI.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
-    /// A context backend could not be loaded or initialised.
-    #[error("{backend} backend unavailable: {reason}")]
-    BackendUnavailable {
-        /// `egl` or `osmesa`.
-        backend: &'static str,
-        /// What failed, and what to install or try instead.
-        reason: String,
-    },
+    /// An error of the core (GL objects, the resolve, the retrofit).
+    #[error(transparent)]
+    Core(#[from] deferred_msaa::Error),
 
-    /// The context offers less than the OpenGL 3.2 core floor.
-    #[error(
-        "OpenGL {found} is below the supported floor: OpenGL 3.2 core profile and GLSL 1.50 are required"
-    )]
-    GlVersionTooLow {
-        /// The version string the driver reported.
-        found: String,
-    },
-
-    /// A feature needs a newer GL version or an extension the context lacks.
-    #[error("{feature} needs {requires}, which this context ({found}) does not offer")]
-    Unsupported {
-        /// What was asked for.
-        feature: String,
-        /// The version or extension it needs.
-        requires: String,
-        /// What the context has.
-        found: String,
-    },
-
-    /// A sample count the driver does not offer for a format.
-    #[error(
-        "{requested}x MSAA is not supported for {format}; the driver offers {}",
-        fmt_counts(supported)
-    )]
-    UnsupportedSampleCount {
-        /// The count that was asked for.
-        requested: u32,
-        /// The internal format's name.
-        format: String,
-        /// The counts the driver offers for it.
-        supported: Vec<u32>,
-    },
-
-    /// An internal format the crate cannot use for this purpose.
-    #[error("attachment `{attachment}`: format {format} is not supported ({reason})")]
-    UnsupportedFormat {
-        /// The attachment it was declared for.
-        attachment: String,
-        /// The format's name (or its GL enum in hex when unknown).
-        format: String,
-        /// Why, and what is supported instead.
-        reason: String,
-    },
-
-    /// A GL object could not be created.
-    #[error("could not create {what}: {reason}")]
-    Create {
-        /// The kind of object and its label.
-        what: String,
-        /// The driver's words.
-        reason: String,
-    },
-
-    /// A framebuffer is not complete.
-    #[error("framebuffer `{label}` is incomplete: {status}")]
-    FramebufferIncomplete {
-        /// The framebuffer's debug label.
-        label: String,
-        /// The status enum's name, e.g. `GL_FRAMEBUFFER_INCOMPLETE_MULTISAMPLE`.
-        status: &'static str,
-    },
-
-    /// A shader stage failed to compile.
-    #[error("{stage} shader `{name}` failed to compile:\n{log}\n{excerpt}")]
-    ShaderCompile {
-        /// `vertex`, `geometry`, `fragment` or `compute`.
-        stage: &'static str,
-        /// The shader's file name or label.
-        name: String,
-        /// The driver's info log.
-        log: String,
-        /// The offending source lines with their numbers.
-        excerpt: String,
-    },
-
-    /// A program failed to link.
-    #[error("program `{name}` failed to link:\n{log}")]
-    ProgramLink {
-        /// The program's label.
-        name: String,
-        /// The driver's info log.
-        log: String,
-    },
-
-    /// `glGetError` reported an error after a stage.
-    #[error("GL error {code_name} (0x{code:04X}) during {stage}")]
-    Gl {
-        /// What was being done.
-        stage: String,
-        /// The raw error code.
-        code: u32,
-        /// Its name, e.g. `GL_OUT_OF_MEMORY`.
-        code_name: &'static str,
-    },
-
-    /// A host framebuffer cannot be retrofitted as it is.
-    #[error("cannot retrofit host framebuffer, attachment `{attachment}`: {reason}")]
-    Retrofit {
-        /// The attachment point, e.g. `GL_COLOR_ATTACHMENT2` or `GL_DEPTH_ATTACHMENT`.
-        attachment: String,
-        /// Why, and what is needed instead.
-        reason: String,
-    },
-
-    /// A G-buffer would take more memory than its budget allows
-    /// ([`MemoryBudget`](crate::gbuffer::MemoryBudget)), and no lower sample
-    /// count fits or stepping down was refused (strict).
-    #[error(
-        "the G-buffer needs {} at {samples}x, over the memory budget of {}; allow more memory (--memory-budget), fewer samples or a smaller size",
-        crate::gbuffer::fmt_bytes(*needed),
-        crate::gbuffer::fmt_bytes(*budget)
-    )]
-    MemoryBudget {
-        /// Bytes the G-buffer would take at `samples`.
-        needed: u64,
-        /// The budget in bytes.
-        budget: u64,
-        /// The sample count asked for (as the driver rounds it).
-        samples: u32,
-    },
-
-    /// A G-buffer layout that cannot work.
-    #[error("invalid G-buffer layout: {0}")]
-    Layout(String),
+    /// A headless context could not be made.
+    #[error(transparent)]
+    Context(#[from] deferred_msaa_headless::Error),
 
     /// A scene could not be loaded.
     #[error("{}: {reason}", path.display())]
@@ -161,6 +31,10 @@ pub enum Error {
     /// A size, count or option outside what is accepted.
     #[error("{0}")]
     InvalidArgument(String),
+
+    /// A G-buffer layout or plan that cannot work.
+    #[error("invalid G-buffer layout: {0}")]
+    Layout(String),
 
     /// A file could not be read or written.
     #[error("{}: {source}", path.display())]
@@ -181,14 +55,6 @@ pub enum Error {
     },
 }
 
-fn fmt_counts(counts: &[u32]) -> String {
-    if counts.is_empty() {
-        return "no multisampling".to_string();
-    }
-    let list: Vec<String> = counts.iter().map(|c| format!("{c}x")).collect();
-    list.join(", ")
-}
-
 impl Error {
     /// Shorthand for an [`Error::InvalidArgument`].
     pub fn invalid(message: impl Into<String>) -> Self {
@@ -200,6 +66,14 @@ impl Error {
         Error::Io {
             path: path.into(),
             source,
+        }
+    }
+
+    /// The core's error inside, if this is one.
+    pub fn core(&self) -> Option<&deferred_msaa::Error> {
+        match self {
+            Error::Core(e) => Some(e),
+            _ => None,
         }
     }
 }

@@ -38,7 +38,7 @@ use crate::gbuffer::{
 use crate::gl::{Capabilities, Format};
 use crate::renderer::shaders::lighting_defines;
 use crate::renderer::{AaMode, RenderOptions};
-use crate::resolve::{KeySource, ResolveMethod, Window};
+use crate::resolve::{KeySource, ResolveMethod, ResolveSlot, Window};
 use crate::scene::{AlphaMode, Background, Scene};
 use crate::{Error, Result};
 
@@ -557,11 +557,12 @@ impl Plan {
             let bytes = gbuffer_bytes(&layout, width, height, None);
             if bytes > budget_bytes {
                 if options.memory_budget.strict {
-                    return Err(Error::MemoryBudget {
+                    return Err(deferred_msaa::Error::MemoryBudget {
                         needed: bytes,
                         budget: budget_bytes,
                         samples: 1,
-                    });
+                    }
+                    .into());
                 }
                 warnings.push(format!(
                     "memory budget: the single-sample G-buffer needs {}, over the budget of {}; there is no lower sample count to step down to",
@@ -845,7 +846,7 @@ fn remove(layout: &mut GBufferLayout, name: &str) {
     if let Some(key) = key_name {
         layout.key = layout
             .index_of(&key)
-            .map_or(KeySource::Depth, KeySource::Position);
+            .map_or(KeySource::Depth, |k| KeySource::Position(ResolveSlot(k)));
     }
 }
 

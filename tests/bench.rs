@@ -5,7 +5,7 @@
 
 mod common;
 
-use deferred_msaa::bench::{DEFAULT_SCENES, MethodEntry};
+use deferred_msaa_lab::bench::{DEFAULT_SCENES, MethodEntry};
 use serde_json::Value;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -147,7 +147,7 @@ fn the_report_has_every_key_and_one_run_per_scene_method_and_count() {
     // Run without --scene: the defaults are the scenes the claims are about.
     assert_eq!(DEFAULT_SCENES, SCENES);
     let runs = runs(report);
-    let labels: Vec<String> = deferred_msaa::bench::default_methods()
+    let labels: Vec<String> = deferred_msaa_lab::bench::default_methods()
         .into_iter()
         .map(|e| e.label)
         .collect();
@@ -508,7 +508,7 @@ fn bad_input_is_refused_in_one_line() {
     }
     // Methods the renderer does not offer yet say so rather than run something else.
     for m in ["per-sample", "complex"] {
-        let entry: deferred_msaa::bench::MethodEntry = m.parse().expect("a known method");
+        let entry: deferred_msaa_lab::bench::MethodEntry = m.parse().expect("a known method");
         if !entry.method.available() {
             let o = cli(&["bench", "--methods", m, "--report", d]);
             assert!(!o.status.success());

@@ -6,12 +6,12 @@
 mod common;
 
 use deferred_msaa::Error;
-use deferred_msaa::gbuffer::{MemoryBudget, choose_samples, gbuffer_bytes, real_sample_count};
-use deferred_msaa::gl::live_objects;
-use deferred_msaa::plan::{Plan, PlanContext};
-use deferred_msaa::renderer::{AaMode, RenderOptions, Renderer};
-use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions};
-use deferred_msaa::scene::Scene;
+use deferred_msaa_lab::gbuffer::{MemoryBudget, choose_samples, gbuffer_bytes, real_sample_count};
+use deferred_msaa_lab::gl::live_objects;
+use deferred_msaa_lab::plan::{Plan, PlanContext};
+use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
+use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
+use deferred_msaa_lab::scene::Scene;
 use std::process::Command;
 
 /// 100 bytes a sample: count n costs 100·n (1: single-sample).
@@ -119,7 +119,10 @@ fn the_plan_weighs_the_whole_g_buffer_before_anything_is_allocated() {
         &options(MemoryBudget::limit(at(8) - 1).strict()),
     )
     .unwrap_err();
-    assert!(matches!(e, Error::MemoryBudget { samples: 8, .. }), "{e}");
+    assert!(
+        matches!(e.core(), Some(Error::MemoryBudget { samples: 8, .. })),
+        "{e}"
+    );
 }
 
 #[test]
@@ -171,14 +174,14 @@ fn on_a_real_context_a_tiny_budget_falls_back_to_single_sample_or_refuses() {
     };
     let e = r.set_options(gl, &strict).unwrap_err();
     assert!(
-        matches!(e, Error::MemoryBudget { budget, samples, .. } if budget == single && samples == multisampled),
+        matches!(e.core(), Some(Error::MemoryBudget { budget, samples, .. }) if *budget == single && *samples == multisampled),
         "{e}"
     );
     assert_eq!(r.samples(), multisampled);
     r.render(gl).unwrap();
     r.destroy(gl);
     let e = Renderer::new(gl, |n| ctx.get_proc_address(n), &scene, &strict).unwrap_err();
-    assert!(matches!(e, Error::MemoryBudget { .. }), "{e}");
+    assert!(matches!(e.core(), Some(Error::MemoryBudget { .. })), "{e}");
     assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
 }
 
@@ -192,12 +195,15 @@ fn the_retrofit_weighs_its_twins_and_refuses_what_does_not_fit() {
         gl,
         64,
         36,
-        deferred_msaa::gl::Format::Rgba32f,
-        deferred_msaa::gl::Format::Depth32f,
+        deferred_msaa_lab::gl::Format::Rgba32f,
+        deferred_msaa_lab::gl::Format::Depth32f,
     );
-    let options = RetrofitOptions::default();
-    let ok = MsaaRetrofit::with_budget(gl, host.fbo.raw, &options, &MemoryBudget::limit(1 << 30))
-        .unwrap();
+    let budgeted = |budget: MemoryBudget| RetrofitOptions {
+        memory_budget: Some(budget),
+        ..RetrofitOptions::default()
+    };
+    let ok =
+        MsaaRetrofit::new(gl, host.fbo.raw(), &budgeted(MemoryBudget::limit(1 << 30))).unwrap();
     assert!(ok.warnings().is_empty());
     let twins = ok.twin().bytes();
     let samples = ok.samples();
@@ -205,7 +211,7 @@ fn the_retrofit_weighs_its_twins_and_refuses_what_does_not_fit() {
     // One byte short of the twins: a lower offered count, or (llvmpipe,
     // 4x only) a refusal, since the retrofit cannot go single-sample.
     let short = MemoryBudget::limit(twins - 1);
-    match MsaaRetrofit::with_budget(gl, host.fbo.raw, &options, &short) {
+    match MsaaRetrofit::new(gl, host.fbo.raw(), &budgeted(short)) {
         Ok(r) => {
             assert!(r.samples() < samples && r.twin().bytes() < twins);
             assert_eq!(r.warnings().len(), 1);
@@ -216,7 +222,7 @@ fn the_retrofit_weighs_its_twins_and_refuses_what_does_not_fit() {
             "{e}"
         ),
     }
-    let e = MsaaRetrofit::with_budget(gl, host.fbo.raw, &options, &short.strict()).unwrap_err();
+    let e = MsaaRetrofit::new(gl, host.fbo.raw(), &budgeted(short.strict())).unwrap_err();
     assert!(matches!(e, Error::MemoryBudget { .. }), "{e}");
     host.destroy(gl);
     assert_eq!(live_objects().total(), 0, "{:?}", live_objects());

@@ -49,7 +49,7 @@ fn info_reports_the_real_context_on_both_backends() {
     if common::egl_context().is_some() {
         check_info(&json(&cli(&["info", "--json"])), "egl");
     }
-    if common::context(deferred_msaa::context::Backend::OsMesa).is_some() {
+    if common::context(deferred_msaa_lab::context::Backend::OsMesa).is_some() {
         check_info(
             &json(&cli(&["info", "--json", "--backend", "osmesa"])),
             "osmesa",

@@ -7,8 +7,8 @@
 use std::sync::{Arc, Barrier};
 use std::thread;
 
-use deferred_msaa::Error;
-use deferred_msaa::context::{Backend, ContextRequest, GlVersion, HeadlessContext};
+use deferred_msaa_lab::context::Error;
+use deferred_msaa_lab::context::{Backend, ContextRequest, GlVersion, HeadlessContext};
 use glow::HasContext;
 
 /// Whether `backend`'s library is installed; prints `skipped: ...` if not.

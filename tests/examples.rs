@@ -16,10 +16,10 @@ use std::process::{Child, Command, Output, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-use deferred_msaa::compare::flip;
-use deferred_msaa::renderer::{AaMode, RenderOptions, Renderer};
-use deferred_msaa::resolve::{ResolveMethod, ResolveSettings};
-use deferred_msaa::scene::Scene;
+use deferred_msaa_lab::compare::flip;
+use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
+use deferred_msaa_lab::resolve::{ResolveMethod, ResolveSettings};
+use deferred_msaa_lab::scene::Scene;
 
 const W: u32 = 160;
 const H: u32 = 90;
@@ -557,9 +557,9 @@ fn viewer_runs_in_a_window_and_switches_live() {
     // sample count, every view round to the final image, orbit away and
     // back. The viewer fails on any blank frame. The views are the final
     // image, the attachments the scene-adaptive plan keeps, depth and complex.
-    let plan = deferred_msaa::plan::Plan::for_scene(
+    let plan = deferred_msaa_lab::plan::Plan::for_scene(
         &Scene::load("builtin:box").expect("the built-in scene"),
-        &deferred_msaa::plan::PlanContext {
+        &deferred_msaa_lab::plan::PlanContext {
             sample_counts: vec![4],
             driver_memory: None,
         },

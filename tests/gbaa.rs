@@ -6,12 +6,12 @@
 
 mod common;
 
-use deferred_msaa::bench::{self, BenchConfig};
-use deferred_msaa::gl::TextureRef;
-use deferred_msaa::gl::{Format, live_objects};
-use deferred_msaa::readback::{Readback, SampleImage};
-use deferred_msaa::renderer::{AaMode, RenderOptions, Renderer};
-use deferred_msaa::scene::{Aabb, Background, Camera, Material, Object, Scene};
+use deferred_msaa_lab::bench::{self, BenchConfig};
+use deferred_msaa_lab::gl::TextureRef;
+use deferred_msaa_lab::gl::{Format, live_objects};
+use deferred_msaa_lab::readback::{Readback, SampleImage};
+use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
+use deferred_msaa_lab::scene::{Aabb, Background, Camera, Material, Object, Scene};
 use glam::{DMat4, DVec3, DVec4, Mat4, Vec3};
 use std::process::Command;
 
@@ -479,7 +479,7 @@ fn linear_to_srgb(l: f64) -> f64 {
 /// Render `scene` with `none` and `gbaa`; the two final images and the
 /// gbaa edge buffers.
 fn render_pair(
-    ctx: &deferred_msaa::context::HeadlessContext,
+    ctx: &deferred_msaa_lab::context::HeadlessContext,
     scene: &Scene,
     w: u32,
     h: u32,

@@ -4,13 +4,13 @@
 mod common;
 
 use deferred_msaa::Error;
-use deferred_msaa::context::{Backend, HeadlessContext};
-use deferred_msaa::gl::{
+use deferred_msaa_lab::context::{Backend, HeadlessContext};
+use deferred_msaa_lab::gl::{
     Attachment, Capabilities, ExtraFns, Format, Framebuffer, GpuTimer, Program, ShaderStage,
     Texture2d, Texture2dMultisample, TextureRef, VertexArray, live_objects, preamble,
     sample_positions,
 };
-use deferred_msaa::readback::Readback;
+use deferred_msaa_lab::readback::Readback;
 use glow::HasContext;
 
 fn contexts() -> Vec<HeadlessContext> {
@@ -60,7 +60,7 @@ fn the_real_sample_count_is_read_back() {
         for requested in 1..=offered[offered.len() - 1] {
             let t = Texture2dMultisample::new(gl, "t", Format::Rgba16f, 4, 4, requested).unwrap();
             let real = unsafe {
-                gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, Some(t.raw));
+                gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, Some(t.raw()));
                 gl.get_tex_level_parameter_i32(
                     glow::TEXTURE_2D_MULTISAMPLE,
                     0,

@@ -7,12 +7,12 @@
 mod common;
 
 use common::golden::{FlipTolerance, Plane, SampleTolerance, check_image, check_samples};
-use deferred_msaa::gbuffer::GBufferLayout;
-use deferred_msaa::gl::{TextureRef, live_objects};
-use deferred_msaa::readback::{Readback, SampleImage};
-use deferred_msaa::renderer::{AaMode, RenderOptions, Renderer};
-use deferred_msaa::resolve::{ResolveRule, ResolveSettings};
-use deferred_msaa::scene::Scene;
+use deferred_msaa_lab::gbuffer::GBufferLayout;
+use deferred_msaa_lab::gl::{TextureRef, live_objects};
+use deferred_msaa_lab::readback::{Readback, SampleImage};
+use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
+use deferred_msaa_lab::resolve::{ResolveRule, ResolveSettings};
+use deferred_msaa_lab::scene::Scene;
 
 const W: u32 = 64;
 const H: u32 = 36;
@@ -85,7 +85,7 @@ fn per_sample_golden(scene_name: &str) {
     renderer.render(gl).unwrap();
     let retrofit = renderer.retrofit().expect("multisampled");
     assert_eq!(retrofit.samples(), 4, "goldens are recorded at 4x");
-    let (depth, colors) = retrofit.inputs().unwrap();
+    let (depth, colors, _) = retrofit.inputs().unwrap();
     let mut readback = Readback::new(gl).unwrap();
     let mut planes = Vec::new();
     for (k, a) in opts.layout.colors.iter().enumerate() {

@@ -5,18 +5,17 @@
 
 mod common;
 
-use deferred_msaa::gbuffer::GBufferLayout;
-use deferred_msaa::gl::{
+use deferred_msaa::ColorAttachment;
+use deferred_msaa_lab::gbuffer::GBufferLayout;
+use deferred_msaa_lab::gl::{
     Attachment, Buffer, Format, Framebuffer, Program, ShaderStage, Texture2d, TextureRef,
     VertexArray, live_objects, preamble,
 };
-use deferred_msaa::readback::{Readback, SampleImage};
-use deferred_msaa::renderer::{AaMode, DepthMode, RenderOptions, Renderer, shaders};
-use deferred_msaa::resolve::{
-    DepthProjection, KeySource, ResolveMethod, ResolveParams, ResolveSettings,
-};
-use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions};
-use deferred_msaa::scene::{AlphaMode, Background, LightKind, Material, Scene};
+use deferred_msaa_lab::readback::{Readback, SampleImage};
+use deferred_msaa_lab::renderer::{AaMode, DepthMode, RenderOptions, Renderer, shaders};
+use deferred_msaa_lab::resolve::{KeySource, ResolveMethod, ResolveSettings, ResolveSlot};
+use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
+use deferred_msaa_lab::scene::{AlphaMode, Background, LightKind, Material, Scene};
 use glam::{DMat4, DVec3};
 use glow::HasContext;
 
@@ -91,7 +90,7 @@ impl Host {
         .unwrap();
         let white =
             Texture2d::with_data(gl, "host white", Format::Rgba8, 1, 1, Some(&[255; 4])).unwrap();
-        let attrib = |name: &str| unsafe { gl.get_attrib_location(model.raw, name) };
+        let attrib = |name: &str| unsafe { gl.get_attrib_location(model.raw(), name) };
         let mut meshes = Vec::new();
         for o in scene.objects.iter().filter(|o| o.indices.len() >= 3) {
             let material = scene.material_of(o);
@@ -113,7 +112,7 @@ impl Host {
                     .unwrap();
                 if let Some(loc) = attrib(name) {
                     unsafe {
-                        gl.bind_buffer(glow::ARRAY_BUFFER, Some(b.raw));
+                        gl.bind_buffer(glow::ARRAY_BUFFER, Some(b.raw()));
                         gl.vertex_attrib_pointer_f32(loc, size, glow::FLOAT, false, 0, 0);
                         gl.enable_vertex_attrib_array(loc);
                     }
@@ -130,7 +129,7 @@ impl Host {
             )
             .unwrap();
             unsafe {
-                gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(ib.raw));
+                gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(ib.raw()));
                 gl.bind_vertex_array(None);
                 gl.bind_buffer(glow::ARRAY_BUFFER, None);
             }
@@ -173,7 +172,7 @@ impl Host {
             gl.enable(glow::MULTISAMPLE);
             for unit in 0..2 {
                 gl.active_texture(glow::TEXTURE0 + unit);
-                gl.bind_texture(glow::TEXTURE_2D, Some(self.white.raw));
+                gl.bind_texture(glow::TEXTURE_2D, Some(self.white.raw()));
             }
         }
         let p = &self.model;
@@ -316,7 +315,7 @@ fn host_lighting(
     {
         unsafe {
             gl.active_texture(glow::TEXTURE0 + unit as u32);
-            gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw));
+            gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw()));
         }
         p.set_i32(gl, name, unit as i32);
     }
@@ -411,13 +410,8 @@ fn a_host_retrofitted_through_the_public_api_matches_the_builtin_pipeline() {
     let camera = scene.camera;
     let projection = camera.projection(W as f32 / H as f32);
     assert_eq!(projection, renderer.projection());
-    let params = ResolveParams {
-        settings,
-        projection: DepthProjection::from_matrix(&projection.as_dmat4(), false, 1.0),
-        fov_y: camera.fov_y as f64,
-        height_px: H,
-    };
-    assert_eq!(Some(params), renderer.resolve_params());
+    let frame = deferred_msaa::Frame::from_matrix(projection.to_cols_array());
+    assert_eq!(frame, renderer.resolve_frame());
     let host = Host::new(gl, &layout, &scene);
     let retrofit_options = RetrofitOptions {
         samples: 4,
@@ -425,15 +419,21 @@ fn a_host_retrofitted_through_the_public_api_matches_the_builtin_pipeline() {
             .colors
             .iter()
             .enumerate()
-            .map(|(k, a)| (k as u32, a.rule))
+            .map(|(k, a)| (ColorAttachment(k as u32), a.rule))
             .collect(),
         position_attachment: match layout.key {
-            KeySource::Position(k) => Some(k as u32),
+            KeySource::Position(ResolveSlot(k)) => Some(ColorAttachment(k as u32)),
             KeySource::Depth => None,
         },
+        resolve: settings,
+        ..RetrofitOptions::default()
     };
+    assert_eq!(
+        Some(&retrofit_options.resolve),
+        renderer.retrofit().map(|r| &r.options().resolve)
+    );
     // The two integration lines.
-    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &retrofit_options).expect("retrofit");
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &retrofit_options).expect("retrofit");
     assert_eq!(msaa.samples(), renderer.samples());
     unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
     let emissive = layout.index_of("emissive").unwrap() as u32;
@@ -443,7 +443,7 @@ fn a_host_retrofitted_through_the_public_api_matches_the_builtin_pipeline() {
         &camera.view.as_dmat4(),
         &projection.to_cols_array(),
     );
-    msaa.resolve(gl, &params).expect("resolve");
+    msaa.resolve(gl, &frame).expect("resolve");
 
     // Every attachment, every pixel.
     let names: Vec<&str> = layout

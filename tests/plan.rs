@@ -5,14 +5,14 @@
 
 mod common;
 
-use deferred_msaa::compare;
-use deferred_msaa::gbuffer::GBufferLayout;
-use deferred_msaa::gl::{TextureRef, live_objects};
-use deferred_msaa::plan::{Pass, Plan, PlanContext, SceneNeeds, SpecularResponse};
-use deferred_msaa::readback::Readback;
-use deferred_msaa::renderer::{AaMode, RenderOptions, Renderer};
-use deferred_msaa::resolve::{KeySource, ResolveSettings};
-use deferred_msaa::scene::Scene;
+use deferred_msaa_lab::compare;
+use deferred_msaa_lab::gbuffer::GBufferLayout;
+use deferred_msaa_lab::gl::{TextureRef, live_objects};
+use deferred_msaa_lab::plan::{Pass, Plan, PlanContext, SceneNeeds, SpecularResponse};
+use deferred_msaa_lab::readback::Readback;
+use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
+use deferred_msaa_lab::resolve::{KeySource, ResolveSettings, ResolveSlot};
+use deferred_msaa_lab::scene::Scene;
 use std::process::Command;
 
 const W: u32 = 128;
@@ -40,7 +40,7 @@ fn median() -> AaMode {
 
 fn average() -> AaMode {
     AaMode::Resolve(ResolveSettings {
-        method: deferred_msaa::resolve::ResolveMethod::Average,
+        method: deferred_msaa_lab::resolve::ResolveMethod::Average,
         ..ResolveSettings::default()
     })
 }
@@ -82,7 +82,7 @@ fn each_builtin_scene_keeps_exactly_the_channels_it_uses() {
         // Emission: kept exactly when a G-buffer material emits.
         let emits = s.objects.iter().any(|o| {
             let m = &s.materials[o.material];
-            m.alpha_mode != deferred_msaa::scene::AlphaMode::Blend && m.is_emissive()
+            m.alpha_mode != deferred_msaa_lab::scene::AlphaMode::Blend && m.is_emissive()
         });
         assert_eq!(plan.layout.index_of("emissive").is_some(), emits, "{name}");
         assert_eq!(plan.runs(Pass::BackgroundCopy), emits, "{name}");
@@ -106,7 +106,7 @@ fn each_builtin_scene_keeps_exactly_the_channels_it_uses() {
         assert_eq!(plan.attachments.len(), plan.layout.colors.len() + 1);
         assert!(plan.attachments.iter().all(|a| a.multisampled), "{name}");
         // The key still reads the position attachment.
-        let KeySource::Position(k) = plan.layout.key else {
+        let KeySource::Position(ResolveSlot(k)) = plan.layout.key else {
             panic!("{name}: the key left the position attachment");
         };
         assert_eq!(plan.layout.colors[k].name, "position", "{name}");
@@ -205,7 +205,7 @@ fn a_layout_without_what_the_scene_needs_is_refused() {
 
 /// Render `name` with `aa`, adaptive or with the full layout.
 fn render(
-    ctx: &deferred_msaa::context::HeadlessContext,
+    ctx: &deferred_msaa_lab::context::HeadlessContext,
     s: &Scene,
     aa: AaMode,
     adaptive: bool,
@@ -331,8 +331,8 @@ fn the_model_and_lighting_shaders_follow_the_plan_not_the_method() {
 /// not all bitwise equal, computed on the CPU from the twins.
 fn key_complex_pixels(gl: &glow::Context, r: &Renderer) -> Vec<bool> {
     let retrofit = r.retrofit().expect("multisampled");
-    let (_, colors) = retrofit.inputs().unwrap();
-    let KeySource::Position(k) = retrofit.key() else {
+    let (_, colors, _) = retrofit.inputs().unwrap();
+    let KeySource::Position(ResolveSlot(k)) = retrofit.key() else {
         panic!("the key comes from the position attachment");
     };
     let mut readback = Readback::new(gl).unwrap();

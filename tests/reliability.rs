@@ -4,11 +4,12 @@
 mod common;
 
 use common::host::{Host, perspective, triangle};
-use deferred_msaa::context::{Backend, HeadlessContext};
-use deferred_msaa::gl::{Format, TextureRef, live_objects};
-use deferred_msaa::readback::Readback;
-use deferred_msaa::resolve::{DepthProjection, ResolveParams, ResolveRule, ResolveSettings};
-use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions};
+use deferred_msaa::ColorAttachment;
+use deferred_msaa_lab::context::{Backend, HeadlessContext};
+use deferred_msaa_lab::gl::{Format, TextureRef, live_objects};
+use deferred_msaa_lab::readback::Readback;
+use deferred_msaa_lab::resolve::{ResolveRule, ResolveSettings};
+use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
 use glow::HasContext;
 
 fn scene(seed: u32) -> Vec<f32> {
@@ -40,19 +41,11 @@ fn scene(seed: u32) -> Vec<f32> {
     v
 }
 
-fn params(width: u32, height: u32, settings: ResolveSettings) -> ResolveParams {
-    let m = perspective(0.9, width as f64 / height as f64, 0.5, Some(100.0));
-    ResolveParams {
-        settings,
-        projection: DepthProjection {
-            p22: m[10],
-            p23: m[14],
-            zero_to_one: false,
-            clear_depth: 1.0,
-        },
-        fov_y: 0.9,
-        height_px: height,
-    }
+fn frame(width: u32, height: u32) -> deferred_msaa::Frame {
+    common::host::frame(
+        &perspective(0.9, width as f64 / height as f64, 0.5, Some(100.0)),
+        false,
+    )
 }
 
 /// Resident set size in bytes (Linux).
@@ -81,18 +74,18 @@ fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
         host.set_triangles(gl, &scene(cycle % 7));
         let options = RetrofitOptions {
             samples: 1 + cycle % 4,
-            rules: vec![(2, ResolveRule::BlendNormal)],
-            position_attachment: Some(1),
+            rules: vec![(ColorAttachment(2), ResolveRule::BlendNormal)],
+            position_attachment: Some(ColorAttachment(1)),
+            ..RetrofitOptions::default()
         };
-        let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &options).unwrap();
+        let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
         unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
         host.draw(
             gl,
             &perspective(0.9, w as f64 / h as f64, 0.5, Some(100.0)),
             false,
         );
-        msaa.resolve(gl, &params(w, h, ResolveSettings::default()))
-            .unwrap();
+        msaa.resolve(gl, &frame(w, h)).unwrap();
         // Change the sample count at run time, then resize the host and refresh.
         msaa.set_samples(gl, 4).unwrap();
         unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
@@ -101,21 +94,18 @@ fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
             &perspective(0.9, w as f64 / h as f64, 0.5, Some(100.0)),
             false,
         );
-        msaa.resolve(
-            gl,
-            &params(
-                w,
-                h,
-                ResolveSettings {
-                    fast_path: cycle % 2 == 0,
-                    ..ResolveSettings::default()
-                },
-            ),
-        )
-        .unwrap();
+        let alternate = RetrofitOptions {
+            resolve: ResolveSettings {
+                fast_path: cycle % 2 == 0,
+                ..ResolveSettings::default()
+            },
+            ..msaa.options().clone()
+        };
+        msaa.set_options(gl, &alternate).unwrap();
+        msaa.resolve(gl, &frame(w, h)).unwrap();
         unsafe {
             for t in [&host.albedo, &host.normal] {
-                gl.bind_texture(glow::TEXTURE_2D, Some(t.raw));
+                gl.bind_texture(glow::TEXTURE_2D, Some(t.raw()));
                 gl.tex_image_2d(
                     glow::TEXTURE_2D,
                     0,
@@ -128,7 +118,7 @@ fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
                     glow::PixelUnpackData::Slice(None),
                 );
             }
-            gl.bind_texture(glow::TEXTURE_2D, Some(host.position.raw));
+            gl.bind_texture(glow::TEXTURE_2D, Some(host.position.raw()));
             gl.tex_image_2d(
                 glow::TEXTURE_2D,
                 0,
@@ -140,7 +130,7 @@ fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
                 glow::FLOAT,
                 glow::PixelUnpackData::Slice(None),
             );
-            gl.bind_texture(glow::TEXTURE_2D, Some(host.depth.raw));
+            gl.bind_texture(glow::TEXTURE_2D, Some(host.depth.raw()));
             gl.tex_image_2d(
                 glow::TEXTURE_2D,
                 0,
@@ -188,9 +178,10 @@ fn render_once(
     host.set_triangles(gl, &scene(seed));
     let mut msaa = MsaaRetrofit::new(
         gl,
-        host.fbo.raw,
+        host.fbo.raw(),
         &RetrofitOptions {
-            position_attachment: Some(1),
+            position_attachment: Some(ColorAttachment(1)),
+            resolve: settings,
             ..Default::default()
         },
     )
@@ -200,7 +191,7 @@ fn render_once(
     for _ in 0..frames {
         unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
         host.draw(gl, &perspective(0.9, 1.5, 0.5, Some(100.0)), false);
-        msaa.resolve(gl, &params(w, h, settings)).unwrap();
+        msaa.resolve(gl, &frame(w, h)).unwrap();
         let frame = rb.read(gl, TextureRef::from(&host.albedo), 1).unwrap().data;
         if !out.is_empty() {
             assert_eq!(out, frame, "frame changed between identical frames");
@@ -224,7 +215,7 @@ fn two_contexts_on_two_threads_render_at_once_without_disturbing_each_other() {
             Backend::Egl,
             2,
             ResolveSettings {
-                method: deferred_msaa::resolve::ResolveMethod::Front,
+                method: deferred_msaa_lab::resolve::ResolveMethod::Front,
                 ..ResolveSettings::default()
             },
         ),
@@ -281,7 +272,7 @@ fn gl_out_of_memory_is_a_typed_error_and_the_context_survives() {
         bytes > 1 << 40,
         "the driver's limits allow only {bytes} bytes"
     );
-    let err = deferred_msaa::gl::Texture2dArray::new(
+    let err = deferred_msaa_lab::gl::Texture2dArray::new(
         gl,
         "far too big",
         Format::Rgba32f,
@@ -304,7 +295,7 @@ fn gl_out_of_memory_is_a_typed_error_and_the_context_survives() {
     );
     assert_eq!(live_objects(), before, "the failed texture was not freed");
     // The context still works.
-    let small = deferred_msaa::gl::Texture2d::new(gl, "small", Format::Rgba8, 4, 4)
+    let small = deferred_msaa_lab::gl::Texture2d::new(gl, "small", Format::Rgba8, 4, 4)
         .expect("a small texture after the failure");
     small.destroy(gl);
     assert_eq!(live_objects(), before);

@@ -8,14 +8,15 @@ mod common;
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use deferred_msaa::Error;
-use deferred_msaa::gbuffer::{GBuffer, GBufferLayout};
-use deferred_msaa::gl::TextureRef;
-use deferred_msaa::gl::{Capabilities, ExtraFns, live_objects};
-use deferred_msaa::readback::Readback;
-use deferred_msaa::renderer::{AaMode, DepthMode, RenderOptions, Renderer};
-use deferred_msaa::resolve::{ResolveMethod, ResolveRule, ResolveSettings};
-use deferred_msaa::scene::Scene;
+use deferred_msaa::Error as CoreError;
+use deferred_msaa_lab::Error;
+use deferred_msaa_lab::gbuffer::{GBuffer, GBufferLayout};
+use deferred_msaa_lab::gl::TextureRef;
+use deferred_msaa_lab::gl::{Capabilities, ExtraFns, live_objects};
+use deferred_msaa_lab::readback::Readback;
+use deferred_msaa_lab::renderer::{AaMode, DepthMode, RenderOptions, Renderer};
+use deferred_msaa_lab::resolve::{ResolveMethod, ResolveRule, ResolveSettings};
+use deferred_msaa_lab::scene::Scene;
 use glow::HasContext;
 
 const W: u32 = 128;
@@ -216,7 +217,7 @@ fn lighting_and_model_shaders_do_not_change_with_msaa() {
         assert_eq!(r.geometry_program_source(), plain.geometry_program_source());
         let per_sample = r.per_sample_lighting_program_source();
         assert!(
-            per_sample.contains(deferred_msaa::renderer::shaders::LIGHTING_FRAG)
+            per_sample.contains(deferred_msaa_lab::renderer::shaders::LIGHTING_FRAG)
                 && per_sample.contains("#define LIGHTING_FUNCTIONS_ONLY")
                 && per_sample.contains("sampler2DMS"),
             "{per_sample}"
@@ -238,7 +239,7 @@ fn read_attachment(gl: &glow::Context, gbuffer: &GBuffer, k: u32) -> Vec<f32> {
     let (w, h) = (gbuffer.width as usize, gbuffer.height as usize);
     let mut data = vec![0f32; w * h * 4];
     unsafe {
-        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(gbuffer.fbo.raw));
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(gbuffer.fbo.raw()));
         gl.read_buffer(glow::COLOR_ATTACHMENT0 + k);
         gl.read_pixels(
             0,
@@ -288,7 +289,7 @@ fn decal_hook_sees_and_writes_the_resolved_gbuffer() {
             let bound = unsafe { gl.get_parameter_i32(glow::DRAW_FRAMEBUFFER_BINDING) };
             assert_eq!(
                 bound as u32,
-                gbuffer.fbo.raw.0.get(),
+                gbuffer.fbo.raw().0.get(),
                 "the G-buffer is bound for the hook"
             );
             let texels = read_attachment(gl, gbuffer, color);
@@ -298,7 +299,7 @@ fn decal_hook_sees_and_writes_the_resolved_gbuffer() {
                 .count();
             seen_in_hook.borrow_mut().push(model);
             unsafe {
-                gl.bind_framebuffer(glow::FRAMEBUFFER, Some(gbuffer.fbo.raw));
+                gl.bind_framebuffer(glow::FRAMEBUFFER, Some(gbuffer.fbo.raw()));
                 gl.enable(glow::SCISSOR_TEST);
                 gl.scissor(rect.0, rect.1, rect.2, rect.3);
                 gl.clear_buffer_f32_slice(glow::COLOR, color, &[0.05, 0.9, 0.05, 1.0]);
@@ -498,7 +499,6 @@ fn set_options_switches_at_run_time_without_leaks() {
                     "{what}: {} samples",
                     r.samples()
                 );
-                assert!(renderer.resolve_params().is_some());
             }
         }
         let img = render_checked(gl, &mut renderer, what);
@@ -585,8 +585,8 @@ fn fxaa_softens_edges_and_timings_are_reported() {
 /// Read a texture of the renderer back (row 0 at the top).
 fn read_texture(
     gl: &glow::Context,
-    texture: deferred_msaa::gl::TextureRef,
-) -> deferred_msaa::readback::SampleImage {
+    texture: deferred_msaa_lab::gl::TextureRef,
+) -> deferred_msaa_lab::readback::SampleImage {
     let mut readback = Readback::new(gl).expect("readback");
     let img = readback.read(gl, texture, 1).expect("reading a texture");
     readback.destroy(gl);
@@ -616,9 +616,11 @@ fn far_scene_keeps_its_model_with_reversed_z_and_warns_with_the_freespace_layout
         assert_eq!(renderer.depth_mode(), DepthMode::Reversed);
         assert_eq!(renderer.clear_depth(), 0.0);
         assert!(renderer.warnings().is_empty(), "{:#?}", renderer.warnings());
-        let params = renderer.resolve_params().expect("resolve parameters");
-        assert!(params.projection.zero_to_one && params.projection.clear_depth == 0.0);
-        assert_eq!(params.projection.p22, 0.0, "an infinite far plane");
+        let frame = renderer.resolve_frame();
+        assert_eq!(frame.depth_mode, deferred_msaa::DepthMode::ReversedZ);
+        let (projection, _) = frame.depth_terms().expect("a perspective projection");
+        assert!(projection.zero_to_one && projection.clear_depth == 0.0);
+        assert_eq!(projection.p22, 0.0, "an infinite far plane");
         let img = render_checked(gl, &mut renderer, "far, reversed-Z");
         save(&img, "far-reversed");
         // The model, not background, covers most of the view: its depth is
@@ -652,7 +654,10 @@ fn far_scene_keeps_its_model_with_reversed_z_and_warns_with_the_freespace_layout
             &with_depth(DepthMode::Reversed, median()),
         )
         .expect_err("reversed-Z without glClipControl");
-        assert!(matches!(e, Error::Unsupported { .. }), "{e}");
+        assert!(
+            matches!(e, Error::Core(CoreError::Unsupported { .. })),
+            "{e}"
+        );
     }
     renderer.destroy(gl);
 
@@ -761,7 +766,7 @@ fn every_builtin_scene_looks_the_same_with_reversed_and_standard_depth() {
             .zip(standard_position.data.chunks_exact(4))
             .filter(|(a, b)| (0..3).any(|c| (a[c] - b[c]).abs() > 1e-3 * (1.0 + a[2].abs())))
             .count();
-        let flip = deferred_msaa::compare::flip(&standard, &reversed).expect("same size");
+        let flip = deferred_msaa_lab::compare::flip(&standard, &reversed).expect("same size");
         eprintln!(
             "{name}: FLIP mean {:.5} (max {:.3}); {off} pixels with other positions",
             flip.mean, flip.max
@@ -841,7 +846,7 @@ fn the_renderer_leaves_the_hosts_depth_state_as_it_found_it() {
     let again = render_checked(gl, &mut renderer, "box standard, host in zero-to-one");
     assert_eq!(state(), host, "after a standard frame");
     assert_eq!(again, standard);
-    let flip = deferred_msaa::compare::flip(&standard, &reversed).expect("same size");
+    let flip = deferred_msaa_lab::compare::flip(&standard, &reversed).expect("same size");
     assert!(flip.mean < 0.02, "FLIP mean {}", flip.mean);
     extra.set_clip_depth_zero_to_one(false);
     renderer.destroy(gl);
@@ -854,7 +859,7 @@ fn the_renderer_leaves_the_hosts_depth_state_as_it_found_it() {
 
 fn render_with(
     gl: &glow::Context,
-    ctx: &deferred_msaa::context::HeadlessContext,
+    ctx: &deferred_msaa_lab::context::HeadlessContext,
     scene: &Scene,
     opts: &RenderOptions,
     what: &str,
@@ -911,7 +916,7 @@ fn downsample(img: &image::RgbaImage, factor: u32) -> image::RgbaImage {
 /// box-filtered 4×4 in linear light: the 16-sample supersampled reference.
 fn supersampled(
     gl: &glow::Context,
-    ctx: &deferred_msaa::context::HeadlessContext,
+    ctx: &deferred_msaa_lab::context::HeadlessContext,
     scene: &Scene,
 ) -> image::RgbaImage {
     let big = RenderOptions {
@@ -959,7 +964,7 @@ fn per_sample_and_complex_render_every_builtin_scene() {
         assert_eq!(renderer.per_sample_pixels(), Some(marked), "{name}");
         // Complex pixels are lit exactly as per-sample lights them, simple
         // pixels (all samples one surface) from sample 0: the same image.
-        let flip = deferred_msaa::compare::flip(&per_sample, &complex).expect("same size");
+        let flip = deferred_msaa_lab::compare::flip(&per_sample, &complex).expect("same size");
         eprintln!(
             "{name}: complex fraction {fraction:.3}; complex vs per-sample FLIP mean {:.5}",
             flip.mean
@@ -999,7 +1004,7 @@ fn per_sample_lighting_has_the_least_error_against_supersampling() {
             ("complex", AaMode::Complex),
         ] {
             let img = render_with(gl, &ctx, &scene, &options(aa), &format!("{name} {method}"));
-            let flip = deferred_msaa::compare::flip(&reference, &img).expect("same size");
+            let flip = deferred_msaa_lab::compare::flip(&reference, &img).expect("same size");
             errors.push((method, flip.mean));
         }
         eprintln!("{name}: FLIP mean against the 4x4 reference: {errors:?}");
@@ -1099,7 +1104,7 @@ fn per_sample_lighting_cost_grows_with_the_number_of_lights() {
             rng.range(0.3, 1.0),
             rng.range(0.3, 1.0),
         );
-        lit.lights.push(deferred_msaa::scene::Light::point(
+        lit.lights.push(deferred_msaa_lab::scene::Light::point(
             position,
             color,
             rng.range(1.0, 5.0),
@@ -1196,7 +1201,7 @@ fn complex_without_sample_mask_in_child() {
     .expect("complex renderer without gl_SampleMaskIn");
     let complex = render_checked(gl, &mut renderer, "complex, GL 3.2");
     let fraction = renderer.complex_fraction().expect("a fraction");
-    let flip = deferred_msaa::compare::flip(&per_sample, &complex).expect("same size");
+    let flip = deferred_msaa_lab::compare::flip(&per_sample, &complex).expect("same size");
     eprintln!(
         "child: complex fraction {fraction:.3} from discontinuities alone; complex vs per-sample FLIP mean {:.5}",
         flip.mean

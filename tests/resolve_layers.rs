@@ -12,12 +12,15 @@
 mod common;
 
 use common::Rng;
-use deferred_msaa::gl::{Attachment, Format, Framebuffer, Texture2d, Texture2dArray, TextureRef};
-use deferred_msaa::readback::Readback;
-use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
-use deferred_msaa::resolve::{
+use deferred_msaa::ColorAttachment;
+use deferred_msaa_lab::gl::{
+    Attachment, Format, Framebuffer, Texture2d, Texture2dArray, TextureRef,
+};
+use deferred_msaa_lab::readback::Readback;
+use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
+use deferred_msaa_lab::resolve::{
     DepthProjection, KeySource, ResolveInputs, ResolveMethod, ResolveParams, ResolveRule,
-    ResolveSettings, Resolver, Window,
+    ResolveSettings, ResolveSlot, Resolver, Window,
 };
 
 const W: u32 = 24;
@@ -212,6 +215,8 @@ impl Harness {
         settings: ResolveSettings,
     ) {
         let colors: Vec<TextureRef> = self.inputs.iter().map(TextureRef::from).collect();
+        let attachments: Vec<ColorAttachment> =
+            (0..colors.len() as u32).map(ColorAttachment).collect();
         let projection = DepthProjection {
             p22: -1.0,
             p23: -0.2,
@@ -227,8 +232,9 @@ impl Harness {
         let inputs = ResolveInputs {
             depth: TextureRef::from(&self.depth),
             colors: &colors,
+            attachments: &attachments,
             rules: &RULES,
-            key: KeySource::Position(1),
+            key: KeySource::Position(ResolveSlot(1)),
             samples: self.n,
         };
         resolver
@@ -344,7 +350,7 @@ fn run_for(n: u32) {
         return;
     };
     let gl = ctx.gl();
-    let before = deferred_msaa::gl::live_objects();
+    let before = deferred_msaa_lab::gl::live_objects();
     let mut resolver = Resolver::new(gl).unwrap();
     let mut readback = Readback::new(gl).unwrap();
     let harness = Harness::new(gl, n, 0xD5A0 + n as u64);
@@ -354,7 +360,7 @@ fn run_for(n: u32) {
     harness.destroy(gl);
     resolver.destroy(gl);
     readback.destroy(gl);
-    assert_eq!(deferred_msaa::gl::live_objects(), before);
+    assert_eq!(deferred_msaa_lab::gl::live_objects(), before);
 }
 
 #[test]

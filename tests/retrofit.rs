@@ -6,15 +6,14 @@
 mod common;
 
 use common::host::{Host, perspective, triangle};
-use deferred_msaa::Error;
-use deferred_msaa::gl::{Attachment, Format, Texture2d, TextureRef, live_objects};
-use deferred_msaa::readback::Readback;
-use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
-use deferred_msaa::resolve::{
-    DepthProjection, Region, ResolveMethod, ResolveParams, ResolveRule, ResolveSettings, Schedule,
-    Selection, SelectionFlag, Window,
+use deferred_msaa::{ColorAttachment, Error};
+use deferred_msaa_lab::gl::{Attachment, Format, Texture2d, TextureRef, live_objects};
+use deferred_msaa_lab::readback::Readback;
+use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
+use deferred_msaa_lab::resolve::{
+    Region, ResolveMethod, ResolveRule, ResolveSettings, Schedule, Selection, SelectionFlag, Window,
 };
-use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions, introspect};
+use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions, introspect};
 use glow::HasContext;
 
 const W: u32 = 64;
@@ -69,19 +68,14 @@ fn host(gl: &glow::Context) -> Host {
     host
 }
 
-fn params(settings: ResolveSettings) -> ResolveParams {
-    let p = projection();
-    ResolveParams {
-        settings,
-        projection: DepthProjection {
-            p22: p[10],
-            p23: p[14],
-            zero_to_one: false,
-            clear_depth: 1.0,
-        },
-        fov_y: FOV_Y,
-        height_px: H,
-    }
+fn frame() -> deferred_msaa::Frame {
+    common::host::frame(&projection(), false)
+}
+
+/// `tan(fov_y / height)`: the pixel footprint the resolve derives from the frame.
+fn footprint() -> f64 {
+    let (_, fov_y) = frame().depth_terms().unwrap();
+    (fov_y / H as f64).tan()
 }
 
 fn half_close(gpu: f32, cpu: f64) -> bool {
@@ -92,9 +86,9 @@ fn half_close(gpu: f32, cpu: f64) -> bool {
 /// Every sample count the driver really offers (4 on llvmpipe; 2, 4, 8 and
 /// 16 on desktop GPUs): the tests select themselves from what is there.
 fn offered_counts(gl: &glow::Context) -> Vec<u32> {
-    let mut counts = deferred_msaa::gl::Capabilities::sample_counts_for(gl, Format::Rgba16f);
+    let mut counts = deferred_msaa_lab::gl::Capabilities::sample_counts_for(gl, Format::Rgba16f);
     for f in [Format::Rgba32f, Format::Depth32f] {
-        let other = deferred_msaa::gl::Capabilities::sample_counts_for(gl, f);
+        let other = deferred_msaa_lab::gl::Capabilities::sample_counts_for(gl, f);
         counts.retain(|n| other.contains(n));
     }
     counts.retain(|&n| n > 1);
@@ -113,16 +107,17 @@ fn resolve_matches_the_cpu_reference_on_real_samples() {
     }
 }
 
-fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u32) {
+fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples: u32) {
     let gl = ctx.gl();
     let before = live_objects();
     let host = host(gl);
     let options = RetrofitOptions {
         samples,
-        rules: vec![(2, ResolveRule::BlendNormal)],
-        position_attachment: Some(1),
+        rules: vec![(ColorAttachment(2), ResolveRule::BlendNormal)],
+        position_attachment: Some(ColorAttachment(1)),
+        ..RetrofitOptions::default()
     };
-    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &options).unwrap();
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
     assert_eq!(
         msaa.samples(),
         samples,
@@ -133,7 +128,7 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
     host.draw(gl, &projection(), false);
 
     let mut readback = Readback::new(gl).unwrap();
-    let (depth_ref, color_refs) = msaa.inputs().unwrap();
+    let (depth_ref, color_refs, _) = msaa.inputs().unwrap();
     let samples: Vec<_> = color_refs
         .iter()
         .map(|t| readback.read(gl, *t, 1).unwrap())
@@ -162,7 +157,7 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
                     fast_path,
                     ..ResolveSettings::default()
                 };
-                cases.push((settings, msaa.schedule()));
+                cases.push((settings, msaa.options().schedule));
             }
         }
     }
@@ -196,7 +191,7 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
         Selection {
             // Triangles whose colour has red >= 0.5 are anti-aliased.
             flag: Some(SelectionFlag {
-                attachment: 0,
+                attachment: ColorAttachment(0),
                 component: 0,
             }),
             ..Selection::default()
@@ -214,15 +209,19 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
             }
         }
     }
-    let default_schedule = msaa.schedule();
+    let default_options = msaa.options().clone();
     let mut complex_pixels = 0;
     let mut outside_pixels = 0;
     for (settings, schedule) in cases {
         {
             {
-                msaa.set_schedule(schedule).unwrap();
-                let p = params(settings);
-                msaa.resolve(gl, &p).unwrap();
+                let options = RetrofitOptions {
+                    resolve: settings,
+                    schedule,
+                    ..default_options.clone()
+                };
+                msaa.set_options(gl, &options).unwrap();
+                msaa.resolve(gl, &frame()).unwrap();
                 let resolved: Vec<_> = [&host.albedo, &host.position, &host.normal]
                     .iter()
                     .map(|t| readback.read(gl, TextureRef::from(*t), 1).unwrap())
@@ -233,7 +232,7 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
                     rules: msaa.rules().to_vec(),
                     key_source: CpuKeySource::Position(1),
                     clear_depth: 1.0,
-                    footprint: p.footprint(),
+                    footprint: footprint(),
                 };
                 // The same resolve without selective AA.
                 let plain = CpuResolve {
@@ -298,7 +297,7 @@ fn resolve_matches_at(ctx: &deferred_msaa::context::HeadlessContext, samples: u3
             }
         }
     }
-    msaa.set_schedule(default_schedule).unwrap();
+    msaa.set_options(gl, &default_options).unwrap();
     // The scene has edges: the slow path must really have been exercised,
     // and every selection must have turned some complex pixels into one-sample ones.
     assert!(complex_pixels > 30, "only {complex_pixels} complex pixels");
@@ -323,9 +322,9 @@ fn sample_count_and_size_changes_rebuild_the_twins() {
     let host = host(gl);
     let mut msaa = MsaaRetrofit::new(
         gl,
-        host.fbo.raw,
+        host.fbo.raw(),
         &RetrofitOptions {
-            position_attachment: Some(1),
+            position_attachment: Some(ColorAttachment(1)),
             ..Default::default()
         },
     )
@@ -337,16 +336,14 @@ fn sample_count_and_size_changes_rebuild_the_twins() {
         assert!(msaa.samples() >= requested.max(1));
         unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
         host.draw(gl, &projection(), false);
-        msaa.resolve(gl, &params(ResolveSettings::default()))
-            .unwrap();
+        msaa.resolve(gl, &frame()).unwrap();
     }
     assert_ne!(first, msaa.framebuffer());
     let e = msaa.set_samples(gl, 64).unwrap_err();
     assert!(matches!(e, Error::UnsupportedSampleCount { .. }), "{e}");
     assert!(e.to_string().contains("offers"), "{e}");
     // A failed change leaves the retrofit working.
-    msaa.resolve(gl, &params(ResolveSettings::default()))
-        .unwrap();
+    msaa.resolve(gl, &frame()).unwrap();
     msaa.destroy(gl);
     host.destroy(gl);
     assert_eq!(live_objects(), before);
@@ -370,7 +367,7 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
                 glow::FRAMEBUFFER,
                 p.gl_enum(),
                 glow::TEXTURE_2D,
-                Some(t.raw),
+                Some(t.raw()),
                 0,
             );
         }
@@ -462,7 +459,7 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
         gl,
         fbo,
         &RetrofitOptions {
-            rules: vec![(0, ResolveRule::Blend)],
+            rules: vec![(ColorAttachment(0), ResolveRule::Blend)],
             ..Default::default()
         },
     )

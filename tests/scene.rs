@@ -8,7 +8,7 @@
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
-use deferred_msaa::scene::{
+use deferred_msaa_lab::scene::{
     AlphaMode, Background, Camera, DEFAULT_SCENE, LightKind, Object, Scene,
 };
 use glam::{Vec3, Vec4};
@@ -31,7 +31,7 @@ fn scratch(tag: &str) -> PathBuf {
     dir
 }
 
-fn load_path(path: &Path) -> deferred_msaa::Result<Scene> {
+fn load_path(path: &Path) -> deferred_msaa_lab::Result<Scene> {
     Scene::load(path.to_str().expect("utf-8 path"))
 }
 
@@ -480,7 +480,7 @@ fn one_mesh_scene(primitive: Value, node: Value) -> Value {
     })
 }
 
-fn err_line(result: deferred_msaa::Result<Scene>) -> String {
+fn err_line(result: deferred_msaa_lab::Result<Scene>) -> String {
     let msg = result.expect_err("expected an error").to_string();
     assert!(!msg.contains('\n'), "multi-line error: {msg}");
     msg

@@ -6,11 +6,11 @@
 
 mod common;
 
-use deferred_msaa::gl::{TextureRef, live_objects};
-use deferred_msaa::readback::{Readback, SampleImage};
-use deferred_msaa::renderer::{AaMode, RenderOptions, Renderer};
-use deferred_msaa::resolve::{Region, ResolveSettings, Selection};
-use deferred_msaa::scene::Scene;
+use deferred_msaa_lab::gl::{TextureRef, live_objects};
+use deferred_msaa_lab::readback::{Readback, SampleImage};
+use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
+use deferred_msaa_lab::resolve::{Region, ResolveSettings, Selection};
+use deferred_msaa_lab::scene::Scene;
 
 const W: u32 = 128;
 const H: u32 = 72;
@@ -25,7 +25,7 @@ fn color_samples_and_resolved(
         .index_of("color")
         .expect("a color attachment");
     let mut readback = Readback::new(gl).expect("readback");
-    let (_, twins) = renderer
+    let (_, twins, _) = renderer
         .retrofit()
         .expect("multisampled")
         .inputs()
@@ -43,7 +43,11 @@ fn varied(samples: &SampleImage, x: u32, y: u32) -> bool {
     (1..samples.samples).any(|s| samples.get(s, x, y) != samples.get(0, x, y))
 }
 
-fn render(ctx: &deferred_msaa::context::HeadlessContext, scene: &Scene, aa: AaMode) -> Renderer {
+fn render(
+    ctx: &deferred_msaa_lab::context::HeadlessContext,
+    scene: &Scene,
+    aa: AaMode,
+) -> Renderer {
     let gl = ctx.gl();
     let options = RenderOptions {
         width: W,

@@ -12,17 +12,18 @@
 
 mod common;
 
-use deferred_msaa::Error;
-use deferred_msaa::bench::{self, BenchConfig, downsample_srgb};
-use deferred_msaa::compare;
-use deferred_msaa::context::HeadlessContext;
-use deferred_msaa::gbuffer::GBufferLayout;
-use deferred_msaa::gl::live_objects;
-use deferred_msaa::renderer::{
+use deferred_msaa::Error as CoreError;
+use deferred_msaa_lab::Error;
+use deferred_msaa_lab::bench::{self, BenchConfig, downsample_srgb};
+use deferred_msaa_lab::compare;
+use deferred_msaa_lab::context::HeadlessContext;
+use deferred_msaa_lab::gbuffer::GBufferLayout;
+use deferred_msaa_lab::gl::live_objects;
+use deferred_msaa_lab::renderer::{
     AaMode, MASK_OVERFLOW, MASK_SINGLE, RenderOptions, Renderer, SparseOptions,
 };
-use deferred_msaa::resolve::Region;
-use deferred_msaa::scene::Scene;
+use deferred_msaa_lab::resolve::Region;
+use deferred_msaa_lab::scene::Scene;
 
 /// An empty region: every pixel takes one sample (the single-sample path).
 const NOWHERE: Region = Region::Rect {
@@ -80,7 +81,7 @@ fn supported(ctx: &HeadlessContext, scene: &Scene) -> bool {
     }
     let opts = options(sparse(SparseOptions::default()), W, H);
     match Renderer::new(gl, |n| ctx.get_proc_address(n), scene, &opts) {
-        Err(Error::Unsupported { requires, .. }) => {
+        Err(Error::Core(CoreError::Unsupported { requires, .. })) => {
             for m in &missing {
                 assert!(requires.contains(m), "`{requires}` does not name {m}");
             }

@@ -5,11 +5,12 @@
 mod common;
 
 use common::host::{Host, perspective, perspective_reversed, triangle};
-use deferred_msaa::gbuffer::{DepthSetup, GBufferLayout, precision_warnings};
-use deferred_msaa::gl::{ExtraFns, Format, TextureRef, live_objects};
-use deferred_msaa::readback::{Readback, SampleImage};
-use deferred_msaa::resolve::{DepthProjection, ResolveParams, ResolveRule, ResolveSettings};
-use deferred_msaa::retrofit::{MsaaRetrofit, RetrofitOptions};
+use deferred_msaa::ColorAttachment;
+use deferred_msaa_lab::gbuffer::{DepthSetup, GBufferLayout, precision_warnings};
+use deferred_msaa_lab::gl::{ExtraFns, Format, TextureRef, live_objects};
+use deferred_msaa_lab::readback::{Readback, SampleImage};
+use deferred_msaa_lab::resolve::{ResolveRule, ResolveSettings};
+use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
 
 struct Case {
     name: String,
@@ -89,7 +90,7 @@ struct Outcome {
 
 /// Draw, resolve (key from position and from depth) and read back.
 fn run(
-    ctx: &deferred_msaa::context::HeadlessContext,
+    ctx: &deferred_msaa_lab::context::HeadlessContext,
     case: &Case,
     key_from_position: bool,
 ) -> Outcome {
@@ -105,28 +106,20 @@ fn run(
     host.set_triangles(gl, &case.triangles());
     let options = RetrofitOptions {
         samples: 4,
-        rules: vec![(2, ResolveRule::BlendNormal)],
-        position_attachment: key_from_position.then_some(1),
-    };
-    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &options).unwrap();
-    unsafe { glow::HasContext::bind_framebuffer(gl, glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
-    let m = case.projection();
-    host.draw(gl, &m, case.reversed);
-    let params = ResolveParams {
-        settings: ResolveSettings {
+        rules: vec![(ColorAttachment(2), ResolveRule::BlendNormal)],
+        position_attachment: key_from_position.then_some(ColorAttachment(1)),
+        resolve: ResolveSettings {
             fast_path: false,
             ..ResolveSettings::default()
         },
-        projection: DepthProjection {
-            p22: m[10],
-            p23: m[14],
-            zero_to_one: case.reversed,
-            clear_depth: if case.reversed { 0.0 } else { 1.0 },
-        },
-        fov_y: case.fov_y,
-        height_px: case.height,
+        ..RetrofitOptions::default()
     };
-    msaa.resolve(gl, &params).unwrap();
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
+    unsafe { glow::HasContext::bind_framebuffer(gl, glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    let m = case.projection();
+    host.draw(gl, &m, case.reversed);
+    msaa.resolve(gl, &common::host::frame(&m, case.reversed))
+        .unwrap();
     if case.reversed {
         extra.set_clip_depth_zero_to_one(false);
     }
@@ -344,7 +337,7 @@ fn framebuffers_from_1x1_to_the_maximum_width() {
     let Some(ctx) = common::egl_context() else {
         return;
     };
-    let max = deferred_msaa::gl::Capabilities::query(ctx.gl()).max_texture_size;
+    let max = deferred_msaa_lab::gl::Capabilities::query(ctx.gl()).max_texture_size;
     drop(ctx);
     for (w, h) in [(1, 1), (2, 1), (1, 3), (max, 1), (1, max)] {
         check(&Case {
@@ -403,25 +396,15 @@ fn hdr_values_up_to_65504_stay_finite() {
     host.set_triangles(gl, &v);
     let options = RetrofitOptions {
         samples: 4,
-        rules: vec![(0, ResolveRule::BlendHdr)],
-        position_attachment: Some(1),
+        rules: vec![(ColorAttachment(0), ResolveRule::BlendHdr)],
+        position_attachment: Some(ColorAttachment(1)),
+        ..RetrofitOptions::default()
     };
-    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw, &options).unwrap();
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
     unsafe { glow::HasContext::bind_framebuffer(gl, glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
     let m = perspective(1.2, 1.0, 0.1, Some(100.0));
     host.draw(gl, &m, false);
-    let params = ResolveParams {
-        settings: ResolveSettings::default(),
-        projection: DepthProjection {
-            p22: m[10],
-            p23: m[14],
-            zero_to_one: false,
-            clear_depth: 1.0,
-        },
-        fov_y: 1.2,
-        height_px: 32,
-    };
-    msaa.resolve(gl, &params).unwrap();
+    msaa.resolve(gl, &common::host::frame(&m, false)).unwrap();
     let mut rb = Readback::new(gl).unwrap();
     let albedo = rb.read(gl, TextureRef::from(&host.albedo), 1).unwrap();
     assert!(

@@ -5,7 +5,7 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    match deferred_msaa::scene::Scene::from_bytes(data, "fuzz-input") {
+    match deferred_msaa_lab::scene::Scene::from_bytes(data, "fuzz-input") {
         Ok(scene) => {
             // Whatever loads is sane: finite data and indices in range.
             for o in &scene.objects {

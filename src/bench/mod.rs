@@ -20,13 +20,13 @@
 //! or any `.ttf` named by the `DEFERRED_MSAA_FONT` environment variable.
 //!
 //! ```no_run
-//! use deferred_msaa::bench::{self, BenchConfig};
+//! use deferred_msaa_lab::bench::{self, BenchConfig};
 //! let config = BenchConfig { width: 320, height: 180, ..BenchConfig::default() };
 //! let out = std::path::Path::new("target/bench");
 //! bench::prepare_output_dir(out)?;
 //! let output = bench::run(&config)?;
 //! bench::write_outputs(&output, out)?;
-//! # Ok::<(), deferred_msaa::Error>(())
+//! # Ok::<(), deferred_msaa_lab::Error>(())
 //! ```
 
 mod crops;
@@ -140,7 +140,7 @@ impl BenchConfig {
         for spec in &self.scenes {
             check_scene_spec(spec)?;
         }
-        self.layout.validate()
+        Ok(self.layout.validate()?)
     }
 }
 

@@ -119,7 +119,7 @@ impl RenderCmd {
 }
 
 fn parse_region(s: &str) -> std::result::Result<Region, String> {
-    s.parse().map_err(|e: Error| e.to_string())
+    s.parse().map_err(|e: deferred_msaa::Error| e.to_string())
 }
 
 fn parse_budget(s: &str) -> std::result::Result<u64, String> {
@@ -191,6 +191,18 @@ impl RenderArgs {
                     flag: None,
                 },
             };
+            if !(self.c.is_finite() && self.c > 0.0) {
+                return Err(Error::invalid(format!(
+                    "--c must be a finite number above 0, got {}",
+                    self.c
+                )));
+            }
+            if !(self.c_in.is_finite() && self.c_in >= 0.0 && self.c_in < self.c) {
+                return Err(Error::invalid(format!(
+                    "--c-in must be at least 0 and below --c ({}), got {}",
+                    self.c, self.c_in
+                )));
+            }
             settings.validate()?;
             AaMode::Resolve(settings)
         };
@@ -453,7 +465,7 @@ pub fn run_dump(cmd: &DumpCmd) -> Result<()> {
         let (sample_colors, sample_depth): (Vec<TextureRef>, TextureRef) = match renderer.retrofit()
         {
             Some(r) => {
-                let (depth, colors) = r.inputs()?;
+                let (depth, colors, _) = r.inputs()?;
                 (colors, depth)
             }
             None => (

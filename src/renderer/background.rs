@@ -44,7 +44,7 @@ impl BackgroundPass {
         let p = &self.program;
         bind_target(
             gl,
-            target.fbo.raw,
+            target.fbo.raw(),
             target.texture.width,
             target.texture.height,
         );
@@ -71,7 +71,7 @@ impl BackgroundPass {
             &view_to_world.as_mat4().to_cols_array(),
         );
         draw_fullscreen(gl, vao);
-        check_error(gl, "the background pass")
+        Ok(check_error(gl, "the background pass")?)
     }
 
     /// Free the program.

@@ -63,7 +63,7 @@ impl BackgroundCopyPass {
             gl.enable(glow::MULTISAMPLE);
             gl.draw_buffers(&[glow::COLOR_ATTACHMENT0 + target.emissive]);
             gl.active_texture(glow::TEXTURE0);
-            gl.bind_texture(glow::TEXTURE_2D, Some(background.raw));
+            gl.bind_texture(glow::TEXTURE_2D, Some(background.raw()));
         }
         self.program.bind(gl);
         self.program.set_i32(gl, "u_background", 0);
@@ -74,7 +74,7 @@ impl BackgroundCopyPass {
             .map(|b| b.map_or(glow::NONE, |i| glow::COLOR_ATTACHMENT0 + i))
             .collect();
         unsafe { gl.draw_buffers(&mapping) };
-        check_error(gl, "the background copy pass")
+        Ok(check_error(gl, "the background copy pass")?)
     }
 
     /// Free the program.

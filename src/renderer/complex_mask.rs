@@ -8,8 +8,8 @@
 
 use super::lighting_per_sample::SampleInputs;
 use super::pass::{bind_target, draw_fullscreen, fullscreen_state};
+use crate::gl::FULLSCREEN_VERT;
 use crate::gl::{Program, ShaderStage, TextureRef, VertexArray, check_error, preamble};
-use crate::resolve::FULLSCREEN_VERT;
 use crate::{Error, Result};
 use glow::HasContext;
 
@@ -140,7 +140,7 @@ impl ComplexMaskPass {
                 gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
             }
         }
-        check_error(gl, "the complex-pixel detection pass")
+        Ok(check_error(gl, "the complex-pixel detection pass")?)
     }
 
     /// Free the program.

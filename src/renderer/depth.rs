@@ -2,10 +2,10 @@
 //! projection for each, `glClipControl` around the frame, and the precision
 //! check of a layout against the scene's depth range.
 
+use crate::Result;
 use crate::gbuffer::{DepthSetup, GBufferLayout, precision_warnings};
 use crate::gl::Format;
 use crate::scene::{Camera, Scene};
-use crate::{Error, Result};
 use glam::Mat4;
 use glow::HasContext;
 use std::ffi::c_void;
@@ -255,11 +255,12 @@ pub(crate) fn resolve_mode(
         .resolved(clip.available(), depth_format)
         .ok_or_else(|| {
             let v = gl.version();
-            Error::Unsupported {
+            deferred_msaa::Error::Unsupported {
                 feature: "reversed-Z depth (DepthMode::Reversed)".into(),
                 requires: "glClipControl (OpenGL 4.5 or GL_ARB_clip_control)".into(),
                 found: format!("OpenGL {}.{}", v.major, v.minor),
             }
+            .into()
         })
 }
 

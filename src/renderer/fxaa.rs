@@ -33,14 +33,14 @@ impl FxaaPass {
     ) -> Result<()> {
         bind_target(
             gl,
-            target.fbo.raw,
+            target.fbo.raw(),
             target.texture.width,
             target.texture.height,
         );
         fullscreen_state(gl);
         unsafe {
             gl.active_texture(glow::TEXTURE0);
-            gl.bind_texture(glow::TEXTURE_2D, Some(ldr.raw));
+            gl.bind_texture(glow::TEXTURE_2D, Some(ldr.raw()));
         }
         let p = &self.program;
         p.bind(gl);
@@ -51,7 +51,7 @@ impl FxaaPass {
             [1.0 / ldr.width as f32, 1.0 / ldr.height as f32],
         );
         draw_fullscreen(gl, vao);
-        check_error(gl, "the FXAA pass")
+        Ok(check_error(gl, "the FXAA pass")?)
     }
 
     /// Free the program.

@@ -23,12 +23,12 @@ use super::gbaa_geometry::{GbaaGeometryPass, NO_EDGE, edge_defines};
 use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
 use super::targets::ColorTarget;
 use super::tonemap::TONEMAP_FRAG;
+use crate::Result;
 use crate::gbuffer::GBuffer;
 use crate::gl::{
     Attachment, Capabilities, Format, Framebuffer, Program, Texture2d, TextureRef, VertexArray,
     check_error,
 };
-use crate::{Error, Result};
 use glow::HasContext;
 
 /// The post pass's body.
@@ -81,11 +81,12 @@ impl GbaaPasses {
         let caps = Capabilities::query(gl);
         let limit = caps.max_draw_buffers.min(caps.max_color_attachments);
         if colors + 2 > limit {
-            return Err(Error::Unsupported {
+            return Err(deferred_msaa::Error::Unsupported {
                 feature: format!("method `gbaa` on a G-buffer of {colors} colour attachments"),
                 requires: format!("{} colour attachments and draw buffers", colors + 2),
                 found: format!("{limit}"),
-            });
+            }
+            .into());
         }
         let passes = Self::new(gl, slots, colors)?;
         if let Some(old) = slot.replace(passes) {
@@ -154,7 +155,7 @@ impl GbaaPasses {
         targets: &GbaaTargets,
         show_edges: bool,
     ) -> Result<()> {
-        bind_target(gl, out.fbo.raw, out.texture.width, out.texture.height);
+        bind_target(gl, out.fbo.raw(), out.texture.width, out.texture.height);
         fullscreen_state(gl);
         let image = &targets.tonemapped.texture;
         TextureRef::from(image).bind(gl, 0);
@@ -176,7 +177,7 @@ impl GbaaPasses {
         );
         draw_fullscreen(gl, vao);
         unsafe { gl.active_texture(glow::TEXTURE0) };
-        check_error(gl, "the gbaa post pass")
+        Ok(check_error(gl, "the gbaa post pass")?)
     }
 
     /// Free the programs.
@@ -216,7 +217,7 @@ impl GbaaTargets {
             Ok(t) => t,
             Err(e) => {
                 edge.destroy(gl);
-                return Err(e);
+                return Err(e.into());
             }
         };
         let mut attachments = gbuffer.fbo.attachments.clone();
@@ -229,7 +230,7 @@ impl GbaaTargets {
                 Err(e) => {
                     edge.destroy(gl);
                     far.destroy(gl);
-                    return Err(e);
+                    return Err(e.into());
                 }
             };
         let tonemapped = match ColorTarget::new(gl, "gbaa tonemapped", Format::Srgb8Alpha8, w, h) {
@@ -257,7 +258,7 @@ impl GbaaTargets {
     pub(crate) fn clear_edges(&self, gl: &glow::Context) {
         let colors = self.draw_buffers.len() as u32 - 2;
         unsafe {
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.fbo.raw));
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.fbo.raw()));
             gl.disable(glow::SCISSOR_TEST);
             gl.color_mask(true, true, true, true);
             gl.clear_buffer_f32_slice(glow::COLOR, colors, &[NO_EDGE, NO_EDGE, 0.0, 1.0]);

@@ -137,7 +137,7 @@ impl GbaaGeometryPass {
                 depth_func,
             },
         );
-        check_error(gl, "the G-buffer pass of gbaa")
+        Ok(check_error(gl, "the G-buffer pass of gbaa")?)
     }
 
     /// Free the program.

@@ -143,7 +143,7 @@ impl GeometryPass {
                 depth_func,
             },
         );
-        check_error(gl, "the G-buffer pass")
+        Ok(check_error(gl, "the G-buffer pass")?)
     }
 
     /// Free the program.

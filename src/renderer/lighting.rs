@@ -213,7 +213,7 @@ impl LightingPass {
     ) -> Result<()> {
         bind_target(
             gl,
-            target.fbo.raw,
+            target.fbo.raw(),
             target.texture.width,
             target.texture.height,
         );
@@ -237,7 +237,7 @@ impl LightingPass {
         for (unit, (name, texture)) in inputs.iter().enumerate() {
             unsafe {
                 gl.active_texture(glow::TEXTURE0 + unit as u32);
-                gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw));
+                gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw()));
             }
             p.set_i32(gl, name, unit as i32);
         }
@@ -255,7 +255,7 @@ impl LightingPass {
                 gl.bind_texture(glow::TEXTURE_2D, None);
             }
         }
-        check_error(gl, "the lighting pass")
+        Ok(check_error(gl, "the lighting pass")?)
     }
 
     /// Free the program.

@@ -11,8 +11,8 @@ use super::GBufferSlots;
 use super::lighting::{AMBIENT, LIGHTING_FRAG, LightBatch, StandIns, set_batch_blend};
 use super::pass::{LightTarget, draw_fullscreen};
 use super::tonemap::{EXPOSURE, TONEMAP_FRAG, WHITE};
+use crate::gl::FULLSCREEN_VERT;
 use crate::gl::{Buffer, Program, ShaderStage, TextureRef, VertexArray, check_error, preamble};
-use crate::resolve::FULLSCREEN_VERT;
 use crate::retrofit::MsaaRetrofit;
 use crate::{Error, Result};
 use glow::HasContext;
@@ -47,15 +47,14 @@ impl SampleInputs {
     /// renderer's G-buffer has colour `k` at attachment `k`, so host colour
     /// `k` is slot `k`).
     pub(crate) fn of(retrofit: &MsaaRetrofit, slots: GBufferSlots) -> Result<Self> {
-        let (depth, colors) = retrofit.inputs()?;
+        let (depth, colors, _) = retrofit.inputs()?;
         let get = |slot: u32, name: &str| {
-            colors
-                .get(slot as usize)
-                .copied()
-                .ok_or_else(|| Error::Retrofit {
+            colors.get(slot as usize).copied().ok_or_else(|| {
+                Error::from(deferred_msaa::Error::Retrofit {
                     attachment: format!("GL_COLOR_ATTACHMENT{slot}"),
                     reason: format!("the `{name}` attachment has no multisampled twin"),
                 })
+            })
         };
         Ok(SampleInputs {
             color: get(slots.color, "color")?,
@@ -93,13 +92,13 @@ impl LightBlock {
     /// buffer (`what` names the pass in errors and labels). On failure
     /// nothing is left allocated; the program stays the caller's.
     pub(crate) fn new(gl: &glow::Context, program: &Program, what: &str) -> Result<Self> {
-        let block = unsafe { gl.get_uniform_block_index(program.raw, "LightBlock") };
+        let block = unsafe { gl.get_uniform_block_index(program.raw(), "LightBlock") };
         let Some(block) = block else {
             return Err(Error::invalid(format!(
                 "the {what} program has no `LightBlock` uniform block"
             )));
         };
-        unsafe { gl.uniform_block_binding(program.raw, block, LIGHT_BLOCK_BINDING) };
+        unsafe { gl.uniform_block_binding(program.raw(), block, LIGHT_BLOCK_BINDING) };
         let buffer = Buffer::with_size(
             gl,
             &format!("{what} light block"),
@@ -116,7 +115,7 @@ impl LightBlock {
             gl.bind_buffer_base(
                 glow::UNIFORM_BUFFER,
                 LIGHT_BLOCK_BINDING,
-                Some(self.buffer.raw),
+                Some(self.buffer.raw()),
             )
         };
     }
@@ -124,7 +123,7 @@ impl LightBlock {
     /// Upload up to [`LIGHTS_PER_DRAW`] lights for the next draw.
     pub(crate) fn upload(&self, gl: &glow::Context, lights: &[[[f32; 4]; 4]]) {
         unsafe {
-            gl.bind_buffer(glow::UNIFORM_BUFFER, Some(self.buffer.raw));
+            gl.bind_buffer(glow::UNIFORM_BUFFER, Some(self.buffer.raw()));
             gl.buffer_sub_data_u8_slice(glow::UNIFORM_BUFFER, 0, &pack_block(lights));
             gl.bind_buffer(glow::UNIFORM_BUFFER, None);
         }

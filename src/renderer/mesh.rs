@@ -27,9 +27,9 @@ impl AttribLocations {
     pub(crate) fn of(gl: &glow::Context, program: &Program) -> Self {
         unsafe {
             AttribLocations {
-                position: gl.get_attrib_location(program.raw, "a_position"),
-                normal: gl.get_attrib_location(program.raw, "a_normal"),
-                uv: gl.get_attrib_location(program.raw, "a_uv"),
+                position: gl.get_attrib_location(program.raw(), "a_position"),
+                normal: gl.get_attrib_location(program.raw(), "a_normal"),
+                uv: gl.get_attrib_location(program.raw(), "a_uv"),
             }
         }
     }
@@ -68,7 +68,7 @@ impl GpuMesh {
             Ok(b) => b,
             Err(e) => {
                 positions.destroy(gl);
-                return Err(e);
+                return Err(e.into());
             }
         };
         let uvs = match Buffer::with_data(
@@ -82,7 +82,7 @@ impl GpuMesh {
             Err(e) => {
                 positions.destroy(gl);
                 normals.destroy(gl);
-                return Err(e);
+                return Err(e.into());
             }
         };
         let indices = match Buffer::with_data(
@@ -97,7 +97,7 @@ impl GpuMesh {
                 positions.destroy(gl);
                 normals.destroy(gl);
                 uvs.destroy(gl);
-                return Err(e);
+                return Err(e.into());
             }
         };
         let vao = match VertexArray::new(gl, &label("vertex array")) {
@@ -107,12 +107,12 @@ impl GpuMesh {
                 normals.destroy(gl);
                 uvs.destroy(gl);
                 indices.destroy(gl);
-                return Err(e);
+                return Err(e.into());
             }
         };
         unsafe {
             vao.bind(gl);
-            gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(indices.raw));
+            gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(indices.raw()));
             gl.bind_vertex_array(None);
             gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, None);
         }
@@ -145,7 +145,7 @@ impl GpuMesh {
                 ];
                 for (loc, buffer, size) in streams {
                     if let Some(loc) = loc {
-                        gl.bind_buffer(glow::ARRAY_BUFFER, Some(buffer.raw));
+                        gl.bind_buffer(glow::ARRAY_BUFFER, Some(buffer.raw()));
                         gl.vertex_attrib_pointer_f32(loc, size, glow::FLOAT, false, 0, 0);
                         gl.enable_vertex_attrib_array(loc);
                     }
@@ -243,7 +243,7 @@ fn upload_texture(
         Some(&data.rgba8),
     )?;
     unsafe {
-        gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw));
+        gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw()));
         gl.generate_mipmap(glow::TEXTURE_2D);
         gl.tex_parameter_i32(
             glow::TEXTURE_2D,
@@ -261,7 +261,7 @@ fn upload_texture(
     }
     if let Err(e) = check_error(gl, &format!("building mipmaps of scene texture {index}")) {
         texture.destroy(gl);
-        return Err(e);
+        return Err(e.into());
     }
     Ok(texture)
 }
@@ -334,12 +334,12 @@ impl GpuScene {
             gl.active_texture(glow::TEXTURE0 + BASE_TEXTURE_UNIT);
             gl.bind_texture(
                 glow::TEXTURE_2D,
-                Some(texture(material.base_color_texture).raw),
+                Some(texture(material.base_color_texture).raw()),
             );
             gl.active_texture(glow::TEXTURE0 + EMISSIVE_TEXTURE_UNIT);
             gl.bind_texture(
                 glow::TEXTURE_2D,
-                Some(texture(material.emissive_texture).raw),
+                Some(texture(material.emissive_texture).raw()),
             );
         }
         program.set_vec4(gl, "u_base_color", material.base_color);

@@ -84,13 +84,15 @@ mod targets;
 mod tonemap;
 mod transparent;
 
+use crate::frame::{DepthMode as ResolveDepthMode, Frame as ResolveFrame};
 use crate::gbuffer::{GBuffer, GBufferLayout, MemoryBudget};
+use crate::gl::ColorAttachment;
 use crate::gl::{
     Attachment, Capabilities, Framebuffer, GpuTimer, Texture2d, TextureRef, TimerKind, VertexArray,
     check_error, framebuffer_status_name,
 };
 use crate::plan::{Pass, Plan, PlanContext, SceneNeeds};
-use crate::resolve::{DepthProjection, KeySource, ResolveParams, ResolveSettings, SelectionFlag};
+use crate::resolve::{KeySource, ResolveSettings, ResolveSlot, SelectionFlag};
 use crate::retrofit::{MsaaRetrofit, RetrofitOptions};
 use crate::scene::{Background, Camera, Light, Scene};
 use crate::{Error, Result};
@@ -256,7 +258,7 @@ pub struct RenderOptions {
     /// The memory safety valve: the G-buffer's bytes are estimated before
     /// allocating and, over this budget, the sample count steps down with a
     /// warning ([`Renderer::warnings`]) or, when strict, the renderer
-    /// refuses with [`Error::MemoryBudget`]. Default: half the free video
+    /// refuses with [`Error::MemoryBudget`](deferred_msaa::Error::MemoryBudget). Default: half the free video
     /// memory the driver reports, else 1 GiB, not strict.
     pub memory_budget: MemoryBudget,
     /// Standard depth or reversed-Z. Default: [`DepthMode::Auto`] (reversed-Z
@@ -313,9 +315,15 @@ impl RenderOptions {
         GBufferSlots::of(&self.layout).map(|_| ())
     }
 
-    /// The retrofit options for this layout and sample count: each
-    /// attachment's rule, and the position attachment as the depth key.
-    fn retrofit_options(&self) -> RetrofitOptions {
+    /// The retrofit options for this layout, sample count and method: each
+    /// attachment's rule, the position attachment as the depth key, and
+    /// the resolve's settings, with `opt_out_flag` as the selective-AA flag
+    /// unless the settings name one.
+    fn retrofit_options(&self, opt_out_flag: Option<SelectionFlag>) -> RetrofitOptions {
+        let mut resolve = self.aa.settings().unwrap_or_default();
+        if resolve.selection.flag.is_none() {
+            resolve.selection.flag = opt_out_flag;
+        }
         RetrofitOptions {
             samples: self.samples,
             rules: self
@@ -323,12 +331,14 @@ impl RenderOptions {
                 .colors
                 .iter()
                 .enumerate()
-                .map(|(k, a)| (k as u32, a.rule))
+                .map(|(k, a)| (ColorAttachment(k as u32), a.rule))
                 .collect(),
             position_attachment: match self.layout.key {
-                KeySource::Position(k) => Some(k as u32),
+                KeySource::Position(ResolveSlot(k)) => Some(ColorAttachment(k as u32)),
                 KeySource::Depth => None,
             },
+            resolve,
+            ..RetrofitOptions::default()
         }
     }
 }
@@ -454,7 +464,7 @@ impl Passes {
                     Ok(v) => v,
                     Err(e) => {
                         $( $built.destroy(gl); )*
-                        return Err(e);
+                        return Err(e.into());
                     }
                 }
             };
@@ -652,14 +662,22 @@ struct Frame {
 }
 
 impl Frame {
-    fn new(gl: &glow::Context, options: &RenderOptions) -> Result<Self> {
+    fn new(
+        gl: &glow::Context,
+        options: &RenderOptions,
+        opt_out_flag: Option<SelectionFlag>,
+    ) -> Result<Self> {
         let gbuffer = GBuffer::new(gl, &options.layout, options.width, options.height)?;
         let retrofit = if options.aa.is_multisampled() {
-            match MsaaRetrofit::new(gl, gbuffer.fbo.raw, &options.retrofit_options()) {
+            match MsaaRetrofit::new(
+                gl,
+                gbuffer.fbo.raw(),
+                &options.retrofit_options(opt_out_flag),
+            ) {
                 Ok(r) => Some(r),
                 Err(e) => {
                     gbuffer.destroy(gl);
-                    return Err(e);
+                    return Err(e.into());
                 }
             }
         } else {
@@ -712,7 +730,7 @@ fn allocate_gbuffer_textures(
             Ok(t) => colors.push(t),
             Err(e) => {
                 free_textures(gl, colors, None);
-                return Err(e);
+                return Err(e.into());
             }
         }
     }
@@ -720,7 +738,7 @@ fn allocate_gbuffer_textures(
         Ok(depth) => Ok((colors, depth)),
         Err(e) => {
             free_textures(gl, colors, None);
-            Err(e)
+            Err(e.into())
         }
     }
 }
@@ -753,13 +771,13 @@ fn attach_gbuffer_textures(
         TextureRef::from(depth),
     ));
     let status = unsafe {
-        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo.raw));
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo.raw()));
         for (point, texture) in &attachments {
             gl.framebuffer_texture_2d(
                 glow::FRAMEBUFFER,
                 point.gl_enum(),
                 glow::TEXTURE_2D,
-                Some(texture.raw),
+                Some(texture.raw()),
                 0,
             );
         }
@@ -772,10 +790,11 @@ fn attach_gbuffer_textures(
         &format!("re-attaching the textures of framebuffer `{}`", fbo.label),
     )?;
     if status != glow::FRAMEBUFFER_COMPLETE {
-        return Err(Error::FramebufferIncomplete {
+        return Err(deferred_msaa::Error::FramebufferIncomplete {
             label: fbo.label.clone(),
             status: framebuffer_status_name(status),
-        });
+        }
+        .into());
     }
     fbo.width = depth.width;
     fbo.height = depth.height;
@@ -808,6 +827,9 @@ fn timed(gl: &glow::Context, timer: &mut GpuTimer, f: impl FnOnce() -> Result<()
 
 /// The demo deferred renderer; see the [module documentation](self).
 pub struct Renderer {
+    /// The selective-AA flag of objects that opted out of anti-aliasing,
+    /// when the scene has any.
+    opt_out_flag: Option<SelectionFlag>,
     /// The options the frame runs with: those asked for with the plan's
     /// layout, sample count and method.
     options: RenderOptions,
@@ -864,8 +886,8 @@ impl Renderer {
     /// the scene reaches from the camera; each finding is logged with
     /// `log::warn!` and kept ([`Renderer::warnings`]). Errors: invalid
     /// options, a layout the scene cannot do without,
-    /// [`Error::MemoryBudget`] with a strict budget, and
-    /// [`Error::Unsupported`] for [`DepthMode::Reversed`] on a context
+    /// [`Error::MemoryBudget`](deferred_msaa::Error::MemoryBudget) with a strict budget, and
+    /// [`Error::Unsupported`](deferred_msaa::Error::Unsupported) for [`DepthMode::Reversed`] on a context
     /// without `glClipControl`.
     pub fn new(
         gl: &glow::Context,
@@ -902,7 +924,18 @@ impl Renderer {
                 return Err(e);
             }
         };
-        let frame = match Frame::new(gl, options) {
+        // Objects that opted out of anti-aliasing (`Object::antialias`, a
+        // glTF `extras` field) write 0 into `color.a`: the resolve reads it
+        // as its selective-AA flag unless the options name another.
+        let opt_out_flag = gpu_scene
+            .gbuffer_items
+            .iter()
+            .any(|i| !i.antialias)
+            .then_some(SelectionFlag {
+                attachment: ColorAttachment(slots.color),
+                component: 3,
+            });
+        let frame = match Frame::new(gl, options, opt_out_flag) {
             Ok(f) => f,
             Err(e) => {
                 passes.destroy(gl);
@@ -911,6 +944,7 @@ impl Renderer {
             }
         };
         let mut renderer = Renderer {
+            opt_out_flag,
             options: options.clone(),
             requested: requested.clone(),
             plan,
@@ -1019,7 +1053,7 @@ impl Renderer {
         let clear_depth = depth_mode.clear_depth();
         let view = self.camera.view.as_dmat4();
         let projection = self.projection();
-        let params = self.resolve_params();
+        let resolve_frame = self.resolve_frame();
         let batches = light_batches(&self.lights, &view);
         let footprint = (self.camera.fov_y / height as f32).tan();
         self.per_sample_pixels = None;
@@ -1086,11 +1120,11 @@ impl Renderer {
             _ => None,
         };
         let (fbo, draw_buffers) = match (gbaa, coverage, retrofit.as_ref()) {
-            (Some((_, g)), _, _) => (g.fbo.raw, g.draw_buffers.clone()),
-            (None, Some((_, c)), _) => (c.fbo.raw, c.draw_buffers.clone()),
+            (Some((_, g)), _, _) => (g.fbo.raw(), g.draw_buffers.clone()),
+            (None, Some((_, c)), _) => (c.fbo.raw(), c.draw_buffers.clone()),
             (None, None, Some(r)) => (r.framebuffer(), r.host().draw_buffers.clone()),
             (None, None, None) => (
-                gbuffer.fbo.raw,
+                gbuffer.fbo.raw(),
                 (0..gbuffer.colors.len() as u32).map(Some).collect(),
             ),
         };
@@ -1126,7 +1160,7 @@ impl Renderer {
                 return sparse_state.build_lists(
                     gl,
                     &self.scene,
-                    gbuffer.fbo.raw,
+                    gbuffer.fbo.raw(),
                     fullscreen,
                     &build,
                 );
@@ -1164,20 +1198,20 @@ impl Renderer {
         })?;
 
         // The second integration line: resolve into the G-buffer's own textures.
-        if let (Some(r), Some(params)) = (retrofit.as_mut(), params) {
-            t.resolve_ms = timed(gl, timer, || r.resolve(gl, &params))?;
+        if let Some(r) = retrofit.as_mut() {
+            t.resolve_ms = timed(gl, timer, || Ok(r.resolve(gl, &resolve_frame)?))?;
         }
 
         if let Some(hook) = self.decal_hook.as_mut() {
             t.decal_ms = timed(gl, timer, || {
                 gbuffer.fbo.bind(gl);
                 hook(gl, gbuffer);
-                check_error(gl, "the decal hook")
+                Ok(check_error(gl, "the decal hook")?)
             })?;
         }
 
         let hdr = LightTarget {
-            fbo: targets.hdr.fbo.raw,
+            fbo: targets.hdr.fbo.raw(),
             width,
             height,
             stencil: StencilSelect::All,
@@ -1221,14 +1255,14 @@ impl Renderer {
                     ));
                 };
                 let mask_target = MaskTarget {
-                    fbo: c.hdr_with_stencil.raw,
+                    fbo: c.hdr_with_stencil.raw(),
                     width,
                     height,
                 };
                 let flags = c.coverage.as_ref().map(|c| TextureRef::from(&c.texture));
                 mask.draw(gl, mask_target, fullscreen, &inputs, flags, footprint)?;
                 let select = |value| LightTarget {
-                    fbo: c.hdr_with_stencil.raw,
+                    fbo: c.hdr_with_stencil.raw(),
                     width,
                     height,
                     stencil: StencilSelect::Equal(value),
@@ -1450,12 +1484,11 @@ impl Renderer {
         let (w, h) = (self.options.width, self.options.height);
         match self.options.aa {
             AaMode::Resolve(_) => {
-                let (Some(params), Some(retrofit)) =
-                    (self.resolve_params(), self.frame.retrofit.as_mut())
-                else {
+                let resolve_frame = self.resolve_frame();
+                let Some(retrofit) = self.frame.retrofit.as_mut() else {
                     return Ok(None);
                 };
-                slow_path::slow_path_mask(gl, retrofit, &params).map(Some)
+                slow_path::slow_path_mask(gl, retrofit, &resolve_frame).map(Some)
             }
             AaMode::Complex => self.read_complex_mask(gl),
             AaMode::PerSample => Ok(Some(image::GrayImage::from_pixel(w, h, image::Luma([255])))),
@@ -1573,7 +1606,7 @@ impl Renderer {
     /// program when the attachment numbers moved).
     fn rebuild_frame(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
         let slots = GBufferSlots::of(&options.layout)?;
-        let frame = Frame::new(gl, options)?;
+        let frame = Frame::new(gl, options, self.opt_out_flag)?;
         let geometry = if slots != self.passes.geometry.slots() {
             match GeometryPass::new(gl, slots) {
                 Ok(g) => Some(g),
@@ -1680,16 +1713,18 @@ impl Renderer {
         options: &RenderOptions,
         host_changed: bool,
     ) -> Result<()> {
+        let retrofit_options = options.retrofit_options(self.opt_out_flag);
         match (&mut self.frame.retrofit, options.aa.is_multisampled()) {
             (Some(r), true) => {
-                if host_changed || options.samples != self.options.samples {
+                if host_changed {
                     // Rebuilds the twins from the host framebuffer as it is now.
-                    r.set_samples(gl, options.samples)?;
+                    r.refresh(gl)?;
                 }
+                // Rebuilds only what the options change.
+                r.set_options(gl, &retrofit_options)?;
             }
             (None, true) => {
-                let r =
-                    MsaaRetrofit::new(gl, self.frame.gbuffer.fbo.raw, &options.retrofit_options())?;
+                let r = MsaaRetrofit::new(gl, self.frame.gbuffer.fbo.raw(), &retrofit_options)?;
                 self.frame.retrofit = Some(r);
             }
             (Some(_), false) => {
@@ -1720,30 +1755,15 @@ impl Renderer {
         depth::projection(&self.camera, aspect, self.depth_mode)
     }
 
-    /// What the resolve is given each frame, when multisampling.
-    pub fn resolve_params(&self) -> Option<ResolveParams> {
-        let mut settings = self.options.aa.settings()?;
-        // Objects that opted out of anti-aliasing (`Object::antialias`, a
-        // glTF `extras` field) write 0 into `color.a`: the resolve reads it
-        // as its selective-AA flag unless the caller chose another.
-        if settings.selection.flag.is_none()
-            && self.scene.gbuffer_items.iter().any(|i| !i.antialias)
-        {
-            settings.selection.flag = Some(SelectionFlag {
-                attachment: self.passes.geometry.slots().color as usize,
-                component: 3,
-            });
-        }
-        Some(ResolveParams {
-            settings,
-            projection: DepthProjection::from_matrix(
-                &self.projection().as_dmat4(),
-                self.depth_mode.is_reversed(),
-                f64::from(self.clear_depth()),
-            ),
-            fov_y: self.camera.fov_y as f64,
-            height_px: self.options.height,
-        })
+    /// What the resolve is given each frame: the projection in the frame's
+    /// depth mode.
+    pub fn resolve_frame(&self) -> ResolveFrame {
+        let mode = if self.depth_mode.is_reversed() {
+            ResolveDepthMode::ReversedZ
+        } else {
+            ResolveDepthMode::Standard
+        };
+        ResolveFrame::from(self.projection()).with_depth_mode(mode)
     }
 
     /// The lighting fragment shader exactly as compiled (preamble, defines

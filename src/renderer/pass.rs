@@ -2,8 +2,8 @@
 //! state, and binding a target.
 
 use crate::Result;
+use crate::gl::FULLSCREEN_VERT;
 use crate::gl::{Program, ShaderStage, VertexArray, preamble};
-use crate::resolve::FULLSCREEN_VERT;
 use glow::HasContext;
 
 /// Build a full-screen program: `fullscreen.vert` and `frag_body`, with
@@ -16,7 +16,7 @@ pub(crate) fn fullscreen_program(
     defines: &[(String, String)],
     output: &str,
 ) -> Result<Program> {
-    Program::build(
+    Ok(Program::build(
         gl,
         label,
         &preamble(&[], defines),
@@ -25,7 +25,7 @@ pub(crate) fn fullscreen_program(
             (ShaderStage::Fragment, frag_name, frag_body),
         ],
         &[(output, 0)],
-    )
+    )?)
 }
 
 /// Bind `fbo` to `GL_FRAMEBUFFER` with a `width`×`height` viewport.

@@ -4,8 +4,8 @@
 //! discarded (their draw buffers are `GL_NONE`), so the G-buffer is left as
 //! the frame made it.
 
+use crate::frame::Frame as ResolveFrame;
 use crate::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef};
-use crate::resolve::ResolveParams;
 use crate::retrofit::MsaaRetrofit;
 use crate::{Error, Result};
 use glow::HasContext;
@@ -17,7 +17,7 @@ use glow::HasContext;
 pub(crate) fn slow_path_mask(
     gl: &glow::Context,
     retrofit: &mut MsaaRetrofit,
-    params: &ResolveParams,
+    frame: &ResolveFrame,
 ) -> Result<image::GrayImage> {
     let (w, h) = retrofit.host().size();
     let mask = Texture2d::new(gl, "slow-path mask", Format::R8, w, h)?;
@@ -35,20 +35,20 @@ pub(crate) fn slow_path_mask(
         Ok(f) => f,
         Err(e) => {
             mask.destroy(gl);
-            return Err(e);
+            return Err(e.into());
         }
     };
     let result = (|| {
         // Pixels a resolve variant never draws count as fast.
         unsafe {
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo.raw));
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo.raw()));
             gl.disable(glow::SCISSOR_TEST);
             gl.color_mask(true, true, true, true);
             gl.clear_color(0.0, 0.0, 0.0, 0.0);
             gl.clear(glow::COLOR_BUFFER_BIT);
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
         }
-        retrofit.resolve_into(gl, &fbo, params, true)?;
+        retrofit.resolve_into(gl, &fbo, frame, true)?;
         read_r8(gl, &fbo)
     })();
     fbo.destroy(gl);

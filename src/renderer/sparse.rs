@@ -147,7 +147,7 @@ pub(crate) fn apply_region(
 /// `GL_ARB_shader_image_load_store` (all core by OpenGL 4.3) and
 /// `GL_ARB_post_depth_coverage`. They are checked against the context's
 /// extension list at run time; without them [`Renderer::new`] and
-/// [`Renderer::set_options`] return [`Error::Unsupported`] naming what is
+/// [`Renderer::set_options`] return [`Error::Unsupported`](deferred_msaa::Error::Unsupported) naming what is
 /// missing. The pre-pass requests [`RenderOptions::samples`] (at most 32).
 ///
 /// [`Object::antialias`]: crate::scene::Object::antialias
@@ -300,7 +300,7 @@ pub(crate) fn missing_extensions(available: &HashSet<String>) -> Vec<&'static st
         .collect()
 }
 
-/// [`Error::Unsupported`] when `aa` is [`AaMode::Sparse`] and the context
+/// [`Error::Unsupported`](deferred_msaa::Error::Unsupported) when `aa` is [`AaMode::Sparse`] and the context
 /// lacks what it needs; `Ok` otherwise.
 pub(crate) fn check_support(gl: &glow::Context, aa: &AaMode) -> Result<()> {
     if !matches!(aa, AaMode::Sparse(_)) {
@@ -311,7 +311,7 @@ pub(crate) fn check_support(gl: &glow::Context, aa: &AaMode) -> Result<()> {
         return Ok(());
     }
     let caps = Capabilities::query(gl);
-    Err(Error::Unsupported {
+    Err(deferred_msaa::Error::Unsupported {
         feature: "method `sparse` (per-pixel linked lists of G-buffer blocks)".into(),
         requires: format!(
             "{} (the shader storage buffers and atomic counters of OpenGL 4.3, and post-depth \
@@ -329,7 +329,8 @@ pub(crate) fn check_support(gl: &glow::Context, aa: &AaMode) -> Result<()> {
                 ", no shader storage buffers"
             }
         ),
-    })
+    }
+    .into())
 }
 
 /// The programs and targets of [`AaMode::Sparse`]; the programs are built
@@ -448,7 +449,7 @@ impl SparseState {
 }
 
 impl Renderer {
-    /// Whether this context can render with `aa`: [`Error::Unsupported`],
+    /// Whether this context can render with `aa`: [`Error::Unsupported`](deferred_msaa::Error::Unsupported),
     /// naming what is missing, when it cannot. Of the methods, only
     /// [`AaMode::Sparse`] needs more than OpenGL 3.2 (the others fall back
     /// where a feature is missing); [`Renderer::new`] and

@@ -11,13 +11,13 @@
 use super::sparse_targets::SparseTargets;
 use super::{EXTENSIONS, SPARSE_FRAG, apply_region};
 use crate::Result;
+use crate::gl::FULLSCREEN_VERT;
 use crate::gl::{Program, ShaderStage, TextureRef, VertexArray, check_error, preamble};
 use crate::renderer::geometry::{GEOMETRY_FRAG, GEOMETRY_VERT};
 use crate::renderer::mesh::{
     AttribLocations, BASE_TEXTURE_UNIT, EMISSIVE_TEXTURE_UNIT, GpuScene, set_culling,
 };
 use crate::renderer::pass::{bind_target, draw_fullscreen, fullscreen_state};
-use crate::resolve::FULLSCREEN_VERT;
 use crate::resolve::Region;
 use glam::{DMat4, Mat4};
 use glow::HasContext;
@@ -118,7 +118,7 @@ impl SparseBuildPasses {
             Ok(p) => p,
             Err(e) => {
                 depth.program.destroy(gl);
-                return Err(e);
+                return Err(e.into());
             }
         };
         let body = format!(
@@ -153,7 +153,7 @@ impl SparseBuildPasses {
         scene: &GpuScene,
         params: &BuildParams<'_>,
     ) -> Result<()> {
-        bind_target(gl, targets.fbo.raw, targets.width, targets.height);
+        bind_target(gl, targets.fbo.raw(), targets.width, targets.height);
         unsafe {
             gl.disable(glow::SCISSOR_TEST);
             gl.disable(glow::STENCIL_TEST);
@@ -183,7 +183,7 @@ impl SparseBuildPasses {
             scene.meshes[item.mesh].draw(gl, m.locations);
         }
         unsafe { gl.bind_vertex_array(None) };
-        check_error(gl, "the sparse depth pre-pass")
+        Ok(check_error(gl, "the sparse depth pre-pass")?)
     }
 
     /// The set-up pass into the G-buffer's framebuffer `gbuffer_fbo`
@@ -219,7 +219,7 @@ impl SparseBuildPasses {
             gl.active_texture(glow::TEXTURE0);
             gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
         }
-        check_error(gl, "the sparse set-up pass")
+        Ok(check_error(gl, "the sparse set-up pass")?)
     }
 
     /// The G-buffer pass: every opaque and alpha-tested object again, at the
@@ -233,7 +233,7 @@ impl SparseBuildPasses {
         params: &BuildParams<'_>,
     ) -> Result<()> {
         targets.reset_counters(gl);
-        bind_target(gl, targets.fbo.raw, targets.width, targets.height);
+        bind_target(gl, targets.fbo.raw(), targets.width, targets.height);
         unsafe {
             gl.disable(glow::SCISSOR_TEST);
             gl.disable(glow::BLEND);
@@ -280,7 +280,7 @@ impl SparseBuildPasses {
                     | glow::ATOMIC_COUNTER_BARRIER_BIT,
             );
         }
-        check_error(gl, "the sparse G-buffer pass")
+        Ok(check_error(gl, "the sparse G-buffer pass")?)
     }
 
     /// Free the programs.

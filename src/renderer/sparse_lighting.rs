@@ -7,12 +7,12 @@
 use super::sparse_targets::SparseTargets;
 use super::{EXTENSIONS, SPARSE_FRAG, apply_region};
 use crate::Result;
+use crate::gl::FULLSCREEN_VERT;
 use crate::gl::{Program, ShaderStage, Texture2d, VertexArray, check_error, preamble};
 use crate::renderer::lighting::{AMBIENT, LIGHTING_FRAG, LightBatch, set_batch_blend};
 use crate::renderer::lighting_per_sample::{LIGHTS_PER_DRAW, LightBlock};
 use crate::renderer::pass::{LightTarget, draw_fullscreen};
 use crate::renderer::tonemap::{EXPOSURE, TONEMAP_FRAG, WHITE};
-use crate::resolve::FULLSCREEN_VERT;
 use crate::resolve::Region;
 use glam::Mat4;
 use glow::HasContext;
@@ -116,7 +116,7 @@ impl SparseLightingPass {
         p.bind(gl);
         unsafe {
             gl.active_texture(glow::TEXTURE0);
-            gl.bind_texture(glow::TEXTURE_2D, Some(params.background.raw));
+            gl.bind_texture(glow::TEXTURE_2D, Some(params.background.raw()));
         }
         p.set_i32(gl, "u_background", 0);
         p.set_u32(gl, "u_width", targets.width);
@@ -153,7 +153,7 @@ impl SparseLightingPass {
             gl.bind_texture(glow::TEXTURE_2D, None);
         }
         SparseTargets::unbind_buffers(gl);
-        check_error(gl, "the sparse lighting pass")
+        Ok(check_error(gl, "the sparse lighting pass")?)
     }
 
     /// Free the program and the buffer.

@@ -122,7 +122,7 @@ impl SparseTargets {
             Ok(f) => f,
             Err(e) => {
                 depth.destroy(gl);
-                return Err(e);
+                return Err(e.into());
             }
         };
         // Each buffer in turn; on failure, free what was made before it.
@@ -206,22 +206,22 @@ impl SparseTargets {
             gl.bind_buffer_base(
                 glow::SHADER_STORAGE_BUFFER,
                 HEADS_BINDING,
-                Some(self.heads.raw),
+                Some(self.heads.raw()),
             );
             gl.bind_buffer_base(
                 glow::SHADER_STORAGE_BUFFER,
                 FIRST_BINDING,
-                Some(self.first.raw),
+                Some(self.first.raw()),
             );
             gl.bind_buffer_base(
                 glow::SHADER_STORAGE_BUFFER,
                 POOL_BINDING,
-                Some(self.pool.raw),
+                Some(self.pool.raw()),
             );
             gl.bind_buffer_base(
                 glow::ATOMIC_COUNTER_BUFFER,
                 COUNTER_BINDING,
-                Some(self.counters.raw),
+                Some(self.counters.raw()),
             );
         }
     }
@@ -239,7 +239,7 @@ impl SparseTargets {
     /// Zero both counters (before the G-buffer pass).
     pub(crate) fn reset_counters(&self, gl: &glow::Context) {
         unsafe {
-            gl.bind_buffer(glow::ATOMIC_COUNTER_BUFFER, Some(self.counters.raw));
+            gl.bind_buffer(glow::ATOMIC_COUNTER_BUFFER, Some(self.counters.raw()));
             gl.buffer_sub_data_u8_slice(glow::ATOMIC_COUNTER_BUFFER, 0, &[0u8; COUNTER_BYTES]);
             gl.bind_buffer(glow::ATOMIC_COUNTER_BUFFER, None);
         }
@@ -251,7 +251,7 @@ impl SparseTargets {
         let mut bytes = [0u8; COUNTER_BYTES];
         unsafe {
             gl.memory_barrier(glow::BUFFER_UPDATE_BARRIER_BIT | glow::ATOMIC_COUNTER_BARRIER_BIT);
-            gl.bind_buffer(glow::ATOMIC_COUNTER_BUFFER, Some(self.counters.raw));
+            gl.bind_buffer(glow::ATOMIC_COUNTER_BUFFER, Some(self.counters.raw()));
             gl.get_buffer_sub_data(glow::ATOMIC_COUNTER_BUFFER, 0, &mut bytes);
             gl.bind_buffer(glow::ATOMIC_COUNTER_BUFFER, None);
         }
@@ -266,7 +266,7 @@ impl SparseTargets {
         let mut bytes = vec![0u8; self.heads.size];
         unsafe {
             gl.memory_barrier(glow::BUFFER_UPDATE_BARRIER_BIT);
-            gl.bind_buffer(glow::SHADER_STORAGE_BUFFER, Some(self.heads.raw));
+            gl.bind_buffer(glow::SHADER_STORAGE_BUFFER, Some(self.heads.raw()));
             gl.get_buffer_sub_data(glow::SHADER_STORAGE_BUFFER, 0, &mut bytes);
             gl.bind_buffer(glow::SHADER_STORAGE_BUFFER, None);
         }

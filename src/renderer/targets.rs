@@ -45,7 +45,7 @@ impl ColorTarget {
             Ok(fbo) => Ok(ColorTarget { texture, fbo }),
             Err(e) => {
                 texture.destroy(gl);
-                Err(e)
+                Err(e.into())
             }
         }
     }
@@ -99,7 +99,7 @@ impl Targets {
             Err(e) => {
                 background.destroy(gl);
                 hdr.destroy(gl);
-                return Err(e);
+                return Err(e.into());
             }
         };
         let ldr = match Self::ldr_target(gl, "ldr", w, h) {
@@ -213,7 +213,7 @@ impl ComplexTargets {
             Ok(f) => f,
             Err(e) => {
                 stencil.destroy(gl);
-                return Err(e);
+                return Err(e.into());
             }
         };
         let coverage = match coverage {
@@ -288,7 +288,7 @@ impl CoverageTarget {
             }),
             Err(e) => {
                 texture.destroy(gl);
-                Err(e)
+                Err(e.into())
             }
         }
     }

@@ -41,14 +41,14 @@ impl TonemapPass {
     ) -> Result<()> {
         bind_target(
             gl,
-            target.fbo.raw,
+            target.fbo.raw(),
             target.texture.width,
             target.texture.height,
         );
         fullscreen_state(gl);
         unsafe {
             gl.active_texture(glow::TEXTURE0);
-            gl.bind_texture(glow::TEXTURE_2D, Some(hdr.raw));
+            gl.bind_texture(glow::TEXTURE_2D, Some(hdr.raw()));
         }
         let p = &self.program;
         p.bind(gl);
@@ -56,7 +56,7 @@ impl TonemapPass {
         p.set_f32(gl, "u_exposure", EXPOSURE);
         p.set_f32(gl, "u_white", WHITE);
         draw_fullscreen(gl, vao);
-        check_error(gl, "the tonemap pass")
+        Ok(check_error(gl, "the tonemap pass")?)
     }
 
     /// Free the program.

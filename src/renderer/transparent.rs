@@ -76,7 +76,7 @@ impl TransparentPass {
         // View space looks down -z: the most negative z is the farthest.
         order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
 
-        bind_target(gl, target.raw, target.width, target.height);
+        bind_target(gl, target.raw(), target.width, target.height);
         unsafe {
             gl.enable(glow::DEPTH_TEST);
             gl.depth_func(depth_func);
@@ -109,7 +109,7 @@ impl TransparentPass {
             gl.bind_vertex_array(None);
             gl.depth_mask(true);
         }
-        check_error(gl, "the transparent pass")
+        Ok(check_error(gl, "the transparent pass")?)
     }
 
     /// Free the program.

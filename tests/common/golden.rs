@@ -235,7 +235,7 @@ pub fn check_image(name: &str, image: &RgbaImage, tol: FlipTolerance) {
         missing(name, &file, |p| image.save(p).expect("writing candidate"));
     };
     let golden = golden.to_rgba8();
-    let stats = deferred_msaa::compare::flip(&golden, image).unwrap_or_else(|| {
+    let stats = deferred_msaa_lab::compare::flip(&golden, image).unwrap_or_else(|| {
         panic!(
             "{name}: size {:?} differs from the golden's {:?}",
             image.dimensions(),

@@ -3,7 +3,7 @@
 //! the public API alone.
 #![allow(dead_code)]
 
-use deferred_msaa::gl::{
+use deferred_msaa_lab::gl::{
     Attachment, Buffer, Format, Framebuffer, Program, ShaderStage, Texture2d, TextureRef,
     VertexArray, preamble,
 };
@@ -149,11 +149,13 @@ impl Host {
         .unwrap();
         unsafe {
             self.vao.bind(gl);
-            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo.raw));
+            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo.raw()));
             let pos = gl
-                .get_attrib_location(self.program.raw, "a_position")
+                .get_attrib_location(self.program.raw(), "a_position")
                 .unwrap();
-            let col = gl.get_attrib_location(self.program.raw, "a_color").unwrap();
+            let col = gl
+                .get_attrib_location(self.program.raw(), "a_color")
+                .unwrap();
             gl.enable_vertex_attrib_array(pos);
             gl.vertex_attrib_pointer_f32(pos, 3, glow::FLOAT, false, 24, 0);
             gl.enable_vertex_attrib_array(col);
@@ -204,4 +206,15 @@ pub fn triangle(out: &mut Vec<f32>, corners: [[f32; 3]; 3], colour: [f32; 3]) {
         out.extend_from_slice(&c);
         out.extend_from_slice(&colour);
     }
+}
+
+/// The frame the resolve is given for a draw with `projection`: the matrix
+/// as the host uploads it (f32), in standard or reversed-Z depth.
+pub fn frame(projection: &[f64; 16], reversed: bool) -> deferred_msaa::Frame {
+    let mode = if reversed {
+        deferred_msaa::DepthMode::ReversedZ
+    } else {
+        deferred_msaa::DepthMode::Standard
+    };
+    deferred_msaa::Frame::from_matrix(projection.map(|v| v as f32)).with_depth_mode(mode)
 }

@@ -4,7 +4,7 @@
 pub mod golden;
 pub mod host;
 
-use deferred_msaa::context::{Backend, HeadlessContext};
+use deferred_msaa_lab::context::{Backend, HeadlessContext};
 
 /// An EGL context, or `None` (with a printed reason) when the system library is absent.
 pub fn egl_context() -> Option<HeadlessContext> {

@@ -9,7 +9,7 @@ use glow::HasContext;
 #[derive(Debug)]
 pub struct Buffer {
     /// The GL name.
-    pub raw: glow::Buffer,
+    pub(crate) raw: glow::Buffer,
     /// The target it was created for, e.g. `ARRAY_BUFFER`.
     pub target: u32,
     /// Size in bytes.
@@ -17,6 +17,12 @@ pub struct Buffer {
 }
 
 impl Buffer {
+    /// The GL handle, for the host's own calls (binding, attaching);
+    /// [`Buffer::destroy`] frees it.
+    pub fn raw(&self) -> glow::Buffer {
+        self.raw
+    }
+
     /// Create a buffer of `target` holding `data` (`usage` e.g. `STATIC_DRAW`).
     pub fn with_data(
         gl: &glow::Context,
@@ -89,10 +95,16 @@ impl Buffer {
 #[derive(Debug)]
 pub struct VertexArray {
     /// The GL name.
-    pub raw: glow::VertexArray,
+    pub(crate) raw: glow::VertexArray,
 }
 
 impl VertexArray {
+    /// The GL handle, for the host's own calls (binding, attaching);
+    /// [`VertexArray::destroy`] frees it.
+    pub fn raw(&self) -> glow::VertexArray {
+        self.raw
+    }
+
     /// Create an empty vertex array.
     pub fn new(gl: &glow::Context, label: &str) -> Result<Self> {
         let raw = unsafe { gl.create_vertex_array() }.map_err(|reason| Error::Create {

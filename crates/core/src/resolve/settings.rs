@@ -5,8 +5,9 @@ use std::str::FromStr;
 
 /// How the reference sample of a pixel is chosen, and whether samples are
 /// weighted by closeness to it (DESIGN.md section 3).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
 pub enum ResolveMethod {
     /// Every sample weighs 1: what a hardware resolve (`glBlitFramebuffer`) does.
     /// Its reference sample (for `Select` attachments and depth) is the median's.
@@ -20,8 +21,9 @@ pub enum ResolveMethod {
 }
 
 /// The closeness window of the depth-aware methods.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
 pub enum Window {
     /// `w = 1` if `d <= c·m`, else 0 (the paper's Eq. 1).
     Hard,
@@ -36,7 +38,8 @@ pub enum Window {
 /// `Z = p23 / (z_ndc + p22)`. That one formula covers standard, reversed-Z and
 /// infinite-far projections alike; only `z_ndc`'s relation to the stored depth
 /// differs with `glClipControl`'s depth mode.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DepthProjection {
     /// The projection matrix's third-row, third-column entry.
     pub p22: f64,
@@ -50,11 +53,12 @@ pub struct DepthProjection {
 }
 
 impl DepthProjection {
-    /// Read the terms off a column-major projection matrix.
-    pub fn from_matrix(m: &glam::DMat4, zero_to_one: bool, clear_depth: f64) -> Self {
+    /// Read the terms off a column-major projection matrix (`m[10]` and
+    /// `m[14]`, as `glUniformMatrix4fv` takes it untransposed).
+    pub fn from_matrix(m: &[f64; 16], zero_to_one: bool, clear_depth: f64) -> Self {
         DepthProjection {
-            p22: m.z_axis.z,
-            p23: m.w_axis.z,
+            p22: m[10],
+            p23: m[14],
             zero_to_one,
             clear_depth,
         }
@@ -72,7 +76,8 @@ impl DepthProjection {
 }
 
 /// Everything that selects the resolve's behaviour, apart from the layout.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ResolveSettings {
     /// How the reference sample is chosen.
     pub method: ResolveMethod,
@@ -95,7 +100,8 @@ pub struct ResolveSettings {
 /// sample — sample 0 of every attachment and of depth, exactly as a uniform
 /// pixel on the fast path does. The criteria combine: a pixel is resolved
 /// only when it passes every one that is set.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Selection {
     /// Resolve only pixels whose centre lies in this screen region (a VR
     /// lens's sweet spot, a HUD-free area).
@@ -111,8 +117,9 @@ pub struct Selection {
 
 /// A screen region, in pixels with the origin at the top-left corner (as
 /// images are read); pixel `(x, y)` is inside when its centre is.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case", tag = "shape")]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case", tag = "shape"))]
 pub enum Region {
     /// `x <= cx < x + width`, `y <= cy < y + height` for the pixel centre `(cx, cy)`.
     Rect {
@@ -139,10 +146,11 @@ pub enum Region {
 }
 
 /// The attachment component that carries a per-object anti-aliasing flag.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SelectionFlag {
-    /// Colour attachment number (a float format).
-    pub attachment: usize,
+    /// The colour attachment holding the flag (a float or normalised format).
+    pub attachment: crate::gl::ColorAttachment,
     /// Component, 0..=3 (x, y, z, w).
     pub component: u8,
 }
@@ -299,13 +307,13 @@ impl ResolveSettings {
     pub fn validate(&self) -> crate::Result<()> {
         if !(self.c.is_finite() && self.c > 0.0) {
             return Err(crate::Error::invalid(format!(
-                "--c must be a finite number above 0, got {}",
+                "the window width c must be a finite number above 0, got {}",
                 self.c
             )));
         }
         if !(self.c_in.is_finite() && self.c_in >= 0.0 && self.c_in < self.c) {
             return Err(crate::Error::invalid(format!(
-                "--c-in must be at least 0 and below --c ({}), got {}",
+                "the inner window width c_in must be at least 0 and below c ({}), got {}",
                 self.c, self.c_in
             )));
         }
@@ -359,8 +367,9 @@ name_table!(Window, "window",
 );
 
 /// The rule by which one attachment's samples become one value (DESIGN.md section 3).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
 pub enum ResolveRule {
     /// Weighted mean over the samples whose value is finite.
     Blend,
@@ -370,6 +379,17 @@ pub enum ResolveRule {
     BlendHdr,
     /// The reference sample's value, never blended.
     Select,
+}
+
+impl ResolveRule {
+    /// The rule an attachment of `format` resolves by unless told otherwise:
+    /// integer formats are never blended.
+    pub const fn default_for(format: crate::gl::Format) -> ResolveRule {
+        match format.sample_kind() {
+            crate::gl::format::SampleKind::Float => ResolveRule::Blend,
+            _ => ResolveRule::Select,
+        }
+    }
 }
 
 name_table!(ResolveRule, "resolve rule",
@@ -382,6 +402,19 @@ name_table!(ResolveRule, "resolve rule",
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn integer_formats_select() {
+        use crate::gl::Format;
+        assert_eq!(
+            ResolveRule::default_for(Format::Rgba8ui),
+            ResolveRule::Select
+        );
+        assert_eq!(
+            ResolveRule::default_for(Format::Rgba16f),
+            ResolveRule::Blend
+        );
+    }
 
     #[test]
     fn regions_contain_the_pixels_whose_centres_they_cover() {

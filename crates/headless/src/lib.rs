@@ -24,8 +24,13 @@
 //! [`HeadlessContext::make_current`] on the new thread. Several contexts may
 //! live at once, on one thread or on many, for either backend or both.
 
+#![warn(missing_docs)]
+
 mod egl;
+mod error;
 mod osmesa;
+
+pub use error::{Error, Result};
 
 use std::cell::Cell;
 use std::ffi::{CStr, CString, c_void};
@@ -35,8 +40,6 @@ use std::mem::ManuallyDrop;
 use std::str::FromStr;
 
 use glow::HasContext;
-
-use crate::{Error, Result};
 
 /// A way of getting a headless OpenGL context.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]

@@ -1,12 +1,13 @@
 //! Declarative G-buffer layouts.
 
 use crate::gl::Format;
-use crate::resolve::{KeySource, MAX_ATTACHMENTS, ResolveRule};
+use crate::resolve::{KeySource, MAX_ATTACHMENTS, ResolveRule, ResolveSlot};
 use crate::{Error, Result};
 
 /// One colour attachment: its name, storage and resolve rule. Its index in
 /// [`GBufferLayout::colors`] is its colour attachment and fragment output number.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct AttachmentDesc {
     /// Name used in views, dumps and errors (`color`, `position`, …).
     pub name: String,
@@ -22,7 +23,7 @@ impl AttachmentDesc {
         AttachmentDesc {
             name: name.to_string(),
             format,
-            rule: format.default_rule(),
+            rule: ResolveRule::default_for(format),
         }
     }
 
@@ -34,7 +35,8 @@ impl AttachmentDesc {
 }
 
 /// A G-buffer layout: colour attachments, the depth format, the key source.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct GBufferLayout {
     /// Colour attachments in attachment order.
     pub colors: Vec<AttachmentDesc>,
@@ -58,7 +60,7 @@ impl GBufferLayout {
                 AttachmentDesc::new("emissive", Format::Rgba16f).with_rule(ResolveRule::BlendHdr),
             ],
             depth: Format::Depth24,
-            key: KeySource::Position(1),
+            key: KeySource::Position(ResolveSlot(1)),
         }
     }
 
@@ -100,7 +102,7 @@ impl GBufferLayout {
     /// The attachment the key is read from, if the key comes from a position.
     pub fn key_attachment(&self) -> Option<&AttachmentDesc> {
         match self.key {
-            KeySource::Position(k) => self.colors.get(k),
+            KeySource::Position(ResolveSlot(k)) => self.colors.get(k),
             KeySource::Depth => None,
         }
     }
@@ -153,7 +155,9 @@ impl GBufferLayout {
                     reason: "a colour attachment needs a colour format".into(),
                 });
             }
-            if a.format.default_rule() == ResolveRule::Select && a.rule != ResolveRule::Select {
+            if ResolveRule::default_for(a.format) == ResolveRule::Select
+                && a.rule != ResolveRule::Select
+            {
                 return Err(Error::UnsupportedFormat {
                     attachment: a.name.clone(),
                     format: a.format.name().into(),
@@ -164,14 +168,14 @@ impl GBufferLayout {
                 });
             }
         }
-        if let KeySource::Position(k) = self.key {
+        if let KeySource::Position(ResolveSlot(k)) = self.key {
             match self.colors.get(k) {
                 None => {
                     return Err(Error::Layout(format!(
                         "the depth key reads colour attachment {k}, which does not exist"
                     )));
                 }
-                Some(a) if a.format.default_rule() == ResolveRule::Select => {
+                Some(a) if ResolveRule::default_for(a.format) == ResolveRule::Select => {
                     return Err(Error::UnsupportedFormat {
                         attachment: a.name.clone(),
                         format: a.format.name().into(),
@@ -218,7 +222,7 @@ mod tests {
         let e = l.validate().unwrap_err().to_string();
         assert!(e.contains("material") && e.contains("RGBA8UI"), "{e}");
         let mut l = GBufferLayout::freespace_open();
-        l.key = KeySource::Position(9);
+        l.key = KeySource::Position(ResolveSlot(9));
         assert!(l.validate().is_err());
         let mut l = GBufferLayout::freespace_open();
         l.depth = Format::Rgba8;

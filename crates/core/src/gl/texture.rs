@@ -100,7 +100,7 @@ fn allocate(
 #[derive(Debug)]
 pub struct Texture2d {
     /// The GL name.
-    pub raw: glow::Texture,
+    pub(crate) raw: glow::Texture,
     /// Width in texels.
     pub width: u32,
     /// Height in texels.
@@ -110,6 +110,12 @@ pub struct Texture2d {
 }
 
 impl Texture2d {
+    /// The GL handle, for the host's own calls (binding, attaching);
+    /// [`Texture2d::destroy`] frees it.
+    pub fn raw(&self) -> glow::Texture {
+        self.raw
+    }
+
     /// Allocate storage (nearest filtering, clamped) and label it.
     pub fn new(
         gl: &glow::Context,
@@ -159,7 +165,7 @@ impl Texture2d {
 #[derive(Debug)]
 pub struct Texture2dMultisample {
     /// The GL name.
-    pub raw: glow::Texture,
+    pub(crate) raw: glow::Texture,
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
@@ -173,6 +179,12 @@ pub struct Texture2dMultisample {
 }
 
 impl Texture2dMultisample {
+    /// The GL handle, for the host's own calls (binding, attaching);
+    /// [`Texture2dMultisample::destroy`] frees it.
+    pub fn raw(&self) -> glow::Texture {
+        self.raw
+    }
+
     /// Allocate with fixed sample locations, then read the real sample count back:
     /// drivers round requests (llvmpipe turns 1–3 into 4).
     pub fn new(
@@ -259,7 +271,7 @@ impl Texture2dMultisample {
 #[derive(Debug)]
 pub struct Texture2dArray {
     /// The GL name.
-    pub raw: glow::Texture,
+    pub(crate) raw: glow::Texture,
     /// Width in texels.
     pub width: u32,
     /// Height in texels.
@@ -271,6 +283,12 @@ pub struct Texture2dArray {
 }
 
 impl Texture2dArray {
+    /// The GL handle, for the host's own calls (binding, attaching);
+    /// [`Texture2dArray::destroy`] frees it.
+    pub fn raw(&self) -> glow::Texture {
+        self.raw
+    }
+
     /// Allocate and optionally upload all layers at once (`data` is layer-major).
     pub fn new(
         gl: &glow::Context,
@@ -354,6 +372,11 @@ impl From<&Texture2dArray> for TextureRef {
 }
 
 impl TextureRef {
+    /// The GL handle (the same as the `raw` field).
+    pub fn raw(&self) -> glow::Texture {
+        self.raw
+    }
+
     /// Bind to texture unit `unit`.
     pub fn bind(&self, gl: &glow::Context, unit: u32) {
         unsafe {

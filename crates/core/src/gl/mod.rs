@@ -14,6 +14,7 @@ pub mod format;
 mod framebuffer;
 mod program;
 mod query;
+mod state;
 mod texture;
 
 pub use buffer::{Buffer, VertexArray};
@@ -21,12 +22,17 @@ pub use caps::{Capabilities, ExtraFns, sample_positions};
 pub use counters::{LiveObjects, live_objects};
 pub use debug::{install_debug_log, label_object};
 pub use format::Format;
-pub use framebuffer::{Attachment, Framebuffer, framebuffer_status_name};
+pub use framebuffer::{Attachment, ColorAttachment, Framebuffer, framebuffer_status_name};
 pub use program::{Program, ShaderStage, preamble};
 pub use query::{GpuTimer, TimerKind};
+pub use state::SavedState;
 pub use texture::{Texture2d, Texture2dArray, Texture2dMultisample, TextureRef};
 
 use crate::{Error, Result};
+
+/// The full-screen triangle's vertex shader body (no vertex attributes:
+/// `gl_VertexID` places the three corners).
+pub const FULLSCREEN_VERT: &str = include_str!("../../shaders/fullscreen.vert");
 use glow::HasContext;
 
 /// The name of a `glGetError` code.

@@ -28,7 +28,7 @@ use crate::Result;
 use crate::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef};
 
 /// The resolve tile grid's vertex shader body.
-pub const RESOLVE_TILES_VERT: &str = include_str!("../../shaders_glsl/resolve_tiles.vert");
+pub const RESOLVE_TILES_VERT: &str = include_str!("../../shaders/resolve_tiles.vert");
 
 /// Tile edge in pixels: small enough that an edge's slow tiles stay close
 /// to its slow pixels, large enough that classification is a small pass.

@@ -98,7 +98,7 @@ fn excerpt(name: &str, body: &str, log: &str) -> String {
 #[derive(Debug)]
 pub struct Program {
     /// The GL name.
-    pub raw: glow::Program,
+    pub(crate) raw: glow::Program,
     /// Debug label.
     pub label: String,
     uniforms: RefCell<HashMap<String, Option<glow::UniformLocation>>>,
@@ -108,6 +108,12 @@ pub struct Program {
 pub type StageSource<'a> = (ShaderStage, &'a str, &'a str);
 
 impl Program {
+    /// The GL handle, for the host's own calls (binding, attaching);
+    /// [`Program::destroy`] frees it.
+    pub fn raw(&self) -> glow::Program {
+        self.raw
+    }
+
     /// Compile every stage as `preamble + body`, bind fragment outputs to their
     /// colour numbers before linking, and link. Errors carry the stage, the
     /// driver log and the offending body lines.

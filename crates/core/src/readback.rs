@@ -8,12 +8,11 @@ use crate::gl::{
     Attachment, Format, Framebuffer, Program, ShaderStage, Texture2d, TextureRef, VertexArray,
     check_error, preamble,
 };
-use crate::resolve::FULLSCREEN_VERT;
-use crate::resolve::SavedState;
+use crate::gl::{FULLSCREEN_VERT, SavedState};
 use glow::HasContext;
 use std::collections::HashMap;
 
-const READBACK_FRAG: &str = include_str!("../shaders_glsl/readback.frag");
+const READBACK_FRAG: &str = include_str!("../shaders/readback.frag");
 
 /// Float values of a texture, `[samples][height][width][4]`, row 0 = the TOP row.
 #[derive(Clone, Debug, PartialEq)]
@@ -136,7 +135,7 @@ impl Readback {
     ) -> Result<SampleImage> {
         let (w, h) = (texture.width as usize, texture.height as usize);
         let vao = self.vao.raw;
-        let state = SavedState::capture(gl);
+        let state = SavedState::capture(gl, 1);
         let program = self.program(gl, texture.target, texture.format.sample_kind())?;
         let mut data = vec![0.0f32; count as usize * w * h * 4];
         let mut plane = vec![0.0f32; w * h * 4];

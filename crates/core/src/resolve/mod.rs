@@ -1,49 +1,58 @@
 //! The depth-aware resolve: a full-screen pass that reads every sample of a
 //! multisampled G-buffer and writes a single-sample one (DESIGN.md section 3).
 //!
-//! The math lives in two places only: `shaders_glsl/resolve.frag` and its CPU
+//! The math lives in two places only: `shaders/resolve.frag` and its CPU
 //! reference, [`cpu`]. This module builds the shader permutations (the sample
 //! count, attachment set and options are compile-time defines, cached by a
 //! typed key) and runs the pass.
 
 pub mod cpu;
 mod settings;
-pub mod tiles;
+pub(crate) mod tiles;
 
 pub use settings::{
     DepthProjection, Region, ResolveMethod, ResolveRule, ResolveSettings, Selection, SelectionFlag,
     Window,
 };
+pub use tiles::TILE_SIZE;
 use tiles::{RESOLVE_TILES_VERT, TileMask};
 
 use crate::gl::format::SampleKind;
 use crate::gl::{
-    Framebuffer, Program, ShaderStage, TextureRef, VertexArray, check_error, preamble,
+    ColorAttachment, FULLSCREEN_VERT, Framebuffer, Program, SavedState, ShaderStage, TextureRef,
+    VertexArray, check_error, preamble,
 };
 use crate::{Error, Result};
 use glow::HasContext;
 use std::collections::HashMap;
 
 /// The resolve's fragment shader body.
-pub const RESOLVE_FRAG: &str = include_str!("../../shaders_glsl/resolve.frag");
-/// The full-screen triangle's vertex shader body.
-pub const FULLSCREEN_VERT: &str = include_str!("../../shaders_glsl/fullscreen.vert");
+pub const RESOLVE_FRAG: &str = include_str!("../../shaders/resolve.frag");
 
 /// The most colour attachments one resolve handles (GL 3.2 guarantees 8 draw buffers).
 pub const MAX_ATTACHMENTS: usize = 8;
 
+/// A colour input of the resolve by position: slot `k` is the `k`-th
+/// texture of [`ResolveInputs::colors`] and goes to the target's draw
+/// buffer `k`. A host names its attachments by [`ColorAttachment`] instead;
+/// the retrofit maps one to the other.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct ResolveSlot(pub usize);
+
 /// Where the per-sample depth key comes from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub enum KeySource {
-    /// `z = −position.z` of the colour attachment with this index.
-    Position(usize),
+    /// `z = −position.z` of the colour input in this slot (view-space position).
+    Position(ResolveSlot),
     /// The depth attachment, linearised with the projection.
     Depth,
 }
 
 /// Everything that selects one compiled resolve program.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
-pub struct ResolveProgramKey {
+pub(crate) struct ResolveProgramKey {
     /// Real sample count.
     pub samples: u32,
     /// Inputs are `sampler2DArray`s with one layer per sample (test harness).
@@ -72,7 +81,7 @@ pub struct ResolveProgramKey {
 
 /// The passes of a resolve ([`tiles`] explains the tiled schedule).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum ResolvePass {
+pub(crate) enum ResolvePass {
     /// The whole resolve over a full-screen triangle.
     Single,
     /// The tile classification, `tile_size` pixels square.
@@ -91,25 +100,47 @@ pub enum ResolvePass {
 
 /// The compiled-in shape of a [`Selection`] (its numbers are uniforms).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct SelectionKey {
+pub(crate) struct SelectionKey {
     /// `Some(true)` for an ellipse, `Some(false)` for a rectangle.
     pub region_ellipse: Option<bool>,
     /// A depth threshold is set.
     pub max_depth: bool,
-    /// The flag's attachment and component.
-    pub flag: Option<SelectionFlag>,
+    /// The flag's input slot and component.
+    pub flag: Option<(ResolveSlot, u8)>,
 }
 
 impl SelectionKey {
-    /// The shape of `selection`.
-    pub fn of(selection: &Selection) -> Self {
-        SelectionKey {
+    /// The shape of `selection`, its flag found among `inputs`.
+    fn of(selection: &Selection, inputs: &ResolveInputs<'_>) -> Result<Self> {
+        let flag = match selection.flag {
+            None => None,
+            Some(f) => {
+                let slot = inputs.slot_of(f.attachment).ok_or_else(|| Error::Retrofit {
+                    attachment: f.attachment.name(),
+                    reason: format!(
+                        "named as the selective-AA flag, but the resolve's colour inputs are {}",
+                        inputs.attachment_list()
+                    ),
+                })?;
+                let format = inputs.colors[slot.0].format;
+                if format.sample_kind() != SampleKind::Float {
+                    return Err(Error::UnsupportedFormat {
+                        attachment: f.attachment.name(),
+                        format: format.name().into(),
+                        reason: "the selective-AA flag must be in a float or normalised format"
+                            .into(),
+                    });
+                }
+                Some((slot, f.component))
+            }
+        };
+        Ok(SelectionKey {
             region_ellipse: selection
                 .region
                 .map(|r| matches!(r, Region::Ellipse { .. })),
             max_depth: selection.max_depth.is_some(),
-            flag: selection.flag,
-        }
+            flag,
+        })
     }
 }
 
@@ -144,7 +175,7 @@ impl ResolveProgramKey {
             };
             def(&format!("ATT{k}_RULE"), rule.into());
         }
-        if let KeySource::Position(k) = self.key {
+        if let KeySource::Position(ResolveSlot(k)) = self.key {
             def("KEY_SAMPLER", format!("u_att{k}"));
             def("KEY_INDEX", k.to_string());
         }
@@ -191,9 +222,9 @@ impl ResolveProgramKey {
         if sel.max_depth {
             def("SELECT_MAX_DEPTH", "1".into());
         }
-        if let Some(f) = sel.flag {
-            def("SELECT_FLAG_SAMPLER", format!("u_att{}", f.attachment));
-            let component = ["x", "y", "z", "w"][usize::from(f.component.min(3))];
+        if let Some((ResolveSlot(slot), component)) = sel.flag {
+            def("SELECT_FLAG_SAMPLER", format!("u_att{slot}"));
+            let component = ["x", "y", "z", "w"][usize::from(component.min(3))];
             def("SELECT_FLAG_COMPONENT", component.into());
         }
         d
@@ -215,14 +246,37 @@ impl ResolveProgramKey {
 pub struct ResolveInputs<'a> {
     /// The multisampled depth texture (or its per-sample layer array).
     pub depth: TextureRef,
-    /// The multisampled colour textures, in output order.
+    /// The multisampled colour textures, in slot order (slot `k` is written
+    /// to the target's draw buffer `k`).
     pub colors: &'a [TextureRef],
+    /// The attachment each colour input stands for, in the same order: how
+    /// [`SelectionFlag::attachment`] finds its slot.
+    pub attachments: &'a [ColorAttachment],
     /// One rule per colour texture.
     pub rules: &'a [ResolveRule],
     /// Where the depth key comes from.
     pub key: KeySource,
     /// Sample count; for layer arrays, the number of layers.
     pub samples: u32,
+}
+
+impl ResolveInputs<'_> {
+    /// The slot holding `attachment`, if it is an input.
+    pub fn slot_of(&self, attachment: ColorAttachment) -> Option<ResolveSlot> {
+        self.attachments
+            .iter()
+            .position(|a| *a == attachment)
+            .map(ResolveSlot)
+    }
+
+    fn attachment_list(&self) -> String {
+        let names: Vec<String> = self.attachments.iter().map(|a| a.name()).collect();
+        if names.is_empty() {
+            "none".into()
+        } else {
+            names.join(", ")
+        }
+    }
 }
 
 /// The camera facts the closeness window needs.
@@ -263,9 +317,9 @@ pub enum Schedule {
     /// default). Where branches are real (GPUs take them 32–64 pixels at a
     /// time) uniform regions skip it.
     OnePass,
-    /// Classify tiles of this many pixels ([`tiles::TILE_SIZE`] is the size
+    /// Classify tiles of this many pixels ([`TILE_SIZE`] is the size
     /// measured), copy sample 0 everywhere, then draw only the slow tiles
-    /// with the full program ([`tiles`]): for a rasteriser that runs both
+    /// with the full program: for a rasteriser that runs both
     /// sides of every branch, as llvmpipe does, but never visits a tile it
     /// is not given. Measured on llvmpipe (README, "What the resolve
     /// costs") it wins only where slow tiles are few, by less than the
@@ -301,7 +355,11 @@ impl Resolver {
     }
 
     /// The program for `key`, built on first use.
-    pub fn program(&mut self, gl: &glow::Context, key: &ResolveProgramKey) -> Result<&Program> {
+    pub(crate) fn program(
+        &mut self,
+        gl: &glow::Context,
+        key: &ResolveProgramKey,
+    ) -> Result<&Program> {
         match self.programs.entry(key.clone()) {
             std::collections::hash_map::Entry::Occupied(e) => Ok(e.into_mut()),
             std::collections::hash_map::Entry::Vacant(v) => Ok(v.insert(build_program(gl, key)?)),
@@ -313,28 +371,23 @@ impl Resolver {
         self.programs.len()
     }
 
-    /// Resolve `inputs` into `target`, whose colour attachment `k` (draw buffer
-    /// `k`) receives input `k`, whose depth attachment (if any) receives the
-    /// resolved depth, and whose draw buffer `colors.len()` receives the
-    /// complex-pixel mask when `complex_output` is set.
-    pub fn run(
-        &mut self,
-        gl: &glow::Context,
+    /// The program key of the single-pass resolve of `inputs` into `target`
+    /// under `settings`, after checking that they fit together.
+    fn base_key(
         inputs: &ResolveInputs<'_>,
         target: &Framebuffer,
-        params: &ResolveParams,
+        settings: &ResolveSettings,
         complex_output: bool,
-    ) -> Result<()> {
-        params.settings.validate()?;
-        // An error the host left pending is not the resolve's: report it apart.
-        if let Err(e) = check_error(gl, "the host's GL calls before the resolve") {
-            log::warn!("{e}");
-        }
-        if inputs.colors.len() != inputs.rules.len() {
+    ) -> Result<ResolveProgramKey> {
+        settings.validate()?;
+        if inputs.colors.len() != inputs.rules.len()
+            || inputs.colors.len() != inputs.attachments.len()
+        {
             return Err(Error::Layout(format!(
-                "{} colour inputs but {} rules",
+                "{} colour inputs but {} rules and {} attachment numbers",
                 inputs.colors.len(),
-                inputs.rules.len()
+                inputs.rules.len(),
+                inputs.attachments.len()
             )));
         }
         if inputs.colors.len() > MAX_ATTACHMENTS {
@@ -344,11 +397,16 @@ impl Resolver {
             )));
         }
         let mut attachments = Vec::with_capacity(inputs.colors.len());
-        for (tex, &rule) in inputs.colors.iter().zip(inputs.rules) {
+        for ((tex, &rule), point) in inputs
+            .colors
+            .iter()
+            .zip(inputs.rules)
+            .zip(inputs.attachments)
+        {
             let kind = tex.format.sample_kind();
             if kind != SampleKind::Float && rule != ResolveRule::Select {
                 return Err(Error::UnsupportedFormat {
-                    attachment: format!("{} input", tex.format),
+                    attachment: point.name(),
                     format: tex.format.name().into(),
                     reason: format!(
                         "integer formats can only be selected, not resolved by `{rule}`"
@@ -357,29 +415,18 @@ impl Resolver {
             }
             attachments.push((rule, kind));
         }
-        let s = params.settings;
-        if let Some(flag) = s.selection.flag {
-            match inputs.colors.get(flag.attachment) {
-                None => {
-                    return Err(Error::invalid(format!(
-                        "the selective-AA flag is in colour attachment {}, but the resolve has {} colour attachments",
-                        flag.attachment,
-                        inputs.colors.len()
-                    )));
-                }
-                Some(tex) if tex.format.sample_kind() != SampleKind::Float => {
-                    return Err(Error::UnsupportedFormat {
-                        attachment: format!("colour attachment {}", flag.attachment),
-                        format: tex.format.name().into(),
-                        reason: "the selective-AA flag must be in a float or normalised format"
-                            .into(),
-                    });
-                }
-                Some(_) => {}
+        if let KeySource::Position(slot) = inputs.key {
+            if inputs.colors.get(slot.0).map(|t| t.format.sample_kind()) != Some(SampleKind::Float)
+            {
+                return Err(Error::Layout(format!(
+                    "the depth key is in colour input {}, which is not a float input",
+                    slot.0
+                )));
             }
         }
+        let s = settings;
         let write_depth = target.attachments.iter().any(|(_, t)| t.format.is_depth());
-        let base = ResolveProgramKey {
+        Ok(ResolveProgramKey {
             samples: inputs.samples,
             samples_as_layers: inputs.depth.target == glow::TEXTURE_2D_ARRAY,
             attachments,
@@ -395,30 +442,86 @@ impl Resolver {
             blend_depth: s.blend_depth && write_depth,
             complex_output,
             pass: ResolvePass::Single,
-            selection: SelectionKey::of(&s.selection),
-        };
-        // Splitting pays off only when some pixels may take one sample.
-        let splits = s.fast_path || s.selection.is_active();
-        let schedule = if splits {
+            selection: SelectionKey::of(&s.selection, inputs)?,
+        })
+    }
+
+    /// The schedule a resolve under `settings` runs: splitting pays off only
+    /// when some pixels may take one sample.
+    fn schedule_for(&self, settings: &ResolveSettings) -> Schedule {
+        if settings.fast_path || settings.selection.is_active() {
             self.schedule
         } else {
             Schedule::OnePass
-        };
-        let state = SavedState::capture(gl);
-        let result = match schedule {
+        }
+    }
+
+    /// Compile now every program that [`Resolver::run`] with these inputs,
+    /// target and settings will use, so that no frame pays for a compile
+    /// and a shader error surfaces at set-up.
+    pub fn prepare(
+        &mut self,
+        gl: &glow::Context,
+        inputs: &ResolveInputs<'_>,
+        target: &Framebuffer,
+        settings: &ResolveSettings,
+        complex_output: bool,
+    ) -> Result<()> {
+        let base = Self::base_key(inputs, target, settings, complex_output)?;
+        let mut keys = Vec::new();
+        match self.schedule_for(settings) {
+            Schedule::OnePass => keys.push(base),
+            Schedule::Tiles(tile_size) => {
+                keys.push(ResolveProgramKey {
+                    pass: ResolvePass::ClassifyTiles { tile_size },
+                    write_depth: false,
+                    blend_depth: false,
+                    complex_output: false,
+                    ..base.clone()
+                });
+                keys.push(ResolveProgramKey {
+                    pass: ResolvePass::OneSample,
+                    ..base.clone()
+                });
+                keys.push(ResolveProgramKey {
+                    pass: ResolvePass::SlowTiles { tile_size },
+                    ..base
+                });
+            }
+        }
+        for key in &keys {
+            self.program(gl, key)?;
+        }
+        Ok(())
+    }
+
+    /// Resolve `inputs` into `target`, whose colour attachment `k` (draw buffer
+    /// `k`) receives input `k`, whose depth attachment (if any) receives the
+    /// resolved depth, and whose draw buffer `colors.len()` receives the
+    /// complex-pixel mask when `complex_output` is set. Programs not yet
+    /// built ([`Resolver::prepare`]) are built first. The host's GL state,
+    /// texture bindings included, is as it was afterwards.
+    pub fn run(
+        &mut self,
+        gl: &glow::Context,
+        inputs: &ResolveInputs<'_>,
+        target: &Framebuffer,
+        params: &ResolveParams,
+        complex_output: bool,
+    ) -> Result<()> {
+        let base = Self::base_key(inputs, target, &params.settings, complex_output)?;
+        // An error the host left pending is not the resolve's: report it apart.
+        if let Err(e) = check_error(gl, "the host's GL calls before the resolve") {
+            log::warn!("{e}");
+        }
+        // Units 0..=colors hold the inputs, one more the tile mask.
+        let state = SavedState::capture(gl, inputs.colors.len() as u32 + 2);
+        let result = match self.schedule_for(&params.settings) {
             Schedule::OnePass => self.draw(gl, &base, inputs, target, params, None),
             Schedule::Tiles(tile_size) => {
                 self.run_tiled(gl, base, inputs, target, params, tile_size)
             }
         };
-        unsafe {
-            for k in 0..=inputs.colors.len() as u32 + 1 {
-                gl.active_texture(glow::TEXTURE0 + k);
-                gl.bind_texture(inputs.depth.target, None);
-                gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
-                gl.bind_texture(glow::TEXTURE_2D, None);
-            }
-        }
         state.restore(gl);
         result?;
         check_error(gl, "the resolve pass")
@@ -602,116 +705,4 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
         ],
         &frag_outputs,
     )
-}
-
-/// The host state a pass changes, put back afterwards: the crate runs inside
-/// the host's context and must leave it as it found it.
-pub(crate) struct SavedState {
-    framebuffer: i32,
-    program: i32,
-    vertex_array: i32,
-    active_texture: i32,
-    viewport: [i32; 4],
-    depth_test: bool,
-    depth_func: i32,
-    depth_mask: bool,
-    blend: bool,
-    cull: bool,
-    scissor: bool,
-    stencil: bool,
-    color_mask: [bool; 4],
-    /// Per face (front, back): stencil func, ref, value mask, fail/zfail/zpass
-    /// ops, write mask.
-    stencil_state: [[i32; 7]; 2],
-}
-
-impl SavedState {
-    pub(crate) fn capture(gl: &glow::Context) -> Self {
-        unsafe {
-            let mut viewport = [0; 4];
-            gl.get_parameter_i32_slice(glow::VIEWPORT, &mut viewport);
-            SavedState {
-                framebuffer: gl.get_parameter_i32(glow::DRAW_FRAMEBUFFER_BINDING),
-                program: gl.get_parameter_i32(glow::CURRENT_PROGRAM),
-                vertex_array: gl.get_parameter_i32(glow::VERTEX_ARRAY_BINDING),
-                active_texture: gl.get_parameter_i32(glow::ACTIVE_TEXTURE),
-                viewport,
-                depth_test: gl.is_enabled(glow::DEPTH_TEST),
-                depth_func: gl.get_parameter_i32(glow::DEPTH_FUNC),
-                depth_mask: gl.get_parameter_i32(glow::DEPTH_WRITEMASK) != 0,
-                blend: gl.is_enabled(glow::BLEND),
-                cull: gl.is_enabled(glow::CULL_FACE),
-                scissor: gl.is_enabled(glow::SCISSOR_TEST),
-                stencil: gl.is_enabled(glow::STENCIL_TEST),
-                color_mask: {
-                    let mut m = [0i32; 4];
-                    gl.get_parameter_i32_slice(glow::COLOR_WRITEMASK, &mut m);
-                    m.map(|c| c != 0)
-                },
-                stencil_state: [
-                    [
-                        glow::STENCIL_FUNC,
-                        glow::STENCIL_REF,
-                        glow::STENCIL_VALUE_MASK,
-                        glow::STENCIL_FAIL,
-                        glow::STENCIL_PASS_DEPTH_FAIL,
-                        glow::STENCIL_PASS_DEPTH_PASS,
-                        glow::STENCIL_WRITEMASK,
-                    ]
-                    .map(|p| gl.get_parameter_i32(p)),
-                    [
-                        glow::STENCIL_BACK_FUNC,
-                        glow::STENCIL_BACK_REF,
-                        glow::STENCIL_BACK_VALUE_MASK,
-                        glow::STENCIL_BACK_FAIL,
-                        glow::STENCIL_BACK_PASS_DEPTH_FAIL,
-                        glow::STENCIL_BACK_PASS_DEPTH_PASS,
-                        glow::STENCIL_BACK_WRITEMASK,
-                    ]
-                    .map(|p| gl.get_parameter_i32(p)),
-                ],
-            }
-        }
-    }
-
-    pub(crate) fn restore(&self, gl: &glow::Context) {
-        fn set(gl: &glow::Context, cap: u32, on: bool) {
-            unsafe { if on { gl.enable(cap) } else { gl.disable(cap) } }
-        }
-        unsafe {
-            gl.bind_framebuffer(
-                glow::DRAW_FRAMEBUFFER,
-                std::num::NonZeroU32::new(self.framebuffer as u32).map(glow::NativeFramebuffer),
-            );
-            gl.use_program(std::num::NonZeroU32::new(self.program as u32).map(glow::NativeProgram));
-            gl.bind_vertex_array(
-                std::num::NonZeroU32::new(self.vertex_array as u32).map(glow::NativeVertexArray),
-            );
-            gl.active_texture(self.active_texture as u32);
-            gl.viewport(
-                self.viewport[0],
-                self.viewport[1],
-                self.viewport[2],
-                self.viewport[3],
-            );
-            gl.depth_func(self.depth_func as u32);
-            gl.depth_mask(self.depth_mask);
-            let [r, g, b, a] = self.color_mask;
-            gl.color_mask(r, g, b, a);
-            for (face, state) in [glow::FRONT, glow::BACK]
-                .into_iter()
-                .zip(self.stencil_state)
-            {
-                let [func, reference, mask, fail, zfail, zpass, write] = state;
-                gl.stencil_func_separate(face, func as u32, reference, mask as u32);
-                gl.stencil_op_separate(face, fail as u32, zfail as u32, zpass as u32);
-                gl.stencil_mask_separate(face, write as u32);
-            }
-        }
-        set(gl, glow::DEPTH_TEST, self.depth_test);
-        set(gl, glow::BLEND, self.blend);
-        set(gl, glow::CULL_FACE, self.cull);
-        set(gl, glow::SCISSOR_TEST, self.scissor);
-        set(gl, glow::STENCIL_TEST, self.stencil);
-    }
 }

@@ -1,5 +1,5 @@
 //! The resolve's CPU reference, in `f64`: the same math as
-//! `shaders_glsl/resolve.frag`, sample for sample. Tests compare the GLSL
+//! `shaders/resolve.frag`, sample for sample. Tests compare the GLSL
 //! against it; change both together.
 
 use super::{DepthProjection, ResolveMethod, ResolveRule, ResolveSettings, Window};
@@ -203,7 +203,8 @@ impl CpuResolve {
                 .any(|i| (keys.z[i] - max_depth).abs() <= 1e-6 * max_depth.abs());
         }
         if let Some(flag) = sel.flag {
-            let values = &px.attachments[flag.attachment];
+            // The CPU inputs are numbered in order: attachment k is input k.
+            let values = &px.attachments[flag.attachment.0 as usize];
             outside |= !values
                 .iter()
                 .any(|v| v[usize::from(flag.component.min(3))] >= 0.5);

@@ -23,7 +23,8 @@ const NVX_CURRENT_AVAILABLE: u32 = 0x9049;
 const ATI_TEXTURE_FREE: u32 = 0x87FC;
 
 /// How many bytes a G-buffer may take, and what to do when it would take more.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct MemoryBudget {
     /// The limit in bytes; `None`: [`DRIVER_FRACTION`] of the free video
     /// memory the driver reports, else [`DEFAULT_BUDGET_BYTES`].
@@ -72,7 +73,8 @@ impl MemoryBudget {
 }
 
 /// Free video memory as a driver extension reports it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct DriverMemory {
     /// `GL_NVX_gpu_memory_info` or `GL_ATI_meminfo`.
     pub extension: &'static str,

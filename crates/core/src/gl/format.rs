@@ -1,10 +1,9 @@
 //! The internal formats the crate knows, with what each needs for allocation,
 //! reading back and resolving.
 
-use crate::resolve::ResolveRule;
-
 /// An internal texture format.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[allow(missing_docs)] // the variants are the GL names
 pub enum Format {
     R8,
@@ -257,15 +256,6 @@ impl Format {
         )
     }
 
-    /// The rule an attachment of this format resolves by unless its layout says otherwise:
-    /// integer formats are never blended.
-    pub const fn default_rule(self) -> ResolveRule {
-        match self.sample_kind() {
-            SampleKind::Float => ResolveRule::Blend,
-            SampleKind::Uint | SampleKind::Int => ResolveRule::Select,
-        }
-    }
-
     /// The GLSL sampler prefix: `""`, `"u"` or `"i"`.
     pub const fn glsl_prefix(self) -> &'static str {
         match self.sample_kind() {
@@ -295,11 +285,5 @@ mod tests {
         assert_eq!(Format::from_name("gl_rgba16f"), Some(Format::Rgba16f));
         assert_eq!(Format::from_name("DEPTH24"), Some(Format::Depth24));
         assert_eq!(Format::from_name("RGBA9"), None);
-    }
-
-    #[test]
-    fn integer_formats_select() {
-        assert_eq!(Format::Rgba8ui.default_rule(), ResolveRule::Select);
-        assert_eq!(Format::Rgba16f.default_rule(), ResolveRule::Blend);
     }
 }

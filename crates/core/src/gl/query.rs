@@ -7,8 +7,9 @@ use glow::HasContext;
 use std::time::Instant;
 
 /// How a measurement was taken.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
 pub enum TimerKind {
     /// `GL_TIME_ELAPSED` query (GL 3.3 or ARB_timer_query).
     GlTimeElapsed,

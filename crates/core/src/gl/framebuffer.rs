@@ -67,11 +67,38 @@ impl Attachment {
     }
 }
 
+/// A colour attachment point by number: `ColorAttachment(2)` is
+/// `GL_COLOR_ATTACHMENT2` of the host's framebuffer, whatever draw buffer
+/// it is mapped to. (The resolve's own inputs are numbered apart, by
+/// [`ResolveSlot`](crate::resolve::ResolveSlot).)
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ColorAttachment(pub u32);
+
+impl ColorAttachment {
+    /// The GL name, e.g. `GL_COLOR_ATTACHMENT2`.
+    pub fn name(self) -> String {
+        Attachment::from(self).name()
+    }
+}
+
+impl From<ColorAttachment> for Attachment {
+    fn from(c: ColorAttachment) -> Self {
+        Attachment::Color(c.0)
+    }
+}
+
+impl std::fmt::Display for ColorAttachment {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "GL_COLOR_ATTACHMENT{}", self.0)
+    }
+}
+
 /// A framebuffer object with its attachments recorded.
 #[derive(Debug)]
 pub struct Framebuffer {
     /// The GL name.
-    pub raw: glow::Framebuffer,
+    pub(crate) raw: glow::Framebuffer,
     /// Debug label, used in errors.
     pub label: String,
     /// Width of the attachments.
@@ -85,6 +112,12 @@ pub struct Framebuffer {
 }
 
 impl Framebuffer {
+    /// The GL handle, for the host's own calls (binding, attaching);
+    /// [`Framebuffer::destroy`] frees it.
+    pub fn raw(&self) -> glow::Framebuffer {
+        self.raw
+    }
+
     /// Create a framebuffer, attach `attachments`, map colour attachment `i` to
     /// fragment output `draw_buffers[i]` (a `None` leaves the slot unmapped) and
     /// check completeness. On failure nothing is left allocated.

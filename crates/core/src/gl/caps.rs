@@ -63,7 +63,8 @@ impl ExtraFns {
 }
 
 /// Limits and features of the current context.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Capabilities {
     /// `GL_VERSION`.
     pub gl_version: String,

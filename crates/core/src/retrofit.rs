@@ -8,23 +8,41 @@
 //! The host's model and lighting shaders do not change: the twins have the
 //! same formats, attachment points and draw-buffer mapping as the host's FBO.
 
+use crate::frame::Frame;
 use crate::gbuffer::{MemoryBudget, MultisampleTwin, TwinSpec, budget_twins};
-use crate::gl::{Attachment, Format, Framebuffer, TextureRef, check_error};
-use crate::resolve::{KeySource, ResolveInputs, ResolveParams, ResolveRule, Resolver, Schedule};
+use crate::gl::{Attachment, ColorAttachment, Format, Framebuffer, TextureRef, check_error};
+use crate::resolve::{
+    KeySource, ResolveInputs, ResolveParams, ResolveRule, ResolveSettings, ResolveSlot, Resolver,
+    Schedule,
+};
 use crate::{Error, Result};
 use glow::HasContext;
 
-/// How a host G-buffer is to be multisampled and resolved.
+/// How a host G-buffer is multisampled and resolved: everything that does
+/// not change from frame to frame, given once. The programs it needs are
+/// compiled when the retrofit is made; [`MsaaRetrofit::set_options`]
+/// changes it and rebuilds what must be rebuilt.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RetrofitOptions {
-    /// Requested samples per pixel (the driver's real count is used and reported).
+    /// Requested samples per pixel (the driver's real count is used:
+    /// [`MsaaRetrofit::samples`]).
     pub samples: u32,
-    /// Rules for colour attachments by attachment number (`GL_COLOR_ATTACHMENTi`);
-    /// the others take their format's default (blend; select for integers).
-    pub rules: Vec<(u32, ResolveRule)>,
-    /// The colour attachment number holding view-space position, whose `−z`
-    /// is the depth key; `None` linearises the depth attachment instead.
-    pub position_attachment: Option<u32>,
+    /// Rules for colour attachments by attachment number; the others take
+    /// their format's default ([`ResolveRule::default_for`]: blend, select for
+    /// integers).
+    pub rules: Vec<(ColorAttachment, ResolveRule)>,
+    /// The colour attachment holding view-space position, whose `-z` is
+    /// the depth key; `None` (the default) linearises the depth attachment
+    /// with each frame's projection instead.
+    pub position_attachment: Option<ColorAttachment>,
+    /// Method, window, fast path and selective anti-aliasing.
+    pub resolve: ResolveSettings,
+    /// How one-sample pixels are found ([`Schedule`]).
+    pub schedule: Schedule,
+    /// A limit on the twins' memory: over it, the sample count steps down
+    /// (with a line in [`MsaaRetrofit::warnings`]) or, strict, the retrofit
+    /// refuses with [`Error::MemoryBudget`].
+    pub memory_budget: Option<MemoryBudget>,
 }
 
 impl Default for RetrofitOptions {
@@ -33,6 +51,9 @@ impl Default for RetrofitOptions {
             samples: 4,
             rules: Vec::new(),
             position_attachment: None,
+            resolve: ResolveSettings::default(),
+            schedule: Schedule::OnePass,
+            memory_budget: None,
         }
     }
 }
@@ -292,52 +313,76 @@ pub struct MsaaRetrofit {
     rules: Vec<ResolveRule>,
     key: KeySource,
     resolver: Resolver,
-    /// The memory budget of [`MsaaRetrofit::with_budget`], applied again on
-    /// every rebuild.
-    budget: Option<MemoryBudget>,
     /// What the budget did (a stepped-down sample count), one line each.
     warnings: Vec<String>,
 }
 
+/// What [`MsaaRetrofit::build`] makes from the host's framebuffer.
+struct Built {
+    host: HostFramebuffer,
+    twin: MultisampleTwin,
+    target: Framebuffer,
+    rules: Vec<ResolveRule>,
+    key: KeySource,
+    warnings: Vec<String>,
+}
+
+impl Built {
+    fn destroy(self, gl: &glow::Context) {
+        self.twin.destroy(gl);
+        self.target.destroy(gl);
+    }
+}
+
 impl MsaaRetrofit {
-    /// [`MsaaRetrofit::new`] under a memory budget: the twins' bytes
-    /// (formats × size × samples) are estimated before they are allocated
-    /// and, over `budget`, the sample count steps down to the highest count
-    /// the driver offers that fits, with a `log::warn!` line kept in
-    /// [`MsaaRetrofit::warnings`]; with a strict budget, or when no
-    /// multisampled count fits (the retrofit cannot render single-sample
-    /// for the host), it refuses with [`Error::MemoryBudget`]. The budget
-    /// holds for [`MsaaRetrofit::set_samples`] and
-    /// [`MsaaRetrofit::refresh`] too.
-    pub fn with_budget(
+    /// Introspect `host_fbo`, build its multisampled twins under
+    /// `options` and compile the resolve's programs.
+    ///
+    /// Errors: [`Error::Retrofit`] or [`Error::UnsupportedFormat`] naming
+    /// the attachment the host framebuffer cannot be retrofitted for,
+    /// [`Error::MemoryBudget`] when a strict budget (or any budget, with no
+    /// multisampled count that fits) refuses, and the GL layer's errors.
+    pub fn new(
         gl: &glow::Context,
         host_fbo: glow::Framebuffer,
         options: &RetrofitOptions,
-        budget: &MemoryBudget,
     ) -> Result<Self> {
-        let (samples, warning) = Self::budgeted(gl, host_fbo, options.samples, budget)?;
-        let mut retrofit = Self::new(
-            gl,
-            host_fbo,
-            &RetrofitOptions {
-                samples,
-                ..options.clone()
-            },
-        )?;
-        retrofit.options.samples = options.samples;
-        retrofit.budget = Some(*budget);
-        retrofit.warnings = warning.into_iter().collect();
+        let mut resolver = Resolver::new(gl)?;
+        if let Err(e) = resolver.set_schedule(options.schedule) {
+            resolver.destroy(gl);
+            return Err(e);
+        }
+        let built = match Self::build(gl, host_fbo, options) {
+            Ok(b) => b,
+            Err(e) => {
+                resolver.destroy(gl);
+                return Err(e);
+            }
+        };
+        let mut retrofit = MsaaRetrofit {
+            host: built.host,
+            options: options.clone(),
+            twin: built.twin,
+            target: built.target,
+            rules: built.rules,
+            key: built.key,
+            resolver,
+            warnings: built.warnings,
+        };
+        if let Err(e) = retrofit.prepare(gl) {
+            retrofit.destroy(gl);
+            return Err(e);
+        }
         Ok(retrofit)
     }
 
-    /// The sample count `budget` allows for twins of `host_fbo`'s attachments.
+    /// The sample count `budget` allows for twins of `host`'s attachments.
     fn budgeted(
         gl: &glow::Context,
-        host_fbo: glow::Framebuffer,
+        host: &HostFramebuffer,
         requested: u32,
         budget: &MemoryBudget,
     ) -> Result<(u32, Option<String>)> {
-        let host = introspect(gl, host_fbo)?;
         let mut formats: Vec<Format> = host.colors.iter().map(|a| a.format).collect();
         formats.push(host.depth.format);
         let (w, h) = host.size();
@@ -350,44 +395,16 @@ impl MsaaRetrofit {
         &self.warnings
     }
 
-    /// Introspect `host_fbo` and build its multisampled twin.
-    pub fn new(
-        gl: &glow::Context,
-        host_fbo: glow::Framebuffer,
-        options: &RetrofitOptions,
-    ) -> Result<Self> {
-        let resolver = Resolver::new(gl)?;
-        match Self::build(gl, host_fbo, options) {
-            Ok((host, twin, target, rules, key)) => Ok(MsaaRetrofit {
-                host,
-                options: options.clone(),
-                twin,
-                target,
-                rules,
-                key,
-                resolver,
-                budget: None,
-                warnings: Vec::new(),
-            }),
-            Err(e) => {
-                resolver.destroy(gl);
-                Err(e)
-            }
-        }
+    /// The options in force.
+    pub fn options(&self) -> &RetrofitOptions {
+        &self.options
     }
 
-    #[allow(clippy::type_complexity)]
     fn build(
         gl: &glow::Context,
         host_fbo: glow::Framebuffer,
         options: &RetrofitOptions,
-    ) -> Result<(
-        HostFramebuffer,
-        MultisampleTwin,
-        Framebuffer,
-        Vec<ResolveRule>,
-        KeySource,
-    )> {
+    ) -> Result<Built> {
         let host = introspect(gl, host_fbo)?;
         let mut rules = Vec::with_capacity(host.colors.len());
         for a in &host.colors {
@@ -397,9 +414,11 @@ impl MsaaRetrofit {
             let rule = options
                 .rules
                 .iter()
-                .find(|(n, _)| *n == i)
-                .map_or(a.format.default_rule(), |(_, r)| *r);
-            if a.format.default_rule() == ResolveRule::Select && rule != ResolveRule::Select {
+                .find(|(n, _)| *n == ColorAttachment(i))
+                .map_or(ResolveRule::default_for(a.format), |(_, r)| *r);
+            if ResolveRule::default_for(a.format) == ResolveRule::Select
+                && rule != ResolveRule::Select
+            {
                 return Err(Error::UnsupportedFormat {
                     attachment: a.point.name(),
                     format: a.format.name().into(),
@@ -411,9 +430,9 @@ impl MsaaRetrofit {
             rules.push(rule);
         }
         for (n, _) in &options.rules {
-            if !host.colors.iter().any(|a| a.point == Attachment::Color(*n)) {
+            if !host.colors.iter().any(|a| a.point == Attachment::from(*n)) {
                 return Err(Error::Retrofit {
-                    attachment: Attachment::Color(*n).name(),
+                    attachment: n.name(),
                     reason:
                         "a rule is given for it but the host framebuffer has nothing attached there"
                             .into(),
@@ -426,22 +445,29 @@ impl MsaaRetrofit {
                 let k = host
                     .colors
                     .iter()
-                    .position(|a| a.point == Attachment::Color(n))
+                    .position(|a| a.point == Attachment::from(n))
                     .ok_or_else(|| Error::Retrofit {
-                        attachment: Attachment::Color(n).name(),
+                        attachment: n.name(),
                         reason: "named as the position attachment but nothing is attached there"
                             .into(),
                     })?;
-                if host.colors[k].format.default_rule() == ResolveRule::Select {
+                if ResolveRule::default_for(host.colors[k].format) == ResolveRule::Select {
                     return Err(Error::UnsupportedFormat {
-                        attachment: Attachment::Color(n).name(),
+                        attachment: n.name(),
                         format: host.colors[k].format.name().into(),
                         reason: "the depth key needs a floating-point position".into(),
                     });
                 }
-                KeySource::Position(k)
+                KeySource::Position(ResolveSlot(k))
             }
         };
+        let mut samples = options.samples;
+        let mut warnings = Vec::new();
+        if let Some(budget) = &options.memory_budget {
+            let (fits, warning) = Self::budgeted(gl, &host, options.samples, budget)?;
+            samples = fits;
+            warnings.extend(warning);
+        }
         let mut specs: Vec<TwinSpec> = host
             .colors
             .iter()
@@ -457,7 +483,7 @@ impl MsaaRetrofit {
             name: host.depth.point.name(),
         });
         let (w, h) = host.size();
-        let twin = MultisampleTwin::new(gl, &specs, &host.draw_buffers, w, h, options.samples)?;
+        let twin = MultisampleTwin::new(gl, &specs, &host.draw_buffers, w, h, samples)?;
         // The resolve writes output k into the host's k-th colour texture.
         let mut attachments: Vec<(Attachment, TextureRef)> = host
             .colors
@@ -475,12 +501,34 @@ impl MsaaRetrofit {
                     return Err(e);
                 }
             };
-        Ok((host, twin, target, rules, key))
+        Ok(Built {
+            host,
+            twin,
+            target,
+            rules,
+            key,
+            warnings,
+        })
+    }
+
+    /// Compile the programs the options' resolve uses.
+    fn prepare(&mut self, gl: &glow::Context) -> Result<()> {
+        let (depth, colors, points) = self.inputs()?;
+        let inputs = ResolveInputs {
+            depth,
+            colors: &colors,
+            attachments: &points,
+            rules: &self.rules,
+            key: self.key,
+            samples: self.twin.samples,
+        };
+        self.resolver
+            .prepare(gl, &inputs, &self.target, &self.options.resolve, false)
     }
 
     /// The multisampled framebuffer: bind it instead of the host's for the geometry pass.
     pub fn framebuffer(&self) -> glow::Framebuffer {
-        self.twin.fbo.raw
+        self.twin.fbo.raw()
     }
 
     /// The real sample count.
@@ -503,13 +551,15 @@ impl MsaaRetrofit {
         &self.rules
     }
 
-    /// Where the depth key comes from (an index into the host's colour attachments).
+    /// Where the depth key comes from (a slot among the host's colour
+    /// attachments, in attachment order).
     pub fn key(&self) -> KeySource {
         self.key
     }
 
-    /// The resolve's inputs: the twins in host colour order, and depth.
-    pub fn inputs(&self) -> Result<(TextureRef, Vec<TextureRef>)> {
+    /// The resolve's inputs: depth, and the twins in host colour order with
+    /// the attachment each stands for.
+    pub fn inputs(&self) -> Result<(TextureRef, Vec<TextureRef>, Vec<ColorAttachment>)> {
         let depth = self
             .twin
             .depth()
@@ -518,60 +568,95 @@ impl MsaaRetrofit {
                 attachment: self.host.depth.point.name(),
                 reason: "its multisampled twin is missing".into(),
             })?;
-        let colors = self
-            .host
-            .colors
-            .iter()
-            .filter_map(|a| self.twin.texture(a.point).map(TextureRef::from))
-            .collect();
-        Ok((depth, colors))
+        let mut colors = Vec::with_capacity(self.host.colors.len());
+        let mut points = Vec::with_capacity(self.host.colors.len());
+        for a in &self.host.colors {
+            let (Some(twin), Attachment::Color(n)) = (self.twin.texture(a.point), a.point) else {
+                return Err(Error::Retrofit {
+                    attachment: a.point.name(),
+                    reason: "its multisampled twin is missing".into(),
+                });
+            };
+            colors.push(TextureRef::from(twin));
+            points.push(ColorAttachment(n));
+        }
+        Ok((depth, colors, points))
     }
 
-    /// Resolve the twins into the host's textures.
-    pub fn resolve(&mut self, gl: &glow::Context, params: &ResolveParams) -> Result<()> {
-        let (depth, colors) = self.inputs()?;
+    /// The low-level parameters of a resolve of this frame.
+    fn params(&self, frame: &Frame) -> Result<ResolveParams> {
+        let (projection, fov_y) = frame.depth_terms()?;
+        Ok(ResolveParams {
+            settings: self.options.resolve,
+            projection,
+            fov_y,
+            height_px: self.host.size().1,
+        })
+    }
+
+    /// Resolve the twins into the host's textures: call it after the
+    /// geometry pass, before the host's lighting reads its G-buffer.
+    pub fn resolve(&mut self, gl: &glow::Context, frame: &Frame) -> Result<()> {
+        let params = self.params(frame)?;
+        let (depth, colors, points) = self.inputs()?;
         let inputs = ResolveInputs {
             depth,
             colors: &colors,
+            attachments: &points,
             rules: &self.rules,
             key: self.key,
             samples: self.twin.samples,
         };
-        self.resolver.run(gl, &inputs, &self.target, params, false)
-    }
-
-    /// How the resolve finds its one-sample pixels (uniform pixels,
-    /// pixels outside a selective-AA selection). The results are identical;
-    /// which is fastest depends on the GPU ([`Schedule`] says why).
-    pub fn set_schedule(&mut self, schedule: Schedule) -> Result<()> {
-        self.resolver.set_schedule(schedule)
-    }
-
-    /// The resolve's schedule.
-    pub fn schedule(&self) -> Schedule {
-        self.resolver.schedule()
+        self.resolver.run(gl, &inputs, &self.target, &params, false)
     }
 
     /// Resolve into another target (its colour `k` receives host attachment
     /// `k`; with `complex_output`, draw buffer `colors.len()` gets the
-    /// complex-pixel mask).
+    /// complex-pixel mask): for tools that inspect the resolve. Its
+    /// programs are compiled on first use.
     pub fn resolve_into(
         &mut self,
         gl: &glow::Context,
         target: &Framebuffer,
-        params: &ResolveParams,
+        frame: &Frame,
         complex_output: bool,
     ) -> Result<()> {
-        let (depth, colors) = self.inputs()?;
+        let params = self.params(frame)?;
+        let (depth, colors, points) = self.inputs()?;
         let inputs = ResolveInputs {
             depth,
             colors: &colors,
+            attachments: &points,
             rules: &self.rules,
             key: self.key,
             samples: self.twin.samples,
         };
         self.resolver
-            .run(gl, &inputs, target, params, complex_output)
+            .run(gl, &inputs, target, &params, complex_output)
+    }
+
+    /// Change the options. Only what they change is rebuilt: the twins
+    /// when the sample count, budget, rules or key change; the programs
+    /// whenever the resolve's permutation changes. On error the retrofit
+    /// keeps working with the options it had.
+    pub fn set_options(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
+        let twins_change = options.samples != self.options.samples
+            || options.memory_budget != self.options.memory_budget
+            || options.rules != self.options.rules
+            || options.position_attachment != self.options.position_attachment;
+        if twins_change {
+            return self.rebuild(gl, options);
+        }
+        let previous = self.options.clone();
+        let previous_schedule = self.resolver.schedule();
+        self.resolver.set_schedule(options.schedule)?;
+        self.options = options.clone();
+        if let Err(e) = self.prepare(gl) {
+            self.options = previous;
+            self.resolver.set_schedule(previous_schedule)?;
+            return Err(e);
+        }
+        Ok(())
     }
 
     /// Re-read the host framebuffer (after the host resized or re-allocated
@@ -582,31 +667,53 @@ impl MsaaRetrofit {
         self.rebuild(gl, &options)
     }
 
-    /// Change the sample count at run time.
+    /// Change the sample count: [`MsaaRetrofit::set_options`] with only
+    /// `samples` changed.
     pub fn set_samples(&mut self, gl: &glow::Context, samples: u32) -> Result<()> {
-        let mut options = self.options.clone();
-        options.samples = samples;
+        let options = RetrofitOptions {
+            samples,
+            ..self.options.clone()
+        };
         self.rebuild(gl, &options)
     }
 
     fn rebuild(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
-        let (mut budgeted, mut warnings) = (options.clone(), Vec::new());
-        if let Some(budget) = &self.budget {
-            let (samples, warning) = Self::budgeted(gl, self.host.fbo, options.samples, budget)?;
-            budgeted.samples = samples;
-            warnings.extend(warning);
+        let built = Self::build(gl, self.host.fbo, options)?;
+        let previous_schedule = self.resolver.schedule();
+        if let Err(e) = self.resolver.set_schedule(options.schedule) {
+            built.destroy(gl);
+            return Err(e);
         }
-        let (host, twin, target, rules, key) = Self::build(gl, self.host.fbo, &budgeted)?;
-        self.warnings = warnings;
-        let old_twin = std::mem::replace(&mut self.twin, twin);
-        let old_target = std::mem::replace(&mut self.target, target);
-        old_twin.destroy(gl);
-        old_target.destroy(gl);
-        self.host = host;
-        self.rules = rules;
-        self.key = key;
-        self.options = options.clone();
-        Ok(())
+        let old = Built {
+            host: std::mem::replace(&mut self.host, built.host),
+            twin: std::mem::replace(&mut self.twin, built.twin),
+            target: std::mem::replace(&mut self.target, built.target),
+            rules: std::mem::replace(&mut self.rules, built.rules),
+            key: std::mem::replace(&mut self.key, built.key),
+            warnings: std::mem::replace(&mut self.warnings, built.warnings),
+        };
+        let old_options = std::mem::replace(&mut self.options, options.clone());
+        match self.prepare(gl) {
+            Ok(()) => {
+                old.destroy(gl);
+                Ok(())
+            }
+            Err(e) => {
+                // Put the working twins back.
+                let new = Built {
+                    host: std::mem::replace(&mut self.host, old.host),
+                    twin: std::mem::replace(&mut self.twin, old.twin),
+                    target: std::mem::replace(&mut self.target, old.target),
+                    rules: std::mem::replace(&mut self.rules, old.rules),
+                    key: std::mem::replace(&mut self.key, old.key),
+                    warnings: std::mem::replace(&mut self.warnings, old.warnings),
+                };
+                new.destroy(gl);
+                self.options = old_options;
+                self.resolver.set_schedule(previous_schedule)?;
+                Err(e)
+            }
+        }
     }
 
     /// Free everything this crate created (never the host's objects).
