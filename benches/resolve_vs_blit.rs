@@ -399,6 +399,7 @@ impl Host {
             },
             fov_y: self.camera.fov_y as f64,
             height_px: self.height,
+            view_row: None,
         }
     }
 

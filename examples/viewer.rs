@@ -1041,7 +1041,8 @@ impl Presenter {
             (View::Complex, Some(retrofit)) => {
                 let (depth, colors, _) = retrofit.inputs()?;
                 match retrofit.key() {
-                    KeySource::Position(ResolveSlot(k)) => {
+                    KeySource::Position(ResolveSlot(k))
+                    | KeySource::WorldPosition(ResolveSlot(k)) => {
                         colors.get(k).map(|t| (t.raw(), 2, retrofit.samples()))
                     }
                     KeySource::Depth => Some((depth.raw(), 0, retrofit.samples())),

@@ -423,7 +423,7 @@ fn a_host_retrofitted_through_the_public_api_matches_the_builtin_pipeline() {
             .collect(),
         position_attachment: match layout.key {
             KeySource::Position(ResolveSlot(k)) => Some(ColorAttachment(k as u32)),
-            KeySource::Depth => None,
+            other => panic!("the demo layout keys on view-space position, not {other:?}"),
         },
         resolve: settings,
         ..RetrofitOptions::default()

@@ -228,6 +228,7 @@ impl Harness {
             projection,
             fov_y: FOV_Y,
             height_px: H,
+            view_row: None,
         };
         let inputs = ResolveInputs {
             depth: TextureRef::from(&self.depth),

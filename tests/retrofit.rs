@@ -394,12 +394,16 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
         "{e}"
     );
     unsafe { gl.delete_framebuffer(fbo) };
-    // A renderbuffer.
+    // An already multisampled renderbuffer (single-sample ones are
+    // retrofitted: the host zoo covers them).
     unsafe {
         let rb = gl.create_renderbuffer().unwrap();
         gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
-        gl.renderbuffer_storage(glow::RENDERBUFFER, glow::RGBA8, 32, 32);
-        let fbo = attach(&[(Attachment::Depth, TextureRef::from(&depth))]);
+        gl.renderbuffer_storage_multisample(glow::RENDERBUFFER, 4, glow::RGBA8, 32, 32);
+        let ms_depth = gl.create_renderbuffer().unwrap();
+        gl.bind_renderbuffer(glow::RENDERBUFFER, Some(ms_depth));
+        gl.renderbuffer_storage_multisample(glow::RENDERBUFFER, 4, glow::DEPTH_COMPONENT24, 32, 32);
+        let fbo = gl.create_framebuffer().unwrap();
         gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
         gl.framebuffer_renderbuffer(
             glow::FRAMEBUFFER,
@@ -407,16 +411,24 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
             glow::RENDERBUFFER,
             Some(rb),
         );
+        gl.framebuffer_renderbuffer(
+            glow::FRAMEBUFFER,
+            glow::DEPTH_ATTACHMENT,
+            glow::RENDERBUFFER,
+            Some(ms_depth),
+        );
         gl.bind_framebuffer(glow::FRAMEBUFFER, None);
         let e = MsaaRetrofit::new(gl, fbo, &RetrofitOptions::default())
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("GL_COLOR_ATTACHMENT0") && e.contains("renderbuffer"),
+            e.contains("GL_COLOR_ATTACHMENT0") && e.contains("already multisampled"),
             "{e}"
         );
+        assert_eq!(e.lines().count(), 1, "{e}");
         gl.delete_framebuffer(fbo);
         gl.delete_renderbuffer(rb);
+        gl.delete_renderbuffer(ms_depth);
     }
     // A format the resolve does not know (RGB565).
     unsafe {
@@ -445,7 +457,9 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
         gl.bind_framebuffer(glow::FRAMEBUFFER, None);
         let e = introspect(gl, fbo).unwrap_err();
         assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
+        // The attachment, and the format by its GL name.
         assert!(e.to_string().contains("GL_COLOR_ATTACHMENT0"), "{e}");
+        assert!(e.to_string().contains("GL_RGB565"), "{e}");
         gl.delete_framebuffer(fbo);
         gl.delete_texture(tex);
     }

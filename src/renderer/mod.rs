@@ -93,7 +93,7 @@ use crate::gl::{
 };
 use crate::plan::{Pass, Plan, PlanContext, SceneNeeds};
 use crate::resolve::{KeySource, ResolveSettings, ResolveSlot, SelectionFlag};
-use crate::retrofit::{MsaaRetrofit, RetrofitOptions};
+use crate::retrofit::{MsaaRetrofit, PositionSpace, RetrofitOptions};
 use crate::scene::{Background, Camera, Light, Scene};
 use crate::{Error, Result};
 use background::BackgroundPass;
@@ -324,6 +324,15 @@ impl RenderOptions {
         if resolve.selection.flag.is_none() {
             resolve.selection.flag = opt_out_flag;
         }
+        let (position_attachment, position_space) = match self.layout.key {
+            KeySource::Position(ResolveSlot(k)) => {
+                (Some(ColorAttachment(k as u32)), PositionSpace::View)
+            }
+            KeySource::WorldPosition(ResolveSlot(k)) => {
+                (Some(ColorAttachment(k as u32)), PositionSpace::World)
+            }
+            KeySource::Depth => (None, PositionSpace::View),
+        };
         RetrofitOptions {
             samples: self.samples,
             rules: self
@@ -333,10 +342,8 @@ impl RenderOptions {
                 .enumerate()
                 .map(|(k, a)| (ColorAttachment(k as u32), a.rule))
                 .collect(),
-            position_attachment: match self.layout.key {
-                KeySource::Position(ResolveSlot(k)) => Some(ColorAttachment(k as u32)),
-                KeySource::Depth => None,
-            },
+            position_attachment,
+            position_space,
             resolve,
             ..RetrofitOptions::default()
         }

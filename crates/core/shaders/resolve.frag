@@ -8,6 +8,8 @@
 //   NUM_ATTACHMENTS        colour attachments 0..7
 //   ATTk_SAMPLER, ATTk_VEC sampler and value type of attachment k
 //   ATTk_RULE              RULE_BLEND, RULE_BLEND_NORMAL, RULE_BLEND_HDR or RULE_SELECT
+//   KEY_WORLD              the position attachment holds world-space positions:
+//                          the key is -dot(u_view_row, (p, 1)), view space's -z
 //   KEY_SAMPLER, KEY_INDEX the position attachment's sampler and number, when
 //                          the key comes from it (its samples are fetched once)
 //   METHOD                 METHOD_AVERAGE, METHOD_FRONT, METHOD_MEDIAN or METHOD_BACK
@@ -15,6 +17,8 @@
 //   FAST_PATH              uniform pixels copy sample 0
 //   WRITE_DEPTH            write the resolved depth; BLEND_DEPTH blends it
 //   COMPLEX_OUTPUT         also write 1.0 for pixels that took the slow path
+//   REFERENCE_OUTPUT       also write the reference sample's index (0 for one-sample
+//                          pixels): the host's stencil is copied from that sample
 //   SELECT_REGION          selective AA: REGION_RECT or REGION_ELLIPSE (u_region)
 //   SELECT_MAX_DEPTH       selective AA: pixels with no geometry sample nearer than
 //                          u_max_depth take one sample
@@ -54,6 +58,9 @@ uniform float u_footprint;       // tan(fov_y / height_px)
 uniform float u_c;               // outer window width, in footprints
 uniform float u_c_in;            // inner width of the smooth window
 uniform float u_infinity;        // +inf: the sort key of background samples
+#ifdef KEY_WORLD
+uniform vec4 u_view_row;         // the view matrix's third row: view z of a world position
+#endif
 #if defined(SELECT_REGION)
 uniform vec4 u_region;           // rect (x0, y0, x1, y1); ellipse (cx, cy, 1/rx, 1/ry); window pixels
 #endif
@@ -122,6 +129,9 @@ out ATT7_VEC o_att7;
 #if defined(COMPLEX_OUTPUT) && DECLARE_OUTPUTS
 out float o_complex;
 #endif
+#if defined(REFERENCE_OUTPUT) && DECLARE_OUTPUTS
+out uint o_reference;
+#endif
 
 // Per-pixel state shared by the attachment blocks below.
 float g_key[NUM_SAMPLES];      // depth key z_i (meaningless where g_bg)
@@ -145,7 +155,11 @@ void load_keys(ivec2 p) {
         g_raw_depth[i] = depth;
 #ifdef KEY_SAMPLER
         g_key_vals[i] = FETCH(KEY_SAMPLER, p, i);
+#ifdef KEY_WORLD
+        float z = -dot(u_view_row, vec4(g_key_vals[i].xyz, 1.0));
+#else
         float z = -g_key_vals[i].z;
+#endif
 #else
         float z = u_projection.y / (depth * u_depth_to_ndc.x + u_depth_to_ndc.y + u_projection.x);
 #endif
@@ -494,6 +508,13 @@ void main() {
 #endif
 #ifdef COMPLEX_OUTPUT
     o_complex = one_sample ? 0.0 : 1.0;
+#endif
+#ifdef REFERENCE_OUTPUT
+#ifdef PASS_ONE_SAMPLE
+    o_reference = 0u;
+#else
+    o_reference = uint(one_sample ? 0 : r);
+#endif
 #endif
 }
 

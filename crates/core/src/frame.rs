@@ -19,6 +19,10 @@ pub struct Frame {
     pub projection: Projection,
     /// How depth values are stored and what the depth buffer is cleared to.
     pub depth_mode: DepthMode,
+    /// The view matrix (column-major), for a host whose position attachment
+    /// holds world-space positions
+    /// ([`PositionSpace::World`](crate::retrofit::PositionSpace::World)).
+    pub view: Option<[f32; 16]>,
 }
 
 /// A perspective projection, given either way a host keeps it.
@@ -78,6 +82,7 @@ impl Frame {
         Frame {
             projection: Projection::Matrix(m),
             depth_mode: DepthMode::Standard,
+            view: None,
         }
     }
 
@@ -87,12 +92,28 @@ impl Frame {
         Frame {
             projection: Projection::Perspective { fov_y, near, far },
             depth_mode: DepthMode::Standard,
+            view: None,
         }
     }
 
     /// The same frame with another depth mode.
     pub fn with_depth_mode(self, depth_mode: DepthMode) -> Self {
         Frame { depth_mode, ..self }
+    }
+
+    /// The same frame with its view matrix (column-major), which a
+    /// world-space position attachment needs.
+    pub fn with_view(self, view: [f32; 16]) -> Self {
+        Frame {
+            view: Some(view),
+            ..self
+        }
+    }
+
+    /// The view matrix's third row, `(m[2], m[6], m[10], m[14])`: what turns
+    /// a world-space position into view-space z.
+    pub fn view_row(&self) -> Option<[f64; 4]> {
+        self.view.map(|m| [m[2], m[6], m[10], m[14]].map(f64::from))
     }
 
     /// The depth linearisation and the vertical field of view, checked:

@@ -108,4 +108,4 @@ pub use frame::{DepthMode, Frame, Projection};
 pub use gl::ColorAttachment;
 /// The GL bindings the crate is written against; hosts use the same version.
 pub use glow;
-pub use retrofit::{MsaaRetrofit, RetrofitOptions};
+pub use retrofit::{MsaaRetrofit, PositionSpace, RetrofitOptions};

@@ -141,11 +141,8 @@ impl Readback {
         let mut plane = vec![0.0f32; w * h * 4];
         unsafe {
             fbo.bind(gl);
+            SavedState::prepare_fullscreen_pass(gl);
             gl.disable(glow::DEPTH_TEST);
-            gl.disable(glow::BLEND);
-            gl.disable(glow::SCISSOR_TEST);
-            gl.disable(glow::CULL_FACE);
-            gl.disable(glow::STENCIL_TEST);
             program.bind(gl);
             texture.bind(gl, 0);
             program.set_i32(gl, "u_src", 0);

@@ -10,10 +10,15 @@
 
 use crate::frame::Frame;
 use crate::gbuffer::{MemoryBudget, MultisampleTwin, TwinSpec, budget_twins};
-use crate::gl::{Attachment, ColorAttachment, Format, Framebuffer, TextureRef, check_error};
+use crate::gl::Texture2d;
+use crate::gl::format::{ComponentType, FormatProperties, internal_format_name};
+use crate::gl::{
+    Attachment, ColorAttachment, Format, Framebuffer, HostImage, SetupState, TextureRef,
+    check_error,
+};
 use crate::resolve::{
-    KeySource, ResolveInputs, ResolveParams, ResolveRule, ResolveSettings, ResolveSlot, Resolver,
-    Schedule,
+    ExtraOutputs, KeySource, ResolveInputs, ResolveParams, ResolveRule, ResolveSettings,
+    ResolveSlot, Resolver, Schedule, StencilCopy, StencilPass,
 };
 use crate::{Error, Result};
 use glow::HasContext;
@@ -35,8 +40,15 @@ pub struct RetrofitOptions {
     /// the depth key; `None` (the default) linearises the depth attachment
     /// with each frame's projection instead.
     pub position_attachment: Option<ColorAttachment>,
+    /// What space [`RetrofitOptions::position_attachment`] holds
+    /// positions in; with [`PositionSpace::World`] each frame passes its
+    /// view matrix ([`Frame::with_view`]).
+    pub position_space: PositionSpace,
     /// Method, window, fast path and selective anti-aliasing.
     pub resolve: ResolveSettings,
+    /// How a depth-stencil host's stencil is written back after the
+    /// resolve ([`StencilCopy`]: by default the reference sample's value).
+    pub stencil: StencilCopy,
     /// How one-sample pixels are found ([`Schedule`]).
     pub schedule: Schedule,
     /// A limit on the twins' memory: over it, the sample count steps down
@@ -51,37 +63,99 @@ impl Default for RetrofitOptions {
             samples: 4,
             rules: Vec::new(),
             position_attachment: None,
+            position_space: PositionSpace::View,
             resolve: ResolveSettings::default(),
+            stencil: StencilCopy::Auto,
             schedule: Schedule::OnePass,
             memory_budget: None,
         }
     }
 }
 
-/// One texture attachment of the host's framebuffer, as introspected.
+/// The space of a host's position attachment.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PositionSpace {
+    /// View space: the key is `−z`, as it is.
+    #[default]
+    View,
+    /// World space (the most-copied deferred tutorial's layout): the key is
+    /// view space's `−z`, from each frame's view matrix.
+    World,
+}
+
+/// The image a host attachment points at.
 #[derive(Clone, Copy, Debug, PartialEq)]
+pub enum HostImageKind {
+    /// Level 0 of a `GL_TEXTURE_2D`.
+    Texture2d(glow::Texture),
+    /// Layer `layer`, level 0, of a `GL_TEXTURE_2D_ARRAY`
+    /// (`glFramebufferTextureLayer`).
+    TextureLayer {
+        /// The array texture.
+        texture: glow::Texture,
+        /// The layer.
+        layer: u32,
+    },
+    /// A single-sample renderbuffer.
+    Renderbuffer(glow::Renderbuffer),
+}
+
+/// One attachment of the host's framebuffer, as introspected.
+#[derive(Clone, Debug, PartialEq)]
 pub struct HostAttachment {
     /// Attachment point.
     pub point: Attachment,
-    /// The host's texture.
-    pub texture: glow::Texture,
-    /// Its internal format.
+    /// The host's image.
+    pub image: HostImageKind,
+    /// Its format, found from the internal format or, for unsized ones
+    /// (`GL_RGBA`, `GL_DEPTH_COMPONENT`), from what the driver made of it.
     pub format: Format,
-    /// Width of level 0.
+    /// The internal format as the host asked for it, e.g. `GL_RGBA`.
+    pub requested_format: String,
+    /// Width of the image.
     pub width: u32,
-    /// Height of level 0.
+    /// Height of the image.
     pub height: u32,
 }
 
 impl HostAttachment {
+    /// A description for the framebuffer wrapper: the format and size, and
+    /// the texture where the image is a whole 2D texture.
     fn texture_ref(&self) -> TextureRef {
+        let (raw, target) = match self.image {
+            HostImageKind::Texture2d(t) => (t, glow::TEXTURE_2D),
+            HostImageKind::TextureLayer { texture, .. } => (texture, glow::TEXTURE_2D_ARRAY),
+            // Never bound as a texture: `host_image` attaches it.
+            HostImageKind::Renderbuffer(rb) => (glow::NativeTexture(rb.0), glow::RENDERBUFFER),
+        };
         TextureRef {
-            raw: self.texture,
-            target: glow::TEXTURE_2D,
+            raw,
+            target,
             format: self.format,
             width: self.width,
             height: self.height,
             samples: 1,
+        }
+    }
+
+    /// How the framebuffer wrapper must attach it, when not as a 2D texture.
+    fn host_image(&self) -> Option<HostImage> {
+        match self.image {
+            HostImageKind::Texture2d(_) => None,
+            HostImageKind::TextureLayer { texture, layer } => {
+                Some(HostImage::TextureLayer { texture, layer })
+            }
+            HostImageKind::Renderbuffer(rb) => Some(HostImage::Renderbuffer(rb)),
+        }
+    }
+
+    /// The GL object's name, to tell whether two points share it.
+    fn object_name(&self) -> u32 {
+        match self.image {
+            HostImageKind::Texture2d(t) | HostImageKind::TextureLayer { texture: t, .. } => {
+                t.0.get()
+            }
+            HostImageKind::Renderbuffer(rb) => rb.0.get(),
         }
     }
 }
@@ -97,6 +171,10 @@ pub struct HostFramebuffer {
     pub depth: HostAttachment,
     /// Draw buffer `i` → colour attachment number (`None` for `GL_NONE`).
     pub draw_buffers: Vec<Option<u32>>,
+    /// Colour attachments no draw buffer maps (a `GL_NONE` hole): the
+    /// geometry pass cannot write them, so they are neither twinned nor
+    /// resolved and keep what the host put there.
+    pub undrawn: Vec<Attachment>,
 }
 
 impl HostFramebuffer {
@@ -110,105 +188,182 @@ fn attachment_param(gl: &glow::Context, point: u32, pname: u32) -> i32 {
     unsafe { gl.get_framebuffer_attachment_parameter_i32(glow::FRAMEBUFFER, point, pname) }
 }
 
+/// The properties the driver reports for the image at `point`.
+fn attachment_properties(gl: &glow::Context, point: u32) -> Option<FormatProperties> {
+    let p = |pname| attachment_param(gl, point, pname).max(0) as u32;
+    let component = ComponentType::from_gl(p(glow::FRAMEBUFFER_ATTACHMENT_COMPONENT_TYPE))?;
+    let srgb = p(glow::FRAMEBUFFER_ATTACHMENT_COLOR_ENCODING) == glow::SRGB;
+    Some(FormatProperties {
+        component,
+        rgba_bits: [
+            p(glow::FRAMEBUFFER_ATTACHMENT_RED_SIZE),
+            p(glow::FRAMEBUFFER_ATTACHMENT_GREEN_SIZE),
+            p(glow::FRAMEBUFFER_ATTACHMENT_BLUE_SIZE),
+            p(glow::FRAMEBUFFER_ATTACHMENT_ALPHA_SIZE),
+        ],
+        depth_bits: p(glow::FRAMEBUFFER_ATTACHMENT_DEPTH_SIZE),
+        stencil_bits: p(glow::FRAMEBUFFER_ATTACHMENT_STENCIL_SIZE),
+        srgb,
+    })
+}
+
+/// The texture target a texture name was created with, found by binding
+/// it: binding to any other target is `GL_INVALID_OPERATION`.
+fn texture_target(gl: &glow::Context, texture: glow::Texture) -> Option<u32> {
+    const CANDIDATES: [u32; 6] = [
+        glow::TEXTURE_2D,
+        glow::TEXTURE_2D_ARRAY,
+        glow::TEXTURE_2D_MULTISAMPLE,
+        glow::TEXTURE_CUBE_MAP,
+        glow::TEXTURE_RECTANGLE,
+        glow::TEXTURE_3D,
+    ];
+    CANDIDATES.into_iter().find(|&target| unsafe {
+        gl.bind_texture(target, Some(texture));
+        let ok = gl.get_error() == glow::NO_ERROR;
+        gl.bind_texture(target, None);
+        ok
+    })
+}
+
+fn target_name(target: u32) -> &'static str {
+    match target {
+        glow::TEXTURE_2D => "GL_TEXTURE_2D",
+        glow::TEXTURE_2D_ARRAY => "GL_TEXTURE_2D_ARRAY",
+        glow::TEXTURE_2D_MULTISAMPLE => "GL_TEXTURE_2D_MULTISAMPLE",
+        glow::TEXTURE_CUBE_MAP => "GL_TEXTURE_CUBE_MAP",
+        glow::TEXTURE_RECTANGLE => "GL_TEXTURE_RECTANGLE",
+        glow::TEXTURE_3D => "GL_TEXTURE_3D",
+        _ => "an unknown texture target",
+    }
+}
+
 fn introspect_point(gl: &glow::Context, point: Attachment) -> Result<Option<HostAttachment>> {
     let name = point.name();
     let e = point.gl_enum();
-    let kind = attachment_param(gl, e, glow::FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE) as u32;
-    match kind {
-        glow::NONE => return Ok(None),
-        glow::TEXTURE => {}
-        glow::RENDERBUFFER => {
-            return Err(Error::Retrofit {
-                attachment: name,
-                reason: "it is a renderbuffer; the resolve must read the samples in a shader, so the host needs a texture here".into(),
-            });
-        }
-        other => {
-            return Err(Error::Retrofit {
-                attachment: name,
-                reason: format!("unexpected object type 0x{other:04X}"),
-            });
-        }
-    }
-    let raw = attachment_param(gl, e, glow::FRAMEBUFFER_ATTACHMENT_OBJECT_NAME) as u32;
-    let level = attachment_param(gl, e, glow::FRAMEBUFFER_ATTACHMENT_TEXTURE_LEVEL);
-    let layered = attachment_param(gl, e, glow::FRAMEBUFFER_ATTACHMENT_LAYERED);
-    let _ = check_error(gl, "reading attachment parameters");
-    let texture = std::num::NonZeroU32::new(raw)
-        .map(glow::NativeTexture)
-        .ok_or_else(|| Error::Retrofit {
-            attachment: name.clone(),
-            reason: "the driver reports texture 0".into(),
-        })?;
-    if level != 0 || layered != 0 {
-        return Err(Error::Retrofit {
-            attachment: name,
-            reason: format!(
-                "texture {raw} is attached at level {level}{}; only level 0 of a 2D texture is supported",
-                if layered != 0 { " and layered" } else { "" }
-            ),
-        });
-    }
-    // Binding to TEXTURE_2D fails for any other target: that is how a 2D texture is told apart.
-    let _ = check_error(gl, "before introspecting a texture");
-    let (internal, width, height) = unsafe {
-        gl.bind_texture(glow::TEXTURE_2D, Some(texture));
-        let ok = gl.get_error() == glow::NO_ERROR;
-        let v = (
-            gl.get_tex_level_parameter_i32(glow::TEXTURE_2D, 0, glow::TEXTURE_INTERNAL_FORMAT),
-            gl.get_tex_level_parameter_i32(glow::TEXTURE_2D, 0, glow::TEXTURE_WIDTH),
-            gl.get_tex_level_parameter_i32(glow::TEXTURE_2D, 0, glow::TEXTURE_HEIGHT),
-        );
-        gl.bind_texture(glow::TEXTURE_2D, None);
-        if !ok {
-            return Err(Error::Retrofit {
-                attachment: name,
-                reason: format!(
-                    "texture {raw} is not a GL_TEXTURE_2D (multisampled, array or cube textures cannot be retrofitted)"
-                ),
-            });
-        }
-        v
+    let refuse = |reason: String| Error::Retrofit {
+        attachment: name.clone(),
+        reason,
     };
-    let format =
-        Format::from_internal_format(internal as u32).ok_or_else(|| Error::UnsupportedFormat {
-            attachment: name.clone(),
-            format: format!("0x{internal:04X}"),
-            reason: format!(
-                "not a format the resolve knows; supported: {}",
-                Format::ALL
-                    .iter()
-                    .map(|f| f.name())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        })?;
+    let kind = attachment_param(gl, e, glow::FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE) as u32;
+    let raw = attachment_param(gl, e, glow::FRAMEBUFFER_ATTACHMENT_OBJECT_NAME) as u32;
+    let (image, internal, width, height) = match kind {
+        glow::NONE => return Ok(None),
+        glow::TEXTURE => {
+            let level = attachment_param(gl, e, glow::FRAMEBUFFER_ATTACHMENT_TEXTURE_LEVEL);
+            let layered = attachment_param(gl, e, glow::FRAMEBUFFER_ATTACHMENT_LAYERED);
+            let layer = attachment_param(gl, e, glow::FRAMEBUFFER_ATTACHMENT_TEXTURE_LAYER);
+            let _ = check_error(gl, "reading attachment parameters");
+            let texture = std::num::NonZeroU32::new(raw)
+                .map(glow::NativeTexture)
+                .ok_or_else(|| refuse("the driver reports texture 0".into()))?;
+            if layered != 0 {
+                return Err(refuse(format!(
+                    "texture {raw} is attached layered (glFramebufferTexture on an array); \
+                     attach one layer with glFramebufferTextureLayer instead"
+                )));
+            }
+            if level != 0 {
+                return Err(refuse(format!(
+                    "texture {raw} is attached at mip level {level}; only level 0 can be retrofitted"
+                )));
+            }
+            let target = texture_target(gl, texture);
+            let image = match target {
+                Some(glow::TEXTURE_2D) => HostImageKind::Texture2d(texture),
+                Some(glow::TEXTURE_2D_ARRAY) => HostImageKind::TextureLayer {
+                    texture,
+                    layer: layer.max(0) as u32,
+                },
+                Some(glow::TEXTURE_2D_MULTISAMPLE) => {
+                    return Err(refuse(format!(
+                        "texture {raw} is already a GL_TEXTURE_2D_MULTISAMPLE; the retrofit \
+                         makes the multisampled twins itself, so give it single-sample textures"
+                    )));
+                }
+                other => {
+                    return Err(refuse(format!(
+                        "texture {raw} is a {}; only GL_TEXTURE_2D and layers of a \
+                         GL_TEXTURE_2D_ARRAY can be retrofitted",
+                        other.map_or("texture of an unknown target", target_name)
+                    )));
+                }
+            };
+            let target = target.unwrap_or(glow::TEXTURE_2D);
+            let (internal, w, h) = unsafe {
+                gl.bind_texture(target, Some(texture));
+                let v = (
+                    gl.get_tex_level_parameter_i32(target, 0, glow::TEXTURE_INTERNAL_FORMAT),
+                    gl.get_tex_level_parameter_i32(target, 0, glow::TEXTURE_WIDTH),
+                    gl.get_tex_level_parameter_i32(target, 0, glow::TEXTURE_HEIGHT),
+                );
+                gl.bind_texture(target, None);
+                v
+            };
+            (image, internal as u32, w, h)
+        }
+        glow::RENDERBUFFER => {
+            let rb = std::num::NonZeroU32::new(raw)
+                .map(glow::NativeRenderbuffer)
+                .ok_or_else(|| refuse("the driver reports renderbuffer 0".into()))?;
+            let (internal, w, h, samples) = unsafe {
+                gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
+                let p = |pname| gl.get_renderbuffer_parameter_i32(glow::RENDERBUFFER, pname);
+                let v = (
+                    p(glow::RENDERBUFFER_INTERNAL_FORMAT),
+                    p(glow::RENDERBUFFER_WIDTH),
+                    p(glow::RENDERBUFFER_HEIGHT),
+                    p(glow::RENDERBUFFER_SAMPLES),
+                );
+                gl.bind_renderbuffer(glow::RENDERBUFFER, None);
+                v
+            };
+            if samples > 1 {
+                return Err(refuse(format!(
+                    "renderbuffer {raw} is already multisampled ({samples}x); the retrofit \
+                     makes the multisampled twins itself, so give it single-sample images"
+                )));
+            }
+            (HostImageKind::Renderbuffer(rb), internal as u32, w, h)
+        }
+        glow::FRAMEBUFFER_DEFAULT => {
+            return Err(refuse(
+                "it is the default framebuffer's; the retrofit needs the host's own FBO".into(),
+            ));
+        }
+        other => return Err(refuse(format!("unexpected object type 0x{other:04X}"))),
+    };
+    let requested_format = internal_format_name(internal);
+    let format = match Format::from_internal_format(internal) {
+        Some(f) => Some(f),
+        None => attachment_properties(gl, e).and_then(|p| Format::from_properties(&p)),
+    };
+    let _ = check_error(gl, "reading attachment properties");
+    let format = format.ok_or_else(|| Error::UnsupportedFormat {
+        attachment: name.clone(),
+        format: requested_format.clone(),
+        reason: "no multisampled twin can hold it; use a sized colour format such as \
+                 GL_RGBA8, GL_RGBA16F, GL_RGBA32F, an snorm, unorm or integer format, or a \
+                 GL_DEPTH_COMPONENT*/GL_DEPTH24_STENCIL8 depth format"
+            .into(),
+    })?;
     Ok(Some(HostAttachment {
         point,
-        texture,
+        image,
         format,
+        requested_format,
         width: width.max(0) as u32,
         height: height.max(0) as u32,
     }))
 }
 
 /// Read a host framebuffer's attachments, formats, sizes and draw-buffer
-/// mapping. The host's framebuffer binding is left as it was.
+/// mapping. The host's bindings are left as they were.
 pub fn introspect(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFramebuffer> {
-    let previous = unsafe { gl.get_parameter_i32(glow::FRAMEBUFFER_BINDING) };
-    let previous_tex = unsafe { gl.get_parameter_i32(glow::TEXTURE_BINDING_2D) };
+    let host = SetupState::capture(gl);
     unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo)) };
     let result = introspect_bound(gl, fbo);
-    unsafe {
-        gl.bind_framebuffer(
-            glow::FRAMEBUFFER,
-            std::num::NonZeroU32::new(previous as u32).map(glow::NativeFramebuffer),
-        );
-        gl.bind_texture(
-            glow::TEXTURE_2D,
-            std::num::NonZeroU32::new(previous_tex as u32).map(glow::NativeTexture),
-        );
-    }
+    host.restore(gl);
     result
 }
 
@@ -231,7 +386,7 @@ fn introspect_bound(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFr
             glow::STENCIL_ATTACHMENT,
             glow::FRAMEBUFFER_ATTACHMENT_OBJECT_NAME,
         );
-        if a.format.has_stencil() && stencil_name as u32 == a.texture.0.get() {
+        if a.format.has_stencil() && stencil_name as u32 == a.object_name() {
             a.point = Attachment::DepthStencil;
         }
         a
@@ -294,11 +449,26 @@ fn introspect_bound(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFr
         draw_buffers.pop();
     }
     check_error(gl, "introspecting the host framebuffer")?;
+    // What no draw buffer reaches, the geometry pass cannot write: it keeps
+    // what the host put there, so it is neither twinned nor resolved.
+    let (colors, undrawn): (Vec<HostAttachment>, Vec<HostAttachment>) =
+        colors.into_iter().partition(|a| {
+            matches!(a.point, Attachment::Color(n) if draw_buffers.contains(&Some(n)))
+        });
+    if colors.is_empty() {
+        return Err(Error::Retrofit {
+            attachment: undrawn
+                .first()
+                .map_or("GL_COLOR_ATTACHMENT0".into(), |a| a.point.name()),
+            reason: "no colour attachment is in the host framebuffer's draw buffers".into(),
+        });
+    }
     Ok(HostFramebuffer {
         fbo,
         colors,
         depth,
         draw_buffers,
+        undrawn: undrawn.into_iter().map(|a| a.point).collect(),
     })
 }
 
@@ -315,6 +485,8 @@ pub struct MsaaRetrofit {
     resolver: Resolver,
     /// What the budget did (a stepped-down sample count), one line each.
     warnings: Vec<String>,
+    /// The stencil copy, for a depth-stencil host.
+    stencil: Option<StencilCopyTargets>,
 }
 
 /// What [`MsaaRetrofit::build`] makes from the host's framebuffer.
@@ -325,13 +497,144 @@ struct Built {
     rules: Vec<ResolveRule>,
     key: KeySource,
     warnings: Vec<String>,
+    stencil: Option<StencilCopyTargets>,
 }
 
 impl Built {
     fn destroy(self, gl: &glow::Context) {
         self.twin.destroy(gl);
         self.target.destroy(gl);
+        if let Some(s) = self.stencil {
+            s.destroy(gl);
+        }
     }
+}
+
+/// What copies a depth-stencil host's stencil back: the resolve's reference
+/// index per pixel, a framebuffer of the host's depth-stencil image alone
+/// (the pass reads the index, so it must not be attached where it writes),
+/// and the pass.
+#[derive(Debug)]
+struct StencilCopyTargets {
+    reference: Texture2d,
+    target: Framebuffer,
+    pass: StencilPass,
+}
+
+impl StencilCopyTargets {
+    fn new(gl: &glow::Context, host: &HostFramebuffer, method: StencilCopy) -> Result<Self> {
+        let method = method.on(gl)?;
+        let (w, h) = host.size();
+        let reference = Texture2d::new(gl, "resolve reference sample", Format::R8ui, w, h)?;
+        let depth = &host.depth;
+        let images: Vec<(Attachment, HostImage)> = depth
+            .host_image()
+            .map(|i| (depth.point, i))
+            .into_iter()
+            .collect();
+        let target = match Framebuffer::with_host_images(
+            gl,
+            "stencil copy target (host depth-stencil)",
+            &[(depth.point, depth.texture_ref())],
+            &images,
+            &[],
+        ) {
+            Ok(f) => f,
+            Err(e) => {
+                reference.destroy(gl);
+                return Err(e);
+            }
+        };
+        match StencilPass::new(gl, method) {
+            Ok(pass) => Ok(StencilCopyTargets {
+                reference,
+                target,
+                pass,
+            }),
+            Err(e) => {
+                target.destroy(gl);
+                reference.destroy(gl);
+                Err(e)
+            }
+        }
+    }
+
+    fn destroy(self, gl: &glow::Context) {
+        self.pass.destroy(gl);
+        self.target.destroy(gl);
+        self.reference.destroy(gl);
+    }
+}
+
+/// The format of a colour attachment's multisampled twin: the host's own
+/// where the driver multisamples it, else its stand-in
+/// ([`Format::multisample_stand_in`]).
+fn twin_format(gl: &glow::Context, a: &HostAttachment, samples: u32) -> Result<Format> {
+    if multisamples(gl, a.format, samples)? {
+        return Ok(a.format);
+    }
+    let wider = a.format.multisample_stand_in();
+    if let Some(wider) = wider {
+        if multisamples(gl, wider, samples)? {
+            log::info!(
+                "{}: {} cannot be multisampled here; its twin is {wider}",
+                a.point.name(),
+                a.requested_format
+            );
+            return Ok(wider);
+        }
+    }
+    Err(Error::UnsupportedFormat {
+        attachment: a.point.name(),
+        format: a.requested_format.clone(),
+        reason: format!(
+            "the driver cannot render to a multisampled texture of it{}",
+            wider
+                .map(|w| format!(" nor of its stand-in GL_{w}"))
+                .unwrap_or_default()
+        ),
+    })
+}
+
+/// Whether a `samples`x multisample texture of `format` can be made and
+/// rendered to: a 1x1 probe, freed at once. A count the format supports
+/// at others is the count's error, not the format's.
+fn multisamples(gl: &glow::Context, format: Format, samples: u32) -> Result<bool> {
+    let _ = check_error(gl, "before probing a multisample format");
+    let texture =
+        match crate::gl::Texture2dMultisample::new(gl, "format probe", format, 1, 1, samples) {
+            Ok(t) => t,
+            Err(e @ Error::UnsupportedSampleCount { .. }) => {
+                let _ = check_error(gl, "probing a multisample format");
+                return match &e {
+                    Error::UnsupportedSampleCount { supported, .. } if !supported.is_empty() => {
+                        Err(e)
+                    }
+                    _ => Ok(false),
+                };
+            }
+            Err(Error::Gl { .. }) => return Ok(false),
+            Err(e) => return Err(e),
+        };
+    let point = if format.is_depth() {
+        Attachment::for_depth_format(format)
+    } else {
+        Attachment::Color(0)
+    };
+    let draw: &[Option<u32>] = if format.is_depth() { &[] } else { &[Some(0)] };
+    let fbo = Framebuffer::new(
+        gl,
+        "format probe",
+        &[(point, TextureRef::from(&texture))],
+        draw,
+    );
+    let complete = fbo.is_ok();
+    if let Ok(f) = fbo {
+        f.destroy(gl);
+    }
+    texture.destroy(gl);
+    let _ = check_error(gl, "probing a multisample format");
+    Ok(complete)
 }
 
 impl MsaaRetrofit {
@@ -343,6 +646,17 @@ impl MsaaRetrofit {
     /// [`Error::MemoryBudget`] when a strict budget (or any budget, with no
     /// multisampled count that fits) refuses, and the GL layer's errors.
     pub fn new(
+        gl: &glow::Context,
+        host_fbo: glow::Framebuffer,
+        options: &RetrofitOptions,
+    ) -> Result<Self> {
+        let host = SetupState::capture(gl);
+        let result = Self::create(gl, host_fbo, options);
+        host.restore(gl);
+        result
+    }
+
+    fn create(
         gl: &glow::Context,
         host_fbo: glow::Framebuffer,
         options: &RetrofitOptions,
@@ -368,6 +682,7 @@ impl MsaaRetrofit {
             key: built.key,
             resolver,
             warnings: built.warnings,
+            stencil: built.stencil,
         };
         if let Err(e) = retrofit.prepare(gl) {
             retrofit.destroy(gl);
@@ -458,7 +773,10 @@ impl MsaaRetrofit {
                         reason: "the depth key needs a floating-point position".into(),
                     });
                 }
-                KeySource::Position(ResolveSlot(k))
+                match options.position_space {
+                    PositionSpace::View => KeySource::Position(ResolveSlot(k)),
+                    PositionSpace::World => KeySource::WorldPosition(ResolveSlot(k)),
+                }
             }
         };
         let mut samples = options.samples;
@@ -468,15 +786,14 @@ impl MsaaRetrofit {
             samples = fits;
             warnings.extend(warning);
         }
-        let mut specs: Vec<TwinSpec> = host
-            .colors
-            .iter()
-            .map(|a| TwinSpec {
+        let mut specs: Vec<TwinSpec> = Vec::with_capacity(host.colors.len() + 1);
+        for a in &host.colors {
+            specs.push(TwinSpec {
                 point: a.point,
-                format: a.format,
+                format: twin_format(gl, a, samples)?,
                 name: a.point.name(),
-            })
-            .collect();
+            });
+        }
         specs.push(TwinSpec {
             point: host.depth.point,
             format: host.depth.format,
@@ -485,23 +802,54 @@ impl MsaaRetrofit {
         let (w, h) = host.size();
         let twin = MultisampleTwin::new(gl, &specs, &host.draw_buffers, w, h, samples)?;
         // The resolve writes output k into the host's k-th colour texture.
-        let mut attachments: Vec<(Attachment, TextureRef)> = host
+        let mut attachments: Vec<(Attachment, TextureRef)> = Vec::new();
+        let mut images: Vec<(Attachment, HostImage)> = Vec::new();
+        for (point, a) in host
             .colors
             .iter()
             .enumerate()
-            .map(|(k, a)| (Attachment::Color(k as u32), a.texture_ref()))
-            .collect();
-        attachments.push((host.depth.point, host.depth.texture_ref()));
-        let draw: Vec<Option<u32>> = (0..host.colors.len() as u32).map(Some).collect();
-        let target =
-            match Framebuffer::new(gl, "resolve target (host textures)", &attachments, &draw) {
-                Ok(f) => f,
+            .map(|(k, a)| (Attachment::Color(k as u32), a))
+            .chain([(host.depth.point, &host.depth)])
+        {
+            attachments.push((point, a.texture_ref()));
+            images.extend(a.host_image().map(|image| (point, image)));
+        }
+        let mut draw: Vec<Option<u32>> = (0..host.colors.len() as u32).map(Some).collect();
+        let stencil = if host.depth.format.has_stencil() {
+            match StencilCopyTargets::new(gl, &host, options.stencil) {
+                Ok(s) => Some(s),
                 Err(e) => {
                     twin.destroy(gl);
                     return Err(e);
                 }
-            };
+            }
+        } else {
+            None
+        };
+        if let Some(s) = &stencil {
+            // The resolve's reference index goes to the draw buffer after the colours.
+            let n = host.colors.len() as u32;
+            attachments.push((Attachment::Color(n), TextureRef::from(&s.reference)));
+            draw.push(Some(n));
+        }
+        let target = match Framebuffer::with_host_images(
+            gl,
+            "resolve target (host images)",
+            &attachments,
+            &images,
+            &draw,
+        ) {
+            Ok(f) => f,
+            Err(e) => {
+                twin.destroy(gl);
+                if let Some(s) = stencil {
+                    s.destroy(gl);
+                }
+                return Err(e);
+            }
+        };
         Ok(Built {
+            stencil,
             host,
             twin,
             target,
@@ -522,8 +870,23 @@ impl MsaaRetrofit {
             key: self.key,
             samples: self.twin.samples,
         };
+        let extra = self.extra_outputs();
         self.resolver
-            .prepare(gl, &inputs, &self.target, &self.options.resolve, false)
+            .prepare(gl, &inputs, &self.target, &self.options.resolve, extra)
+    }
+
+    /// The resolve's outputs beyond the host's attachments: the reference
+    /// index, when the host's stencil is copied.
+    fn extra_outputs(&self) -> ExtraOutputs {
+        ExtraOutputs {
+            complex: false,
+            reference: self.stencil.is_some(),
+        }
+    }
+
+    /// How the host's stencil is copied back (`None` without a stencil).
+    pub fn stencil_copy(&self) -> Option<StencilCopy> {
+        self.stencil.as_ref().map(|s| s.pass.method())
     }
 
     /// The multisampled framebuffer: bind it instead of the host's for the geometry pass.
@@ -591,6 +954,7 @@ impl MsaaRetrofit {
             projection,
             fov_y,
             height_px: self.host.size().1,
+            view_row: frame.view_row(),
         })
     }
 
@@ -607,7 +971,14 @@ impl MsaaRetrofit {
             key: self.key,
             samples: self.twin.samples,
         };
-        self.resolver.run(gl, &inputs, &self.target, &params, false)
+        let extra = self.extra_outputs();
+        self.resolver
+            .run(gl, &inputs, &self.target, &params, extra)?;
+        if let (Some(s), Some(depth)) = (&self.stencil, self.twin.depth()) {
+            s.pass
+                .run(gl, depth, &self.twin.fbo, &s.reference, &s.target)?;
+        }
+        Ok(())
     }
 
     /// Resolve into another target (its colour `k` receives host attachment
@@ -640,10 +1011,19 @@ impl MsaaRetrofit {
     /// whenever the resolve's permutation changes. On error the retrofit
     /// keeps working with the options it had.
     pub fn set_options(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
+        let host = SetupState::capture(gl);
+        let result = self.change_options(gl, options);
+        host.restore(gl);
+        result
+    }
+
+    fn change_options(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
         let twins_change = options.samples != self.options.samples
             || options.memory_budget != self.options.memory_budget
             || options.rules != self.options.rules
-            || options.position_attachment != self.options.position_attachment;
+            || options.position_attachment != self.options.position_attachment
+            || options.position_space != self.options.position_space
+            || options.stencil != self.options.stencil;
         if twins_change {
             return self.rebuild(gl, options);
         }
@@ -678,6 +1058,13 @@ impl MsaaRetrofit {
     }
 
     fn rebuild(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
+        let host = SetupState::capture(gl);
+        let result = self.rebuild_within(gl, options);
+        host.restore(gl);
+        result
+    }
+
+    fn rebuild_within(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
         let built = Self::build(gl, self.host.fbo, options)?;
         let previous_schedule = self.resolver.schedule();
         if let Err(e) = self.resolver.set_schedule(options.schedule) {
@@ -691,6 +1078,7 @@ impl MsaaRetrofit {
             rules: std::mem::replace(&mut self.rules, built.rules),
             key: std::mem::replace(&mut self.key, built.key),
             warnings: std::mem::replace(&mut self.warnings, built.warnings),
+            stencil: std::mem::replace(&mut self.stencil, built.stencil),
         };
         let old_options = std::mem::replace(&mut self.options, options.clone());
         match self.prepare(gl) {
@@ -707,6 +1095,7 @@ impl MsaaRetrofit {
                     rules: std::mem::replace(&mut self.rules, old.rules),
                     key: std::mem::replace(&mut self.key, old.key),
                     warnings: std::mem::replace(&mut self.warnings, old.warnings),
+                    stencil: std::mem::replace(&mut self.stencil, old.stencil),
                 };
                 new.destroy(gl);
                 self.options = old_options;
@@ -720,6 +1109,9 @@ impl MsaaRetrofit {
     pub fn destroy(self, gl: &glow::Context) {
         self.twin.destroy(gl);
         self.target.destroy(gl);
+        if let Some(s) = self.stencil {
+            s.destroy(gl);
+        }
         self.resolver.destroy(gl);
     }
 }

@@ -102,7 +102,9 @@ impl GBufferLayout {
     /// The attachment the key is read from, if the key comes from a position.
     pub fn key_attachment(&self) -> Option<&AttachmentDesc> {
         match self.key {
-            KeySource::Position(ResolveSlot(k)) => self.colors.get(k),
+            KeySource::Position(ResolveSlot(k)) | KeySource::WorldPosition(ResolveSlot(k)) => {
+                self.colors.get(k)
+            }
             KeySource::Depth => None,
         }
     }
@@ -168,7 +170,9 @@ impl GBufferLayout {
                 });
             }
         }
-        if let KeySource::Position(ResolveSlot(k)) = self.key {
+        if let KeySource::Position(ResolveSlot(k)) | KeySource::WorldPosition(ResolveSlot(k)) =
+            self.key
+        {
             match self.colors.get(k) {
                 None => {
                     return Err(Error::Layout(format!(

@@ -41,10 +41,11 @@ impl Buffer {
             target,
             size: data.len(),
         };
+        let previous = bound_buffer(gl, target);
         unsafe {
             gl.bind_buffer(target, Some(raw));
             gl.buffer_data_u8_slice(target, data, usage);
-            gl.bind_buffer(target, None);
+            gl.bind_buffer(target, previous);
         }
         if let Err(e) = check_error(
             gl,
@@ -71,10 +72,11 @@ impl Buffer {
         })?;
         counters::created(Kind::Buffer);
         let buffer = Buffer { raw, target, size };
+        let previous = bound_buffer(gl, target);
         unsafe {
             gl.bind_buffer(target, Some(raw));
             gl.buffer_data_size(target, size as i32, usage);
-            gl.bind_buffer(target, None);
+            gl.bind_buffer(target, previous);
         }
         if let Err(e) = check_error(gl, &format!("allocating buffer `{label}` ({size} bytes)")) {
             buffer.destroy(gl);
@@ -112,9 +114,15 @@ impl VertexArray {
             reason,
         })?;
         counters::created(Kind::VertexArray);
+        // The host's vertex array stays bound.
+        let previous = unsafe { gl.get_parameter_i32(glow::VERTEX_ARRAY_BINDING) };
         unsafe { gl.bind_vertex_array(Some(raw)) };
         label_object(gl, glow::VERTEX_ARRAY, raw.0.get(), label);
-        unsafe { gl.bind_vertex_array(None) };
+        unsafe {
+            gl.bind_vertex_array(
+                std::num::NonZeroU32::new(previous as u32).map(glow::NativeVertexArray),
+            )
+        };
         Ok(VertexArray { raw })
     }
 
@@ -128,4 +136,23 @@ impl VertexArray {
         unsafe { gl.delete_vertex_array(self.raw) };
         counters::destroyed(Kind::VertexArray);
     }
+}
+
+/// The buffer bound to `target` now, so that creating one leaves the host's
+/// binding (and, for `GL_ELEMENT_ARRAY_BUFFER`, its vertex array's) as it was.
+fn bound_buffer(gl: &glow::Context, target: u32) -> Option<glow::Buffer> {
+    let query = match target {
+        glow::ARRAY_BUFFER => glow::ARRAY_BUFFER_BINDING,
+        glow::ELEMENT_ARRAY_BUFFER => glow::ELEMENT_ARRAY_BUFFER_BINDING,
+        glow::UNIFORM_BUFFER => glow::UNIFORM_BUFFER_BINDING,
+        glow::SHADER_STORAGE_BUFFER => glow::SHADER_STORAGE_BUFFER_BINDING,
+        glow::ATOMIC_COUNTER_BUFFER => glow::ATOMIC_COUNTER_BUFFER_BINDING,
+        glow::PIXEL_PACK_BUFFER => glow::PIXEL_PACK_BUFFER_BINDING,
+        glow::PIXEL_UNPACK_BUFFER => glow::PIXEL_UNPACK_BUFFER_BINDING,
+        glow::COPY_READ_BUFFER => glow::COPY_READ_BUFFER_BINDING,
+        glow::COPY_WRITE_BUFFER => glow::COPY_WRITE_BUFFER_BINDING,
+        _ => return None,
+    };
+    let raw = unsafe { gl.get_parameter_i32(query) };
+    std::num::NonZeroU32::new(raw as u32).map(glow::NativeBuffer)
 }

@@ -94,6 +94,22 @@ impl std::fmt::Display for ColorAttachment {
     }
 }
 
+/// An image that is not a whole single-level texture of the crate's
+/// own: a layer of an array texture, or a renderbuffer (both are what host
+/// engines attach).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum HostImage {
+    /// Layer `layer` (level 0) of the `GL_TEXTURE_2D_ARRAY` `texture`.
+    TextureLayer {
+        /// The array texture.
+        texture: glow::Texture,
+        /// The layer.
+        layer: u32,
+    },
+    /// A single-sample renderbuffer.
+    Renderbuffer(glow::Renderbuffer),
+}
+
 /// A framebuffer object with its attachments recorded.
 #[derive(Debug)]
 pub struct Framebuffer {
@@ -107,8 +123,12 @@ pub struct Framebuffer {
     pub height: u32,
     /// Sample count of the attachments (1 when single-sampled).
     pub samples: u32,
-    /// What is attached where.
+    /// What is attached where. An attachment made from a [`HostImage`]
+    /// is described here too, its `raw` and `target` naming the host's
+    /// object only for what [`Framebuffer::host_images`] says.
     pub attachments: Vec<(Attachment, TextureRef)>,
+    /// The attachments that are layers or renderbuffers.
+    host_images: Vec<(Attachment, HostImage)>,
 }
 
 impl Framebuffer {
@@ -125,6 +145,19 @@ impl Framebuffer {
         gl: &glow::Context,
         label: &str,
         attachments: &[(Attachment, TextureRef)],
+        draw_buffers: &[Option<u32>],
+    ) -> Result<Self> {
+        Self::with_host_images(gl, label, attachments, &[], draw_buffers)
+    }
+
+    /// [`Framebuffer::new`], where the attachments whose points appear in
+    /// `host_images` attach that layer or renderbuffer instead (their
+    /// `TextureRef` still gives the format and size).
+    pub fn with_host_images(
+        gl: &glow::Context,
+        label: &str,
+        attachments: &[(Attachment, TextureRef)],
+        host_images: &[(Attachment, HostImage)],
         draw_buffers: &[Option<u32>],
     ) -> Result<Self> {
         let (width, height, samples) = match attachments.first() {
@@ -147,6 +180,7 @@ impl Framebuffer {
             height,
             samples,
             attachments: attachments.to_vec(),
+            host_images: host_images.to_vec(),
         };
         match fbo.configure(gl, draw_buffers) {
             Ok(()) => Ok(fbo),
@@ -158,9 +192,35 @@ impl Framebuffer {
     }
 
     fn configure(&self, gl: &glow::Context, draw_buffers: &[Option<u32>]) -> Result<()> {
+        // The host's bindings are put back: set-up may run inside its frame.
+        let (draw, read) = unsafe {
+            (
+                gl.get_parameter_i32(glow::DRAW_FRAMEBUFFER_BINDING),
+                gl.get_parameter_i32(glow::READ_FRAMEBUFFER_BINDING),
+            )
+        };
         unsafe {
             gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.raw));
             for (point, tex) in &self.attachments {
+                let host = self.host_images.iter().find(|(p, _)| p == point);
+                if let Some((_, image)) = host {
+                    match *image {
+                        HostImage::TextureLayer { texture, layer } => gl.framebuffer_texture_layer(
+                            glow::FRAMEBUFFER,
+                            point.gl_enum(),
+                            Some(texture),
+                            0,
+                            layer as i32,
+                        ),
+                        HostImage::Renderbuffer(rb) => gl.framebuffer_renderbuffer(
+                            glow::FRAMEBUFFER,
+                            point.gl_enum(),
+                            glow::RENDERBUFFER,
+                            Some(rb),
+                        ),
+                    }
+                    continue;
+                }
                 match tex.target {
                     glow::TEXTURE_2D | glow::TEXTURE_2D_MULTISAMPLE => gl.framebuffer_texture_2d(
                         glow::FRAMEBUFFER,
@@ -187,7 +247,11 @@ impl Framebuffer {
         }
         label_object(gl, glow::FRAMEBUFFER, self.raw.0.get(), &self.label);
         let status = unsafe { gl.check_framebuffer_status(glow::FRAMEBUFFER) };
-        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, None) };
+        unsafe {
+            let restore = |v: i32| std::num::NonZeroU32::new(v as u32).map(glow::NativeFramebuffer);
+            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, restore(draw));
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, restore(read));
+        }
         check_error(gl, &format!("configuring framebuffer `{}`", self.label))?;
         if status != glow::FRAMEBUFFER_COMPLETE {
             return Err(Error::FramebufferIncomplete {
@@ -247,6 +311,16 @@ impl Framebuffer {
             .flatten()
             .copied()
             .collect())
+    }
+
+    /// The attachments that are layers or renderbuffers.
+    pub fn host_images(&self) -> &[(Attachment, HostImage)] {
+        &self.host_images
+    }
+
+    /// Whether a depth (or depth-stencil) image is attached.
+    pub fn has_depth(&self) -> bool {
+        self.attachments.iter().any(|(_, t)| t.format.is_depth())
     }
 
     /// The texture at an attachment point.

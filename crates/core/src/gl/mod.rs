@@ -22,10 +22,12 @@ pub use caps::{Capabilities, ExtraFns, sample_positions};
 pub use counters::{LiveObjects, live_objects};
 pub use debug::{install_debug_log, label_object};
 pub use format::Format;
-pub use framebuffer::{Attachment, ColorAttachment, Framebuffer, framebuffer_status_name};
+pub use framebuffer::{
+    Attachment, ColorAttachment, Framebuffer, HostImage, framebuffer_status_name,
+};
 pub use program::{Program, ShaderStage, preamble};
 pub use query::{GpuTimer, TimerKind};
-pub use state::SavedState;
+pub use state::{SavedState, SetupState};
 pub use texture::{Texture2d, Texture2dArray, Texture2dMultisample, TextureRef};
 
 use crate::{Error, Result};

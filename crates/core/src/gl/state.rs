@@ -15,21 +15,43 @@ const TEXTURE_TARGETS: [(u32, u32); 3] = [
     ),
 ];
 
+/// Capabilities a full-screen pass must have off, and that are put back.
+const PASS_OFF: [u32; 18] = [
+    glow::BLEND,
+    glow::CULL_FACE,
+    glow::SCISSOR_TEST,
+    glow::STENCIL_TEST,
+    glow::SAMPLE_MASK,
+    glow::SAMPLE_ALPHA_TO_COVERAGE,
+    glow::SAMPLE_ALPHA_TO_ONE,
+    glow::RASTERIZER_DISCARD,
+    glow::COLOR_LOGIC_OP,
+    glow::POLYGON_OFFSET_FILL,
+    glow::CLIP_DISTANCE0,
+    glow::CLIP_DISTANCE1,
+    glow::CLIP_DISTANCE2,
+    glow::CLIP_DISTANCE3,
+    glow::CLIP_DISTANCE4,
+    glow::CLIP_DISTANCE5,
+    glow::CLIP_DISTANCE6,
+    glow::CLIP_DISTANCE7,
+];
+
 /// The state a pass changes: bindings, tests, masks and the texture
 /// bindings of the units it uses.
 pub struct SavedState {
     framebuffer: i32,
+    read_framebuffer: i32,
+    /// `PASS_OFF`'s capabilities, `GL_DEPTH_TEST` and `GL_FRAMEBUFFER_SRGB`.
+    capabilities: Vec<(u32, bool)>,
+    scissor_box: [i32; 4],
+    polygon_mode: i32,
     program: i32,
     vertex_array: i32,
     active_texture: i32,
     viewport: [i32; 4],
-    depth_test: bool,
     depth_func: i32,
     depth_mask: bool,
-    blend: bool,
-    cull: bool,
-    scissor: bool,
-    stencil: bool,
     color_mask: [bool; 4],
     /// Per face (front, back): stencil func, ref, value mask, fail/zfail/zpass
     /// ops, write mask.
@@ -52,20 +74,28 @@ impl SavedState {
             gl.active_texture(active as u32);
             let mut viewport = [0; 4];
             gl.get_parameter_i32_slice(glow::VIEWPORT, &mut viewport);
+            let mut scissor_box = [0; 4];
+            gl.get_parameter_i32_slice(glow::SCISSOR_BOX, &mut scissor_box);
+            let mut polygon_mode = [glow::FILL as i32; 2];
+            gl.get_parameter_i32_slice(glow::POLYGON_MODE, &mut polygon_mode);
+            let capabilities = PASS_OFF
+                .iter()
+                .chain(&[glow::DEPTH_TEST, glow::FRAMEBUFFER_SRGB])
+                .map(|&cap| (cap, gl.is_enabled(cap)))
+                .collect();
             SavedState {
                 framebuffer: gl.get_parameter_i32(glow::DRAW_FRAMEBUFFER_BINDING),
+                read_framebuffer: gl.get_parameter_i32(glow::READ_FRAMEBUFFER_BINDING),
+                capabilities,
+                scissor_box,
+                polygon_mode: polygon_mode[0],
                 program: gl.get_parameter_i32(glow::CURRENT_PROGRAM),
                 vertex_array: gl.get_parameter_i32(glow::VERTEX_ARRAY_BINDING),
                 active_texture: active,
                 textures,
                 viewport,
-                depth_test: gl.is_enabled(glow::DEPTH_TEST),
                 depth_func: gl.get_parameter_i32(glow::DEPTH_FUNC),
                 depth_mask: gl.get_parameter_i32(glow::DEPTH_WRITEMASK) != 0,
-                blend: gl.is_enabled(glow::BLEND),
-                cull: gl.is_enabled(glow::CULL_FACE),
-                scissor: gl.is_enabled(glow::SCISSOR_TEST),
-                stencil: gl.is_enabled(glow::STENCIL_TEST),
                 color_mask: {
                     let mut m = [0i32; 4];
                     gl.get_parameter_i32_slice(glow::COLOR_WRITEMASK, &mut m);
@@ -107,6 +137,13 @@ impl SavedState {
                 glow::DRAW_FRAMEBUFFER,
                 NonZeroU32::new(self.framebuffer as u32).map(glow::NativeFramebuffer),
             );
+            gl.bind_framebuffer(
+                glow::READ_FRAMEBUFFER,
+                NonZeroU32::new(self.read_framebuffer as u32).map(glow::NativeFramebuffer),
+            );
+            let [x, y, w, h] = self.scissor_box;
+            gl.scissor(x, y, w, h);
+            gl.polygon_mode(glow::FRONT_AND_BACK, self.polygon_mode as u32);
             gl.use_program(NonZeroU32::new(self.program as u32).map(glow::NativeProgram));
             gl.bind_vertex_array(
                 NonZeroU32::new(self.vertex_array as u32).map(glow::NativeVertexArray),
@@ -141,10 +178,100 @@ impl SavedState {
                 gl.stencil_mask_separate(face, write as u32);
             }
         }
-        set(gl, glow::DEPTH_TEST, self.depth_test);
-        set(gl, glow::BLEND, self.blend);
-        set(gl, glow::CULL_FACE, self.cull);
-        set(gl, glow::SCISSOR_TEST, self.scissor);
-        set(gl, glow::STENCIL_TEST, self.stencil);
+        for &(cap, on) in &self.capabilities {
+            set(gl, cap, on);
+        }
+    }
+
+    /// Set what a full-screen pass needs whatever the host left on: no
+    /// blending, culling, scissor, stencil, sample masking or
+    /// alpha-to-coverage, logic op, polygon offset or clip distances,
+    /// rasterisation on, filled polygons, every colour channel written.
+    /// Depth testing and `GL_FRAMEBUFFER_SRGB` are the pass's own choice.
+    pub fn prepare_fullscreen_pass(gl: &glow::Context) {
+        unsafe {
+            for cap in PASS_OFF {
+                gl.disable(cap);
+            }
+            gl.polygon_mode(glow::FRONT_AND_BACK, glow::FILL);
+            gl.color_mask(true, true, true, true);
+        }
+    }
+}
+
+/// Everything set-up calls (creating textures, buffers, framebuffers and
+/// programs, probing formats, introspecting the host's framebuffer) may
+/// touch, for a retrofit made or rebuilt in the middle of the host's frame:
+/// [`SavedState`] over every texture unit, and the renderbuffer, buffer and
+/// pixel-store state.
+pub struct SetupState {
+    passes: SavedState,
+    renderbuffer: i32,
+    buffers: [(u32, i32); 4],
+    pixel_store: [(u32, i32); 4],
+    /// The active unit's other texture targets.
+    other_textures: [(u32, i32); 3],
+}
+
+impl SetupState {
+    /// Capture it.
+    pub fn capture(gl: &glow::Context) -> Self {
+        unsafe {
+            let units = gl
+                .get_parameter_i32(glow::MAX_COMBINED_TEXTURE_IMAGE_UNITS)
+                .clamp(1, 32) as u32;
+            let get = |pname: u32| gl.get_parameter_i32(pname);
+            SetupState {
+                passes: SavedState::capture(gl, units),
+                renderbuffer: get(glow::RENDERBUFFER_BINDING),
+                buffers: [
+                    (glow::ARRAY_BUFFER, get(glow::ARRAY_BUFFER_BINDING)),
+                    (
+                        glow::PIXEL_PACK_BUFFER,
+                        get(glow::PIXEL_PACK_BUFFER_BINDING),
+                    ),
+                    (
+                        glow::PIXEL_UNPACK_BUFFER,
+                        get(glow::PIXEL_UNPACK_BUFFER_BINDING),
+                    ),
+                    (glow::UNIFORM_BUFFER, get(glow::UNIFORM_BUFFER_BINDING)),
+                ],
+                pixel_store: [
+                    glow::PACK_ALIGNMENT,
+                    glow::UNPACK_ALIGNMENT,
+                    glow::PACK_ROW_LENGTH,
+                    glow::UNPACK_ROW_LENGTH,
+                ]
+                .map(|p| (p, get(p))),
+                other_textures: [
+                    (
+                        glow::TEXTURE_RECTANGLE,
+                        get(glow::TEXTURE_BINDING_RECTANGLE),
+                    ),
+                    (glow::TEXTURE_CUBE_MAP, get(glow::TEXTURE_BINDING_CUBE_MAP)),
+                    (glow::TEXTURE_3D, get(glow::TEXTURE_BINDING_3D)),
+                ],
+            }
+        }
+    }
+
+    /// Put it back.
+    pub fn restore(&self, gl: &glow::Context) {
+        self.passes.restore(gl);
+        unsafe {
+            gl.bind_renderbuffer(
+                glow::RENDERBUFFER,
+                NonZeroU32::new(self.renderbuffer as u32).map(glow::NativeRenderbuffer),
+            );
+            for (target, raw) in self.buffers {
+                gl.bind_buffer(target, NonZeroU32::new(raw as u32).map(glow::NativeBuffer));
+            }
+            for (pname, value) in self.pixel_store {
+                gl.pixel_store_i32(pname, value);
+            }
+            for (target, raw) in self.other_textures {
+                gl.bind_texture(target, NonZeroU32::new(raw as u32).map(glow::NativeTexture));
+            }
+        }
     }
 }

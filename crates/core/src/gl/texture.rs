@@ -29,6 +29,55 @@ fn delete_texture(gl: &glow::Context, raw: glow::Texture) {
     counters::destroyed(Kind::Texture);
 }
 
+/// The host state a texture allocation touches, put back afterwards: the
+/// binding of the target on the active unit, the unpack alignment and row
+/// length, and the pixel-unpack buffer (with one bound, the upload would
+/// read the host's buffer instead of `data`).
+struct AllocationState {
+    target: u32,
+    binding: i32,
+    alignment: i32,
+    row_length: i32,
+    unpack_buffer: i32,
+}
+
+impl AllocationState {
+    fn capture(gl: &glow::Context, target: u32) -> Self {
+        let binding = match target {
+            glow::TEXTURE_2D_ARRAY => glow::TEXTURE_BINDING_2D_ARRAY,
+            glow::TEXTURE_2D_MULTISAMPLE => glow::TEXTURE_BINDING_2D_MULTISAMPLE,
+            _ => glow::TEXTURE_BINDING_2D,
+        };
+        unsafe {
+            let state = AllocationState {
+                target,
+                binding: gl.get_parameter_i32(binding),
+                alignment: gl.get_parameter_i32(glow::UNPACK_ALIGNMENT),
+                row_length: gl.get_parameter_i32(glow::UNPACK_ROW_LENGTH),
+                unpack_buffer: gl.get_parameter_i32(glow::PIXEL_UNPACK_BUFFER_BINDING),
+            };
+            gl.bind_buffer(glow::PIXEL_UNPACK_BUFFER, None);
+            gl.pixel_store_i32(glow::UNPACK_ROW_LENGTH, 0);
+            state
+        }
+    }
+
+    fn restore(self, gl: &glow::Context) {
+        unsafe {
+            gl.bind_texture(
+                self.target,
+                std::num::NonZeroU32::new(self.binding as u32).map(glow::NativeTexture),
+            );
+            gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, self.alignment);
+            gl.pixel_store_i32(glow::UNPACK_ROW_LENGTH, self.row_length);
+            gl.bind_buffer(
+                glow::PIXEL_UNPACK_BUFFER,
+                std::num::NonZeroU32::new(self.unpack_buffer as u32).map(glow::NativeBuffer),
+            );
+        }
+    }
+}
+
 /// Create a `TEXTURE_2D` (or, with `layers`, a `TEXTURE_2D_ARRAY`) with
 /// nearest filtering and clamped edges, upload `data`, check for errors and
 /// label it. On failure nothing is left allocated.
@@ -48,6 +97,7 @@ fn allocate(
     } else {
         glow::TEXTURE_2D
     };
+    let host = AllocationState::capture(gl, target);
     unsafe {
         gl.bind_texture(target, Some(raw));
         gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 1);
@@ -85,8 +135,8 @@ fn allocate(
         gl.tex_parameter_i32(target, glow::TEXTURE_MAG_FILTER, glow::NEAREST as i32);
         gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE as i32);
         gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE as i32);
-        gl.bind_texture(target, None);
     }
+    host.restore(gl);
     let stage = format!("allocating texture `{label}` ({format}, {width}x{height})");
     if let Err(e) = check_error(gl, &stage) {
         delete_texture(gl, raw);
@@ -202,6 +252,7 @@ impl Texture2dMultisample {
             )));
         }
         let raw = new_texture(gl, label)?;
+        let host = AllocationState::capture(gl, glow::TEXTURE_2D_MULTISAMPLE);
         unsafe {
             gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, Some(raw));
             gl.tex_image_2d_multisample(
@@ -220,7 +271,7 @@ impl Texture2dMultisample {
         let real = unsafe {
             gl.get_tex_level_parameter_i32(glow::TEXTURE_2D_MULTISAMPLE, 0, glow::TEXTURE_SAMPLES)
         };
-        unsafe { gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None) };
+        host.restore(gl);
         if let Err(e) = allocated {
             delete_texture(gl, raw);
             return Err(match e {

@@ -9,6 +9,14 @@ use super::{DepthProjection, ResolveMethod, ResolveRule, ResolveSettings, Window
 pub enum CpuKeySource {
     /// `z = −position.z` of this attachment (index into the pixel's attachments).
     Position(usize),
+    /// `z = −(view_row · (position, 1))` of this attachment: a world-space
+    /// position and the view matrix's third row.
+    WorldPosition {
+        /// Index into the pixel's attachments.
+        attachment: usize,
+        /// `(m[2], m[6], m[10], m[14])` of the column-major view matrix.
+        view_row: [f64; 4],
+    },
     /// The depth-buffer value, linearised with the projection.
     Depth(DepthProjection),
 }
@@ -102,6 +110,13 @@ impl CpuResolve {
             let depth = px.depth[i];
             let key = match self.key_source {
                 CpuKeySource::Position(k) => -px.attachments[k][i][2],
+                CpuKeySource::WorldPosition {
+                    attachment,
+                    view_row: v,
+                } => {
+                    let p = px.attachments[attachment][i];
+                    -(v[0] * p[0] + v[1] * p[1] + v[2] * p[2] + v[3])
+                }
                 CpuKeySource::Depth(proj) => proj.linearize(depth),
             };
             bg.push(depth == self.clear_depth || !key.is_finite());

@@ -8,12 +8,15 @@
 
 pub mod cpu;
 mod settings;
+mod stencil;
 pub(crate) mod tiles;
 
 pub use settings::{
     DepthProjection, Region, ResolveMethod, ResolveRule, ResolveSettings, Selection, SelectionFlag,
     Window,
 };
+pub(crate) use stencil::StencilPass;
+pub use stencil::{STENCIL_COPY_FRAG, StencilCopy};
 pub use tiles::TILE_SIZE;
 use tiles::{RESOLVE_TILES_VERT, TileMask};
 
@@ -46,6 +49,9 @@ pub struct ResolveSlot(pub usize);
 pub enum KeySource {
     /// `z = −position.z` of the colour input in this slot (view-space position).
     Position(ResolveSlot),
+    /// `z = −(view · position).z` of the colour input in this slot
+    /// (world-space position; the view matrix comes with each frame).
+    WorldPosition(ResolveSlot),
     /// The depth attachment, linearised with the projection.
     Depth,
 }
@@ -73,6 +79,8 @@ pub(crate) struct ResolveProgramKey {
     pub blend_depth: bool,
     /// Write the complex-pixel mask to output `attachments.len()`.
     pub complex_output: bool,
+    /// Write the reference sample's index to the output after those.
+    pub reference_output: bool,
     /// Which of the resolve's passes this program is.
     pub pass: ResolvePass,
     /// Selective anti-aliasing criteria compiled in.
@@ -175,9 +183,14 @@ impl ResolveProgramKey {
             };
             def(&format!("ATT{k}_RULE"), rule.into());
         }
-        if let KeySource::Position(ResolveSlot(k)) = self.key {
+        if let KeySource::Position(ResolveSlot(k)) | KeySource::WorldPosition(ResolveSlot(k)) =
+            self.key
+        {
             def("KEY_SAMPLER", format!("u_att{k}"));
             def("KEY_INDEX", k.to_string());
+        }
+        if matches!(self.key, KeySource::WorldPosition(_)) {
+            def("KEY_WORLD", "1".into());
         }
         let method = match self.method {
             ResolveMethod::Average => "METHOD_AVERAGE",
@@ -200,6 +213,9 @@ impl ResolveProgramKey {
         }
         if self.complex_output {
             def("COMPLEX_OUTPUT", "1".into());
+        }
+        if self.reference_output {
+            def("REFERENCE_OUTPUT", "1".into());
         }
         match self.pass {
             ResolvePass::Single => {}
@@ -237,6 +253,28 @@ impl ResolveProgramKey {
                 ("fullscreen.vert", FULLSCREEN_VERT)
             }
             ResolvePass::SlowTiles { .. } => ("resolve_tiles.vert", RESOLVE_TILES_VERT),
+        }
+    }
+}
+
+/// What a resolve writes besides the resolved attachments and depth, to
+/// the draw buffers after the attachments', in this order. `true` and
+/// `false` convert to the complex-pixel mask alone, or nothing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct ExtraOutputs {
+    /// 1.0 where the pixel took the slow path, else 0.0 (a float target).
+    pub complex: bool,
+    /// The index of the pixel's reference sample (0 where it took one
+    /// sample), to an unsigned-integer target: how the host's stencil is
+    /// copied from the reference sample.
+    pub reference: bool,
+}
+
+impl From<bool> for ExtraOutputs {
+    fn from(complex: bool) -> Self {
+        ExtraOutputs {
+            complex,
+            reference: false,
         }
     }
 }
@@ -290,6 +328,10 @@ pub struct ResolveParams {
     pub fov_y: f64,
     /// Height of the framebuffer in pixels.
     pub height_px: u32,
+    /// The view matrix's third row `(m[2], m[6], m[10], m[14])` of a
+    /// column-major view matrix: needed, and only used, when the key is a
+    /// [`KeySource::WorldPosition`].
+    pub view_row: Option<[f64; 4]>,
 }
 
 impl ResolveParams {
@@ -377,7 +419,7 @@ impl Resolver {
         inputs: &ResolveInputs<'_>,
         target: &Framebuffer,
         settings: &ResolveSettings,
-        complex_output: bool,
+        extra: ExtraOutputs,
     ) -> Result<ResolveProgramKey> {
         settings.validate()?;
         if inputs.colors.len() != inputs.rules.len()
@@ -415,7 +457,7 @@ impl Resolver {
             }
             attachments.push((rule, kind));
         }
-        if let KeySource::Position(slot) = inputs.key {
+        if let KeySource::Position(slot) | KeySource::WorldPosition(slot) = inputs.key {
             if inputs.colors.get(slot.0).map(|t| t.format.sample_kind()) != Some(SampleKind::Float)
             {
                 return Err(Error::Layout(format!(
@@ -425,7 +467,7 @@ impl Resolver {
             }
         }
         let s = settings;
-        let write_depth = target.attachments.iter().any(|(_, t)| t.format.is_depth());
+        let write_depth = target.has_depth();
         Ok(ResolveProgramKey {
             samples: inputs.samples,
             samples_as_layers: inputs.depth.target == glow::TEXTURE_2D_ARRAY,
@@ -440,7 +482,8 @@ impl Resolver {
             fast_path: s.fast_path,
             write_depth,
             blend_depth: s.blend_depth && write_depth,
-            complex_output,
+            complex_output: extra.complex,
+            reference_output: extra.reference,
             pass: ResolvePass::Single,
             selection: SelectionKey::of(&s.selection, inputs)?,
         })
@@ -465,9 +508,9 @@ impl Resolver {
         inputs: &ResolveInputs<'_>,
         target: &Framebuffer,
         settings: &ResolveSettings,
-        complex_output: bool,
+        extra: impl Into<ExtraOutputs>,
     ) -> Result<()> {
-        let base = Self::base_key(inputs, target, settings, complex_output)?;
+        let base = Self::base_key(inputs, target, settings, extra.into())?;
         let mut keys = Vec::new();
         match self.schedule_for(settings) {
             Schedule::OnePass => keys.push(base),
@@ -477,6 +520,7 @@ impl Resolver {
                     write_depth: false,
                     blend_depth: false,
                     complex_output: false,
+                    reference_output: false,
                     ..base.clone()
                 });
                 keys.push(ResolveProgramKey {
@@ -507,9 +551,15 @@ impl Resolver {
         inputs: &ResolveInputs<'_>,
         target: &Framebuffer,
         params: &ResolveParams,
-        complex_output: bool,
+        extra: impl Into<ExtraOutputs>,
     ) -> Result<()> {
-        let base = Self::base_key(inputs, target, &params.settings, complex_output)?;
+        let base = Self::base_key(inputs, target, &params.settings, extra.into())?;
+        if matches!(inputs.key, KeySource::WorldPosition(_)) && params.view_row.is_none() {
+            return Err(Error::invalid(
+                "the depth key is a world-space position, so each frame needs the view matrix \
+                 (Frame::with_view)",
+            ));
+        }
         // An error the host left pending is not the resolve's: report it apart.
         if let Err(e) = check_error(gl, "the host's GL calls before the resolve") {
             log::warn!("{e}");
@@ -597,10 +647,11 @@ impl Resolver {
         let s = params.settings;
         unsafe {
             target.bind(gl);
-            gl.disable(glow::BLEND);
-            gl.disable(glow::CULL_FACE);
-            gl.disable(glow::SCISSOR_TEST);
-            gl.disable(glow::STENCIL_TEST);
+            SavedState::prepare_fullscreen_pass(gl);
+            // sRGB attachments: the twins' samples are read decoded, blended in
+            // linear light and encoded again on the way into the host's
+            // texture (a no-op for linear attachments).
+            gl.enable(glow::FRAMEBUFFER_SRGB);
             if key.write_depth {
                 gl.enable(glow::DEPTH_TEST);
                 gl.depth_func(glow::ALWAYS);
@@ -608,7 +659,6 @@ impl Resolver {
             } else {
                 gl.disable(glow::DEPTH_TEST);
             }
-            gl.color_mask(true, true, true, true);
             program.bind(gl);
             inputs.depth.bind(gl, 0);
             program.set_i32(gl, "u_depth", 0);
@@ -629,6 +679,9 @@ impl Resolver {
             program.set_f32(gl, "u_c", s.c as f32);
             program.set_f32(gl, "u_c_in", s.c_in as f32);
             program.set_f32(gl, "u_infinity", f32::INFINITY);
+            if let Some(row) = params.view_row {
+                program.set_vec4(gl, "u_view_row", row.map(|v| v as f32));
+            }
             if let Some(region) = s.selection.region {
                 let u = region.window_uniform(params.height_px);
                 program.set_vec4(gl, "u_region", u.map(|v| v as f32));
@@ -675,8 +728,13 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
         for k in 0..key.attachments.len() {
             frag_outputs.push((format!("o_att{k}"), k as u32));
         }
+        let mut next = key.attachments.len() as u32;
         if key.complex_output {
-            frag_outputs.push(("o_complex".into(), key.attachments.len() as u32));
+            frag_outputs.push(("o_complex".into(), next));
+            next += 1;
+        }
+        if key.reference_output {
+            frag_outputs.push(("o_reference".into(), next));
         }
     }
     let frag_outputs: Vec<(&str, u32)> = frag_outputs
