@@ -13,6 +13,9 @@
 //   METHOD                 METHOD_AVERAGE, METHOD_FRONT, METHOD_MEDIAN or METHOD_BACK
 //   WINDOW_HARD            hard window (smooth otherwise)
 //   FAST_PATH              uniform pixels copy sample 0
+//   PLANE_UNIFORMITY, PLANE_SAMPLER
+//                          with FAST_PATH: also pixels whose depths fit one plane
+//                          and whose PLANE_SAMPLER samples are equal (opt-in)
 //   WRITE_DEPTH            write the resolved depth; BLEND_DEPTH blends it
 //   COMPLEX_OUTPUT         also write 1.0 for pixels that took the slow path
 //   SELECT_REGION          selective AA: REGION_RECT or REGION_ELLIPSE (u_region)
@@ -335,6 +338,85 @@ bool keys_uniform() {
     return same;
 }
 
+#ifdef PLANE_UNIFORMITY
+// The opt-in plane test (ResolveSettings::plane_uniformity; cpu.rs's
+// plane_fits and plane_uniform are the same test): every sample is geometry,
+// the depth samples lie on one plane over the standard sample pattern, and
+// the first blended attachment's samples are all equal. One triangle's
+// samples pass it; it does not prove that one fragment wrote the pixel.
+// Offsets from the pixel centre in 1/16 pixel, x right, y up.
+#if NUM_SAMPLES == 4
+#define PLANE_PATTERN 1
+const vec2 SAMPLE_POS[4] = vec2[4](vec2(-2.0, -6.0), vec2(6.0, -2.0), vec2(-6.0, 2.0), vec2(2.0, 6.0));
+#elif NUM_SAMPLES == 8
+#define PLANE_PATTERN 1
+const vec2 SAMPLE_POS[8] = vec2[8](vec2(1.0, -3.0), vec2(-1.0, 3.0), vec2(5.0, 1.0), vec2(-3.0, -5.0),
+                                   vec2(-5.0, 5.0), vec2(-7.0, -1.0), vec2(3.0, 7.0), vec2(7.0, -7.0));
+#elif NUM_SAMPLES == 16
+#define PLANE_PATTERN 1
+const vec2 SAMPLE_POS[16] = vec2[16](vec2(1.0, 1.0), vec2(-1.0, -3.0), vec2(-3.0, 2.0), vec2(4.0, -1.0),
+                                     vec2(-5.0, -2.0), vec2(2.0, 5.0), vec2(5.0, 3.0), vec2(3.0, -5.0),
+                                     vec2(-2.0, 6.0), vec2(0.0, -7.0), vec2(-4.0, -6.0), vec2(-6.0, 4.0),
+                                     vec2(-8.0, 0.0), vec2(7.0, -4.0), vec2(6.0, 7.0), vec2(-7.0, -8.0));
+#endif
+
+// Least squares over e_i = d_i - d_0 (exact where depths are close), with
+// positions and e centred; up to 3 samples always fit, a count without a
+// pattern never does.
+bool plane_fits() {
+#if NUM_SAMPLES <= 3
+    return true;
+#elif !defined(PLANE_PATTERN)
+    return false;
+#else
+    vec2 mean_pos = vec2(0.0);
+    float mean_e = 0.0;
+    float largest = 0.0;
+    for (int i = 0; i < NUM_SAMPLES; ++i) {
+        mean_pos += SAMPLE_POS[i];
+        mean_e += g_raw_depth[i] - g_raw_depth[0];
+        largest = max(largest, abs(g_raw_depth[i]));
+    }
+    mean_pos /= float(NUM_SAMPLES);
+    mean_e /= float(NUM_SAMPLES);
+    float sxx = 0.0, sxy = 0.0, syy = 0.0, sxe = 0.0, sye = 0.0;
+    for (int i = 0; i < NUM_SAMPLES; ++i) {
+        vec2 q = SAMPLE_POS[i] - mean_pos;
+        float v = (g_raw_depth[i] - g_raw_depth[0]) - mean_e;
+        sxx += q.x * q.x;
+        sxy += q.x * q.y;
+        syy += q.y * q.y;
+        sxe += q.x * v;
+        sye += q.y * v;
+    }
+    float det = sxx * syy - sxy * sxy;
+    float b = (syy * sxe - sxy * sye) / det;
+    float c = (sxx * sye - sxy * sxe) / det;
+    float worst = 0.0;
+    for (int i = 0; i < NUM_SAMPLES; ++i) {
+        vec2 q = SAMPLE_POS[i] - mean_pos;
+        float v = (g_raw_depth[i] - g_raw_depth[0]) - mean_e;
+        worst = max(worst, abs(v - b * q.x - c * q.y));
+    }
+    // 2^-22 * max|d| + 2^-23; a NaN residual fails.
+    return worst <= largest * 2.384185791015625e-7 + 1.1920928955078125e-7;
+#endif
+}
+
+bool plane_uniform(ivec2 p) {
+    bool same = true;
+    for (int i = 0; i < NUM_SAMPLES; ++i) same = same && !g_bg[i];
+    same = same && plane_fits();
+    // The attachment is read only while the pixel still passes.
+    vec4 first = vec4(FETCH(PLANE_SAMPLER, p, 0));
+    for (int i = g_zero + 1; i < NUM_SAMPLES; ++i) {
+        if (!same) break;
+        same = vec4(FETCH(PLANE_SAMPLER, p, i)) == first;
+    }
+    return same;
+}
+#endif
+
 // Selective anti-aliasing: the pixel lies outside what should be anti-aliased.
 bool outside_selection(ivec2 p) {
     bool outside = false;
@@ -371,6 +453,9 @@ bool takes_one_sample(ivec2 p) {
     bool one = false;
 #ifdef FAST_PATH
     one = keys_uniform();
+#ifdef PLANE_UNIFORMITY
+    one = one || plane_uniform(p);
+#endif
 #endif
 #if defined(SELECT_REGION) || defined(SELECT_MAX_DEPTH) || defined(SELECT_FLAG_SAMPLER)
     one = one || outside_selection(p);
