@@ -140,6 +140,10 @@ bool g_one = false;
 // 0, unknown to the compiler: loops starting at it are not unrolled (an
 // unrolled loop's breaks become nested ifs, which llvmpipe runs in full).
 int g_zero = 0;
+// OUT = A[I] for a run-time I, by selects over constant indices: an array
+// indexed only by constants stays in registers, while one indexed by a
+// loop counter that is not unrolled is read lane by lane from memory.
+#define PICK(OUT, A, I) OUT = A[0]; for (int k_ = 1; k_ < NUM_SAMPLES; ++k_) OUT = k_ == (I) ? A[k_] : OUT;
 
 // How the work is scheduled (for a SIMD rasteriser as well as for a GPU).
 //
@@ -150,11 +154,16 @@ int g_zero = 0;
 // takes real branches, a warp or wave at a time. So everything a
 // one-sample pixel does not need lives in loop iterations it leaves:
 //
-// * every per-sample loop that reads a sample other than 0 or does slow-path
-//   work tests g_one, the fetch loops after fetching sample 0 (which a
-//   one-sample pixel keeps), the slow-path loops at the very top of their
-//   body, so that a group of one-sample pixels runs each such body once,
-//   masked, and never runs its later iterations;
+// * sample 0 of every attachment is read before any loop (a one-sample
+//   pixel's value); samples 1.. of every attachment, the weights and the
+//   blends are one loop over samples 1.. (main), and the reference search
+//   is another; both test g_one at the very top of their body, so a group
+//   of one-sample pixels runs each body once, masked, and never its later
+//   iterations;
+// * those loops start at g_zero (0, from a uniform): with a constant start
+//   the compiler unrolls them, and an unrolled loop's breaks become nested
+//   ifs, which llvmpipe runs in full. Their per-sample values are picked
+//   from the constant-indexed arrays by PICK;
 // * nothing is written as `if (slow) { ... }` around work: the results are
 //   chosen with selects.
 //
@@ -183,17 +192,14 @@ void load_keys(ivec2 p) {
     }
 }
 
-// Strict order by (z, index) with background at +infinity. Geometry keys are
-// finite (a non-finite key is background), so comparing g_sort is that order;
-// written without branches, which a SIMD rasteriser would run both sides of.
-bool key_less(int i, int j) {
-    return g_sort[i] < g_sort[j] || (g_sort[i] == g_sort[j] && i < j);
-}
+// key_less(i, j), the strict order by (z, index) with background at
+// +infinity, is g_sort[i] < g_sort[j] || (g_sort[i] == g_sort[j] && i < j):
+// geometry keys are finite (a non-finite key is background).
 
-// The code below is written with selects rather than branches and with no
-// array indexed by a run-time value (those become select chains anyway): a
-// SIMD rasteriser such as llvmpipe runs both sides of every branch that its
-// lanes disagree on, and masks every store made inside one.
+// The code below is written with selects rather than branches, and no array
+// is indexed by a run-time value (PICK instead): a SIMD rasteriser such as
+// llvmpipe runs both sides of every branch that its lanes disagree on, and
+// masks every store made inside one.
 
 // The reference sample; 0 for a one-sample pixel.
 int reference_sample() {
@@ -203,18 +209,22 @@ int reference_sample() {
     float best = g_sort[0];
     for (int i = g_zero + 1; i < NUM_SAMPLES; ++i) {
         if (g_one) break;
-        bool nearer = g_sort[i] < best;
+        float si;
+        PICK(si, g_sort, i)
+        bool nearer = si < best;
         r = nearer ? i : r;
-        best = nearer ? g_sort[i] : best;
+        best = nearer ? si : best;
     }
 #elif METHOD == METHOD_BACK
     // Farthest; among equal depths the lower index.
     float best = g_sort[0];
     for (int i = g_zero + 1; i < NUM_SAMPLES; ++i) {
         if (g_one) break;
-        bool farther = g_sort[i] > best;
+        float si;
+        PICK(si, g_sort, i)
+        bool farther = si > best;
         r = farther ? i : r;
-        best = farther ? g_sort[i] : best;
+        best = farther ? si : best;
     }
 #else
     // Median (also the average's reference): the sample whose rank under
@@ -222,22 +232,26 @@ int reference_sample() {
     // depth decides its place.
     for (int i = g_zero; i < NUM_SAMPLES; ++i) {
         if (g_one) break;
+        float si;
+        PICK(si, g_sort, i)
+        // key_less(j, i), with sample i's key picked once.
         int rank = 0;
-        for (int j = 0; j < NUM_SAMPLES; ++j) rank += key_less(j, i) ? 1 : 0;
+        for (int j = 0; j < NUM_SAMPLES; ++j) rank += g_sort[j] < si || (g_sort[j] == si && j < i) ? 1 : 0;
         r = rank == NUM_SAMPLES / 2 ? i : r;
     }
 #endif
     return r;
 }
 
-// Closeness of sample i to the reference r, whose key and background flag
-// are z_r and bg_r.
-float closeness(int i, int r, float z_r, bool bg_r) {
+// Closeness of a sample with key z and background flag bg (is_ref: it is
+// the reference) to the reference, whose key and background flag are z_r
+// and bg_r.
+float closeness(float z, bool bg, bool is_ref, float z_r, bool bg_r) {
 #if METHOD == METHOD_AVERAGE
     return 1.0;
 #else
-    float d = abs(g_key[i] - z_r);
-    float m = min(g_key[i], z_r) * u_footprint;
+    float d = abs(z - z_r);
+    float m = min(z, z_r) * u_footprint;
 #ifdef WINDOW_HARD
     float w = d <= u_c * m ? 1.0 : 0.0;
 #else
@@ -249,8 +263,8 @@ float closeness(int i, int r, float z_r, bool bg_r) {
     w = d <= u_c_in * m ? 1.0 : w;
 #endif
     // Background only with background, geometry only with geometry.
-    w = g_bg[i] || bg_r ? (g_bg[i] && bg_r ? 1.0 : 0.0) : w;
-    return i == r ? 1.0 : w;
+    w = bg || bg_r ? (bg && bg_r ? 1.0 : 0.0) : w;
+    return is_ref ? 1.0 : w;
 #endif
 }
 
@@ -539,7 +553,7 @@ vec4 key_value_at(int r) {
 #define BLEND_STEP(S, REF, ACC, RULE) { vec4 x = vec4(FETCH(S, p, i)); REF = i == r ? x : REF; acc_step(ACC, RULE, x, w); }
 #define BLEND_END(O, V, REF, ACC, RULE) O = g_one ? V : acc_finish(ACC, RULE, REF);
 #define KEY_BEGIN(V, REF, ACC, RULE) vec4 V = g_key_vals[0]; vec4 REF = key_value_at(r); Acc ACC = acc_new(); acc_step(ACC, RULE, V, w0);
-#define KEY_STEP(ACC, RULE) acc_step(ACC, RULE, g_key_vals[i], w);
+#define KEY_STEP(ACC, RULE) acc_step(ACC, RULE, key_i, w);
 #define KEY_END(O, V, REF, ACC, RULE) O = g_one || RULE == RULE_SELECT ? REF : acc_finish(ACC, RULE, REF);
 
 void main() {
@@ -562,7 +576,7 @@ void main() {
 
     // Sample 0 of everything, then samples 1.. in one loop that a group of
     // one-sample pixels leaves at the top of its first iteration.
-    float w0 = closeness(0, r, z_r, bg_r);
+    float w0 = closeness(g_key[0], g_bg[0], r == 0, z_r, bg_r);
     float depth_sum = w0 * g_raw_depth[0];
     float depth_weight = w0;
 #if NUM_ATTACHMENTS > 0
@@ -631,8 +645,18 @@ void main() {
 #endif
     for (int i = g_zero + 1; i < NUM_SAMPLES; ++i) {
         if (g_one) break;
-        float w = closeness(i, r, z_r, bg_r);
-        depth_sum += w * g_raw_depth[i];
+        float z_i;
+        bool bg_i;
+        float depth_i;
+        PICK(z_i, g_key, i)
+        PICK(bg_i, g_bg, i)
+        PICK(depth_i, g_raw_depth, i)
+#ifdef KEY_SAMPLER
+        vec4 key_i;
+        PICK(key_i, g_key_vals, i)
+#endif
+        float w = closeness(z_i, bg_i, i == r, z_r, bg_r);
+        depth_sum += w * depth_i;
         depth_weight += w;
 #if NUM_ATTACHMENTS > 0
 #if defined(KEY_INDEX) && KEY_INDEX == 0
