@@ -17,7 +17,9 @@ use deferred_msaa_lab::gl::{
     Attachment, Format, Framebuffer, Texture2d, Texture2dArray, TextureRef,
 };
 use deferred_msaa_lab::readback::Readback;
-use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
+use deferred_msaa_lab::resolve::cpu::{
+    CpuKeySource, CpuResolve, PixelSamples, ResolvedPixel, standard_sample_positions,
+};
 use deferred_msaa_lab::resolve::{
     DepthProjection, KeySource, ResolveInputs, ResolveMethod, ResolveParams, ResolveRule,
     ResolveSettings, ResolveSlot, Resolver, Window,
@@ -34,6 +36,9 @@ const RULES: [ResolveRule; 5] = [
 ];
 const CLEAR_DEPTH: f32 = 1.0;
 const FOV_Y: f64 = 0.9;
+/// The view matrix's third row for the world-space key: a view turned a
+/// little about x and y, so the key mixes every position component.
+const WORLD_VIEW_ROW: [f64; 4] = [0.03, -0.04, 0.998_749_217_771_908_6, 0.0];
 
 /// One pixel's inputs, in f32 as the GPU sees them.
 struct Case {
@@ -146,6 +151,11 @@ impl Harness {
         let cases: Vec<Case> = (0..W * H)
             .map(|p| gen_case(&mut rng, n as usize, p % 10))
             .collect();
+        Harness::upload(gl, n, cases)
+    }
+
+    /// A harness over given cases (`W * H` of them, row by row from the bottom).
+    fn upload(gl: &glow::Context, n: u32, cases: Vec<Case>) -> Harness {
         let formats = [
             Format::Rgba32f,
             Format::Rgba32f,
@@ -214,6 +224,24 @@ impl Harness {
         readback: &mut Readback,
         settings: ResolveSettings,
     ) {
+        self.check_keyed(
+            gl,
+            resolver,
+            readback,
+            settings,
+            KeySource::Position(ResolveSlot(1)),
+        );
+    }
+
+    /// [`Harness::check`] with the key from `key`; returns the CPU's pixels.
+    fn check_keyed(
+        &self,
+        gl: &glow::Context,
+        resolver: &mut Resolver,
+        readback: &mut Readback,
+        settings: ResolveSettings,
+        key: KeySource,
+    ) -> Vec<ResolvedPixel> {
         let colors: Vec<TextureRef> = self.inputs.iter().map(TextureRef::from).collect();
         let attachments: Vec<ColorAttachment> =
             (0..colors.len() as u32).map(ColorAttachment).collect();
@@ -228,14 +256,14 @@ impl Harness {
             projection,
             fov_y: FOV_Y,
             height_px: H,
-            view_row: None,
+            view_row: matches!(key, KeySource::WorldPosition(_)).then_some(WORLD_VIEW_ROW),
         };
         let inputs = ResolveInputs {
             depth: TextureRef::from(&self.depth),
             colors: &colors,
             attachments: &attachments,
             rules: &RULES,
-            key: KeySource::Position(ResolveSlot(1)),
+            key,
             samples: self.n,
         };
         resolver
@@ -253,11 +281,19 @@ impl Harness {
         let cpu = CpuResolve {
             settings,
             rules: RULES.to_vec(),
-            key_source: CpuKeySource::Position(1),
+            key_source: match key {
+                KeySource::Position(ResolveSlot(k)) => CpuKeySource::Position(k),
+                KeySource::WorldPosition(ResolveSlot(k)) => CpuKeySource::WorldPosition {
+                    attachment: k,
+                    view_row: WORLD_VIEW_ROW,
+                },
+                KeySource::Depth => CpuKeySource::Depth(projection),
+            },
             clear_depth: CLEAR_DEPTH as f64,
             footprint: params.footprint(),
         };
         let mut ambiguous = 0;
+        let mut pixels = Vec::with_capacity(self.cases.len());
         let mut failures = Vec::new();
         for (p, case) in self.cases.iter().enumerate() {
             let px = PixelSamples {
@@ -269,6 +305,7 @@ impl Harness {
                     .collect(),
             };
             let want = cpu.resolve_pixel(&px);
+            pixels.push(want.clone());
             if want.ambiguous {
                 ambiguous += 1;
                 continue;
@@ -304,6 +341,7 @@ impl Harness {
             ambiguous * 10 < self.cases.len(),
             "{ambiguous} ambiguous pixels"
         );
+        pixels
     }
 
     fn destroy(self, gl: &glow::Context) {
@@ -364,6 +402,30 @@ fn run_for(n: u32) {
     assert_eq!(deferred_msaa_lab::gl::live_objects(), before);
 }
 
+/// A world-space position key: the GPU and the CPU reference agree, with
+/// uniformity decided on the whole position.
+#[test]
+fn a_world_space_key_matches_the_cpu_reference() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let mut resolver = Resolver::new(gl).unwrap();
+    let mut readback = Readback::new(gl).unwrap();
+    let harness = Harness::new(gl, 4, 0x5EED);
+    for fast_path in [true, false] {
+        let settings = ResolveSettings {
+            fast_path,
+            ..ResolveSettings::default()
+        };
+        let key = KeySource::WorldPosition(ResolveSlot(1));
+        harness.check_keyed(gl, &mut resolver, &mut readback, settings, key);
+    }
+    harness.destroy(gl);
+    resolver.destroy(gl);
+    readback.destroy(gl);
+}
+
 #[test]
 fn two_samples() {
     run_for(2);
@@ -388,4 +450,130 @@ fn sixteen_samples() {
 fn odd_counts_follow_the_same_rules() {
     // Not a hardware count, but the math must not assume powers of two.
     run_for(3);
+}
+
+/// A depth-key host's pixels for the opt-in plane test: `kind` 0 is one
+/// tilted triangle (depths on a plane over the standard pattern, every
+/// attachment equal: one fragment), 1 two surfaces with the same attachment
+/// values, 2 one plane whose first blended attachment (colour) differs by
+/// sample, 3 one plane with equal colour but normals that differ (two
+/// coplanar triangles with different shading), 4 and above the general cases.
+fn gen_plane_case(rng: &mut Rng, n: usize, kind: u32) -> Case {
+    if kind >= 4 {
+        return gen_case(rng, n, kind % 10);
+    }
+    let pattern: Vec<[f64; 2]> = match standard_sample_positions(n) {
+        Some(p) => p.to_vec(),
+        None => (0..n).map(|i| [i as f64, (i * i) as f64]).collect(),
+    };
+    let d0 = rng.range(0.3, 0.9) as f64;
+    // Per sixteenth of a pixel: up to ~1e-3 across the pixel.
+    let (a, b) = (rng.range(-1e-4, 1e-4) as f64, rng.range(-1e-4, 1e-4) as f64);
+    let depth: Vec<f32> = pattern
+        .iter()
+        .enumerate()
+        .map(|(i, q)| {
+            // A second surface under the last sample (two surfaces split
+            // two against two can lie on one plane over the 4x pattern).
+            let other = if kind == 1 && i == n - 1 { 0.05 } else { 0.0 };
+            (d0 + a * q[0] + b * q[1] + other) as f32
+        })
+        .collect();
+    let one = [rng.unit(), rng.unit(), rng.unit(), 1.0];
+    let z = (0.1 / (1.0 - d0)) as f32;
+    let position = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), -z, 1.0];
+    let normal = [0.0, 0.6, 0.8, 0.5];
+    let emissive = [rng.range(0.0, 4.0), 1.0, 2.0, 1.0];
+    let material = [7.0, 0.0, 0.0, 1.0];
+    let mut atts: [Vec<[f32; 4]>; 5] = Default::default();
+    for i in 0..n {
+        let mut colour = one;
+        let mut nrm = normal;
+        if kind == 2 && i == n - 1 {
+            colour[0] = 1.0 - colour[0] + 0.25;
+        }
+        if kind == 3 && i % 2 == 1 {
+            nrm = [0.6, 0.0, 0.8, 0.5];
+        }
+        atts[0].push(colour);
+        atts[1].push(position);
+        atts[2].push(nrm);
+        atts[3].push(emissive);
+        atts[4].push(material);
+    }
+    Case { depth, atts }
+}
+
+#[test]
+fn plane_uniformity_takes_one_sample_on_a_tilted_triangle() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let mut resolver = Resolver::new(gl).unwrap();
+    let mut readback = Readback::new(gl).unwrap();
+    for n in [2u32, 3, 4, 8, 16] {
+        let mut rng = Rng::new(0x91A7E + n as u64);
+        let cases: Vec<Case> = (0..W * H)
+            .map(|p| gen_plane_case(&mut rng, n as usize, p % 8))
+            .collect();
+        let kinds: Vec<u32> = (0..W * H).map(|p| p % 8).collect();
+        let harness = Harness::upload(gl, n, cases);
+        for method in [ResolveMethod::Median, ResolveMethod::Front] {
+            let on = ResolveSettings {
+                method,
+                plane_uniformity: true,
+                ..ResolveSettings::default()
+            };
+            let off = ResolveSettings {
+                plane_uniformity: false,
+                ..on
+            };
+            // The GPU agrees with the CPU reference with the option on and off.
+            let with = harness.check_keyed(gl, &mut resolver, &mut readback, on, KeySource::Depth);
+            let without =
+                harness.check_keyed(gl, &mut resolver, &mut readback, off, KeySource::Depth);
+            let mut fired = [0usize; 8];
+            let mut depth_moved = 0;
+            let mut worst = [0.0f64; 6];
+            for (p, (w, o)) in with.iter().zip(&without).enumerate() {
+                if w.ambiguous || o.ambiguous || w.complex || !o.complex {
+                    continue;
+                }
+                fired[kinds[p] as usize] += 1;
+                let d = (w.depth - o.depth).abs();
+                worst[5] = worst[5].max(d);
+                if d > 1e-4 {
+                    depth_moved += 1;
+                }
+                for k in 0..RULES.len() {
+                    for c in 0..4 {
+                        let e = (w.attachments[k][c] - o.attachments[k][c]).abs();
+                        worst[k] = worst[k].max(e);
+                    }
+                }
+            }
+            let per_kind = (W * H / 8) as usize;
+            eprintln!(
+                "{n}x {method}: the plane test fired on {fired:?} pixels by kind \
+                 ({per_kind} each); largest change against the slow path per \
+                 attachment and depth {worst:?}"
+            );
+            // Every one-triangle pixel takes one sample; for 4 samples and
+            // more, two surfaces and differing colours never do.
+            assert!(fired[0] * 10 >= per_kind * 9, "{fired:?}");
+            if n >= 4 {
+                assert_eq!(fired[1] + fired[2], 0, "{fired:?}");
+            } else {
+                assert!(fired[1] * 10 >= per_kind * 9, "{fired:?}");
+                assert_eq!(fired[2], 0, "{fired:?}");
+            }
+            // The slow path would have given another depth there, so the
+            // GPU's agreement with the CPU shows that it took the plane test.
+            assert!(depth_moved * 2 >= fired[0], "{depth_moved} of {fired:?}");
+        }
+        harness.destroy(gl);
+    }
+    resolver.destroy(gl);
+    readback.destroy(gl);
 }

@@ -185,6 +185,7 @@ impl RenderArgs {
                 c_in: self.c_in,
                 fast_path: !self.no_fast_path,
                 blend_depth: false,
+                plane_uniformity: false,
                 selection: Selection {
                     region: self.aa_region,
                     max_depth: self.aa_max_depth,

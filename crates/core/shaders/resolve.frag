@@ -15,6 +15,9 @@
 //   METHOD                 METHOD_AVERAGE, METHOD_FRONT, METHOD_MEDIAN or METHOD_BACK
 //   WINDOW_HARD            hard window (smooth otherwise)
 //   FAST_PATH              uniform pixels copy sample 0
+//   PLANE_UNIFORMITY, PLANE_SAMPLER
+//                          with FAST_PATH: also pixels whose depths fit one plane
+//                          and whose PLANE_SAMPLER samples are equal (opt-in)
 //   WRITE_DEPTH            write the resolved depth; BLEND_DEPTH blends it
 //   COMPLEX_OUTPUT         also write 1.0 for pixels that took the slow path
 //   REFERENCE_OUTPUT       also write the reference sample's index (0 for one-sample
@@ -138,11 +141,45 @@ float g_key[NUM_SAMPLES];      // depth key z_i (meaningless where g_bg)
 bool g_bg[NUM_SAMPLES];        // background: clear depth, or a non-finite key
 float g_sort[NUM_SAMPLES];     // z_i, or +inf for background: the order of key_less
 float g_raw_depth[NUM_SAMPLES];
-float g_w[NUM_SAMPLES];        // closeness weights, g_w[ref] == 1
-vec4 g_vals[NUM_SAMPLES];      // scratch: one attachment's samples
 #ifdef KEY_SAMPLER
 vec4 g_key_vals[NUM_SAMPLES];  // the key attachment's samples, fetched once
 #endif
+// The pixel takes one sample (sample 0 of everything). Set once per pixel,
+// before anything but the keys is read.
+bool g_one = false;
+// 0, unknown to the compiler: loops starting at it are not unrolled (an
+// unrolled loop's breaks become nested ifs, which llvmpipe runs in full).
+int g_zero = 0;
+// OUT = A[I] for a run-time I, by selects over constant indices: an array
+// indexed only by constants stays in registers, while one indexed by a
+// loop counter that is not unrolled is read lane by lane from memory.
+#define PICK(OUT, A, I) OUT = A[0]; for (int k_ = 1; k_ < NUM_SAMPLES; ++k_) OUT = k_ == (I) ? A[k_] : OUT;
+
+// How the work is scheduled (for a SIMD rasteriser as well as for a GPU).
+//
+// llvmpipe shades 4x2 pixel groups under an execution mask: both sides of
+// every `if` run, `discard` saves nothing, and a loop's body runs at least
+// once; only a loop iteration that no lane of the group is still in is
+// skipped (it tests for an active lane at the end of each iteration). A GPU
+// takes real branches, a warp or wave at a time. So everything a
+// one-sample pixel does not need lives in loop iterations it leaves:
+//
+// * sample 0 of every attachment is read before any loop (a one-sample
+//   pixel's value); samples 1.. of every attachment, the weights and the
+//   blends are one loop over samples 1.. (main), and the reference search
+//   is another; both test g_one at the very top of their body, so a group
+//   of one-sample pixels runs each body once, masked, and never its later
+//   iterations;
+// * those loops start at g_zero (0, from a uniform): with a constant start
+//   the compiler unrolls them, and an unrolled loop's breaks become nested
+//   ifs, which llvmpipe runs in full. Their per-sample values are picked
+//   from the constant-indexed arrays by PICK;
+// * nothing is written as `if (slow) { ... }` around work: the results are
+//   chosen with selects.
+//
+// Only the keys (depth, or the position attachment, and the depth samples'
+// background test) are read in full before g_one is known: whether a pixel
+// is uniform depends on all of them.
 
 bool is_finite(vec4 x) {
     return !any(isnan(x)) && !any(isinf(x));
@@ -169,62 +206,66 @@ void load_keys(ivec2 p) {
     }
 }
 
-// One float attachment's samples into g_vals.
-void load_values(DEPTH_SAMPLER s, ivec2 p) {
-    for (int i = 0; i < NUM_SAMPLES; ++i) g_vals[i] = vec4(FETCH(s, p, i));
-}
+// key_less(i, j), the strict order by (z, index) with background at
+// +infinity, is g_sort[i] < g_sort[j] || (g_sort[i] == g_sort[j] && i < j):
+// geometry keys are finite (a non-finite key is background).
 
-// Strict order by (z, index) with background at +infinity. Geometry keys are
-// finite (a non-finite key is background), so comparing g_sort is that order;
-// written without branches, which a SIMD rasteriser would run both sides of.
-bool key_less(int i, int j) {
-    return g_sort[i] < g_sort[j] || (g_sort[i] == g_sort[j] && i < j);
-}
+// The code below is written with selects rather than branches, and no array
+// is indexed by a run-time value (PICK instead): a SIMD rasteriser such as
+// llvmpipe runs both sides of every branch that its lanes disagree on, and
+// masks every store made inside one.
 
-// The code below is written with selects rather than branches and with no
-// array indexed by a run-time value (those become select chains anyway): a
-// SIMD rasteriser such as llvmpipe runs both sides of every branch that its
-// lanes disagree on, and masks every store made inside one.
-
+// The reference sample; 0 for a one-sample pixel.
 int reference_sample() {
     int r = 0;
 #if METHOD == METHOD_FRONT
     // Nearest; the sweep only replaces r by a higher index, so a tie keeps r.
     float best = g_sort[0];
-    for (int i = 1; i < NUM_SAMPLES; ++i) {
-        bool nearer = g_sort[i] < best;
+    for (int i = g_zero + 1; i < NUM_SAMPLES; ++i) {
+        if (g_one) break;
+        float si;
+        PICK(si, g_sort, i)
+        bool nearer = si < best;
         r = nearer ? i : r;
-        best = nearer ? g_sort[i] : best;
+        best = nearer ? si : best;
     }
 #elif METHOD == METHOD_BACK
     // Farthest; among equal depths the lower index.
     float best = g_sort[0];
-    for (int i = 1; i < NUM_SAMPLES; ++i) {
-        bool farther = g_sort[i] > best;
+    for (int i = g_zero + 1; i < NUM_SAMPLES; ++i) {
+        if (g_one) break;
+        float si;
+        PICK(si, g_sort, i)
+        bool farther = si > best;
         r = farther ? i : r;
-        best = farther ? g_sort[i] : best;
+        best = farther ? si : best;
     }
 #else
     // Median (also the average's reference): the sample whose rank under
     // key_less is N/2. Ranks are counted, not sorted, so every sample's own
     // depth decides its place.
-    for (int i = 0; i < NUM_SAMPLES; ++i) {
+    for (int i = g_zero; i < NUM_SAMPLES; ++i) {
+        if (g_one) break;
+        float si;
+        PICK(si, g_sort, i)
+        // key_less(j, i), with sample i's key picked once.
         int rank = 0;
-        for (int j = 0; j < NUM_SAMPLES; ++j) rank += key_less(j, i) ? 1 : 0;
+        for (int j = 0; j < NUM_SAMPLES; ++j) rank += g_sort[j] < si || (g_sort[j] == si && j < i) ? 1 : 0;
         r = rank == NUM_SAMPLES / 2 ? i : r;
     }
 #endif
     return r;
 }
 
-// Closeness of sample i to the reference r, whose key and background flag
-// are z_r and bg_r.
-float closeness(int i, int r, float z_r, bool bg_r) {
+// Closeness of a sample with key z and background flag bg (is_ref: it is
+// the reference) to the reference, whose key and background flag are z_r
+// and bg_r.
+float closeness(float z, bool bg, bool is_ref, float z_r, bool bg_r) {
 #if METHOD == METHOD_AVERAGE
     return 1.0;
 #else
-    float d = abs(g_key[i] - z_r);
-    float m = min(g_key[i], z_r) * u_footprint;
+    float d = abs(z - z_r);
+    float m = min(z, z_r) * u_footprint;
 #ifdef WINDOW_HARD
     float w = d <= u_c * m ? 1.0 : 0.0;
 #else
@@ -236,8 +277,8 @@ float closeness(int i, int r, float z_r, bool bg_r) {
     w = d <= u_c_in * m ? 1.0 : w;
 #endif
     // Background only with background, geometry only with geometry.
-    w = g_bg[i] || bg_r ? (g_bg[i] && bg_r ? 1.0 : 0.0) : w;
-    return i == r ? 1.0 : w;
+    w = bg || bg_r ? (bg && bg_r ? 1.0 : 0.0) : w;
+    return is_ref ? 1.0 : w;
 #endif
 }
 
@@ -245,84 +286,182 @@ float max3(vec3 v) {
     return max(v.x, max(v.y, v.z));
 }
 
-// g_vals[r] without indexing by a run-time value.
-vec4 value_at(int r) {
-    vec4 v = g_vals[0];
-    for (int i = 1; i < NUM_SAMPLES; ++i) v = i == r ? g_vals[i] : v;
-    return v;
+// One attachment's running blend, a sample at a time. acc_step and
+// acc_finish are the blends of DESIGN.md section 3 (the CPU reference's
+// blend, blend_normal and blend_hdr), split so that one loop over the
+// samples can feed every attachment.
+struct Acc {
+    vec4 sum;         // weighted sum (RULE_BLEND, RULE_BLEND_NORMAL); xyz tonemapped, w alpha (HDR)
+    vec3 complement;  // HDR: the blended 1 - max3(T(x)), per channel
+    vec3 lo;          // HDR: the contributing samples' range
+    vec3 hi;
+    float weight;
+    vec4 first;       // the first contributing value, and whether every one equals it:
+    bool same;        // a blend of equal values is that value, with no rounding
+};
+
+Acc acc_new() {
+    return Acc(vec4(0.0), vec3(0.0), vec3(u_infinity), vec3(-u_infinity), 0.0, vec4(0.0), true);
 }
 
-// Weighted mean of g_vals over finite samples; the reference's value when none weigh.
-vec4 blend(int r) {
-    vec4 sum = vec4(0.0);
-    float weight = 0.0;
-    for (int i = 0; i < NUM_SAMPLES; ++i) {
-        bool used = g_w[i] > 0.0 && is_finite(g_vals[i]);
-        sum += used ? g_w[i] * g_vals[i] : vec4(0.0);
-        weight += used ? g_w[i] : 0.0;
+// Add sample value x with closeness weight w; non-finite values do not count.
+void acc_step(inout Acc a, int rule, vec4 x, float w) {
+    bool used = w > 0.0 && is_finite(x);
+    bool first = used && a.weight == 0.0;
+    a.same = a.same && (!used || first || x == a.first);
+    a.first = first ? x : a.first;
+    if (rule == RULE_BLEND_HDR) {
+        // Blend in the tonemapped domain T(x) = x / (1 + max3(x)) so one
+        // bright sample cannot swamp its neighbours; 1 - max3(T) is
+        // accumulated directly as the min over channels of the blended
+        // (1 + m - x) / (1 + m): the same value, without the cancellation
+        // that costs f32 three digits near 65504.
+        float m = max(max3(x.rgb), 0.0);
+        float wu = used ? w : 0.0;
+        a.sum.rgb += used ? wu * (x.rgb / (1.0 + m)) : vec3(0.0);
+        a.complement += used ? wu * ((1.0 + m - x.rgb) / (1.0 + m)) : vec3(0.0);
+        a.sum.a += used ? wu * x.a : 0.0;
+        a.weight += wu;
+        a.lo = used ? min(a.lo, x.rgb) : a.lo;
+        a.hi = used ? max(a.hi, x.rgb) : a.hi;
+    } else {
+        a.sum += used ? w * x : vec4(0.0);
+        a.weight += used ? w : 0.0;
     }
-    return weight > 0.0 ? sum / weight : value_at(r);
 }
 
-// The weighted sum of normals, normalised; w blends as blend() does (one loop for both).
-vec4 blend_normal(int r) {
-    vec4 sum = vec4(0.0);
-    float weight = 0.0;
-    for (int i = 0; i < NUM_SAMPLES; ++i) {
-        bool used = g_w[i] > 0.0 && is_finite(g_vals[i]);
-        sum += used ? g_w[i] * g_vals[i] : vec4(0.0);
-        weight += used ? g_w[i] : 0.0;
+// The blended value; `reference` (the reference sample's) where nothing weighs.
+vec4 acc_finish(Acc a, int rule, vec4 reference) {
+    if (rule == RULE_BLEND_NORMAL) {
+        // The weighted sum of normals, normalised; w blends as RULE_BLEND does.
+        float len = length(a.sum.xyz);
+        float w = a.weight > 0.0 ? a.sum.w / a.weight : reference.w;
+        return vec4(len >= 1e-6 ? a.sum.xyz / len : reference.xyz, w);
     }
-    vec4 reference = value_at(r);
-    float len = length(sum.xyz);
-    float w = weight > 0.0 ? sum.w / weight : reference.w;
-    return vec4(len >= 1e-6 ? sum.xyz / len : reference.xyz, w);
-}
-
-// Blend in the tonemapped domain T(x) = x / (1 + max3(x)) so one bright sample
-// cannot swamp its neighbours, and map back with T^-1(y) = y / (1 - max3(y)).
-// 1 - max3(y) is accumulated directly as min over channels of the blended
-// (1 + m - x) / (1 + m): the same value, without the cancellation that costs
-// f32 three digits near 65504. The result is kept inside the contributing
-// samples' range.
-vec4 blend_hdr(int r) {
-    vec3 sum = vec3(0.0);
-    vec3 complement = vec3(0.0);
-    float alpha = 0.0;
-    float weight = 0.0;
-    vec3 lo = vec3(u_infinity);
-    vec3 hi = vec3(-u_infinity);
-    for (int i = 0; i < NUM_SAMPLES; ++i) {
-        bool used = g_w[i] > 0.0 && is_finite(g_vals[i]);
-        vec3 x = g_vals[i].rgb;
-        float m = max(max3(x), 0.0);
-        float w = used ? g_w[i] : 0.0;
-        sum += used ? w * (x / (1.0 + m)) : vec3(0.0);
-        complement += used ? w * ((1.0 + m - x) / (1.0 + m)) : vec3(0.0);
-        alpha += used ? w * g_vals[i].a : 0.0;
-        weight += w;
-        lo = used ? min(lo, x) : lo;
-        hi = used ? max(hi, x) : hi;
+    if (rule == RULE_BLEND_HDR) {
+        // Map back with T^-1(y) = y / (1 - max3(y)), inside the samples' range.
+        float denominator = min(min(a.complement.x, a.complement.y), min(a.complement.z, a.weight));
+        vec3 x = a.sum.rgb / max(denominator, 1e-30);
+        float alpha = a.same ? a.first.a : a.sum.a / a.weight;
+        return a.weight > 0.0 ? vec4(clamp(x, a.lo, a.hi), alpha) : reference;
     }
-    float denominator = min(min(complement.x, complement.y), min(complement.z, weight));
-    vec3 x = sum / max(denominator, 1e-30);
-    return weight > 0.0 ? vec4(clamp(x, lo, hi), alpha / weight) : value_at(r);
+    return a.weight > 0.0 ? (a.same ? a.first : a.sum / a.weight) : reference;
 }
 
-vec4 resolve_rule(int rule, int r) {
-    if (rule == RULE_BLEND_NORMAL) return blend_normal(r);
-    if (rule == RULE_BLEND_HDR) return blend_hdr(r);
-    return blend(r);
-}
 
 // Uniform pixel: every sample is background, or every sample is geometry
-// with the same key.
+// with the same key (the CPU reference's definition; keep them equal).
+//
+// With a position key the test reads every position sample (the key) and
+// every depth sample, not depth sample 0 alone: deciding from the position
+// samples alone is not exact. A sample is background by its own depth (the
+// clear depth), and a background sample's position is whatever the host
+// cleared the attachment to, which a geometry sample's may equal (a host
+// clearing position to (0, 0, -far); tests/resolve_layers.rs's
+// one-geometry-sample case, whose background samples keep the geometry's z);
+// geometry exactly at the clear depth (a sky drawn at the far plane) is
+// background in one sample and geometry in its neighbour. The converse is
+// exact without any appeal to fragments: equal keys of geometry samples make
+// every weight 1, and the CPU reference calls such a pixel uniform whatever
+// wrote it (per-sample shading, or two coplanar triangles, included), so
+// sample 0 is its value bit for bit.
 bool keys_uniform() {
     bool same = true;
+#ifdef KEY_WORLD
+    // A world-space position: the whole position and the depth sample must
+    // agree. A half-float position (the tutorial layout's) rounds samples a
+    // quarter pixel apart, on both sides of an edge between coplanar faces,
+    // to one value; their depth samples still differ.
+    for (int i = 1; i < NUM_SAMPLES; ++i)
+        if (g_bg[i] != g_bg[0]
+            || (!g_bg[0] && (any(notEqual(g_key_vals[i].xyz, g_key_vals[0].xyz))
+                             || g_raw_depth[i] != g_raw_depth[0])))
+            same = false;
+#else
     for (int i = 1; i < NUM_SAMPLES; ++i)
         if (g_bg[i] != g_bg[0] || (!g_bg[0] && g_key[i] != g_key[0])) same = false;
+#endif
     return same;
 }
+
+#ifdef PLANE_UNIFORMITY
+// The opt-in plane test (ResolveSettings::plane_uniformity; cpu.rs's
+// plane_fits and plane_uniform are the same test): every sample is geometry,
+// the depth samples lie on one plane over the standard sample pattern, and
+// the first blended attachment's samples are all equal. One triangle's
+// samples pass it; it does not prove that one fragment wrote the pixel.
+// Offsets from the pixel centre in 1/16 pixel, x right, y up.
+#if NUM_SAMPLES == 4
+#define PLANE_PATTERN 1
+const vec2 SAMPLE_POS[4] = vec2[4](vec2(-2.0, -6.0), vec2(6.0, -2.0), vec2(-6.0, 2.0), vec2(2.0, 6.0));
+#elif NUM_SAMPLES == 8
+#define PLANE_PATTERN 1
+const vec2 SAMPLE_POS[8] = vec2[8](vec2(1.0, -3.0), vec2(-1.0, 3.0), vec2(5.0, 1.0), vec2(-3.0, -5.0),
+                                   vec2(-5.0, 5.0), vec2(-7.0, -1.0), vec2(3.0, 7.0), vec2(7.0, -7.0));
+#elif NUM_SAMPLES == 16
+#define PLANE_PATTERN 1
+const vec2 SAMPLE_POS[16] = vec2[16](vec2(1.0, 1.0), vec2(-1.0, -3.0), vec2(-3.0, 2.0), vec2(4.0, -1.0),
+                                     vec2(-5.0, -2.0), vec2(2.0, 5.0), vec2(5.0, 3.0), vec2(3.0, -5.0),
+                                     vec2(-2.0, 6.0), vec2(0.0, -7.0), vec2(-4.0, -6.0), vec2(-6.0, 4.0),
+                                     vec2(-8.0, 0.0), vec2(7.0, -4.0), vec2(6.0, 7.0), vec2(-7.0, -8.0));
+#endif
+
+// Least squares over e_i = d_i - d_0 (exact where depths are close), with
+// positions and e centred; up to 3 samples always fit, a count without a
+// pattern never does.
+bool plane_fits() {
+#if NUM_SAMPLES <= 3
+    return true;
+#elif !defined(PLANE_PATTERN)
+    return false;
+#else
+    vec2 mean_pos = vec2(0.0);
+    float mean_e = 0.0;
+    float largest = 0.0;
+    for (int i = 0; i < NUM_SAMPLES; ++i) {
+        mean_pos += SAMPLE_POS[i];
+        mean_e += g_raw_depth[i] - g_raw_depth[0];
+        largest = max(largest, abs(g_raw_depth[i]));
+    }
+    mean_pos /= float(NUM_SAMPLES);
+    mean_e /= float(NUM_SAMPLES);
+    float sxx = 0.0, sxy = 0.0, syy = 0.0, sxe = 0.0, sye = 0.0;
+    for (int i = 0; i < NUM_SAMPLES; ++i) {
+        vec2 q = SAMPLE_POS[i] - mean_pos;
+        float v = (g_raw_depth[i] - g_raw_depth[0]) - mean_e;
+        sxx += q.x * q.x;
+        sxy += q.x * q.y;
+        syy += q.y * q.y;
+        sxe += q.x * v;
+        sye += q.y * v;
+    }
+    float det = sxx * syy - sxy * sxy;
+    float b = (syy * sxe - sxy * sye) / det;
+    float c = (sxx * sye - sxy * sxe) / det;
+    float worst = 0.0;
+    for (int i = 0; i < NUM_SAMPLES; ++i) {
+        vec2 q = SAMPLE_POS[i] - mean_pos;
+        float v = (g_raw_depth[i] - g_raw_depth[0]) - mean_e;
+        worst = max(worst, abs(v - b * q.x - c * q.y));
+    }
+    // 2^-22 * max|d| + 2^-23; a NaN residual fails.
+    return worst <= largest * 2.384185791015625e-7 + 1.1920928955078125e-7;
+#endif
+}
+
+bool plane_uniform(ivec2 p) {
+    bool same = true;
+    for (int i = 0; i < NUM_SAMPLES; ++i) same = same && !g_bg[i];
+    same = same && plane_fits();
+    // The attachment is read only while the pixel still passes.
+    vec4 first = vec4(FETCH(PLANE_SAMPLER, p, 0));
+    for (int i = g_zero + 1; i < NUM_SAMPLES; ++i) {
+        if (!same) break;
+        same = vec4(FETCH(PLANE_SAMPLER, p, i)) == first;
+    }
+    return same;
+}
+#endif
 
 // Selective anti-aliasing: the pixel lies outside what should be anti-aliased.
 bool outside_selection(ivec2 p) {
@@ -343,9 +482,12 @@ bool outside_selection(ivec2 p) {
     outside = outside || !near;
 #endif
 #ifdef SELECT_FLAG_SAMPLER
+    // Read only while the pixel might still be resolved.
     bool wanted = false;
-    for (int i = 0; i < NUM_SAMPLES; ++i)
+    for (int i = g_zero; i < NUM_SAMPLES; ++i) {
+        if (outside) break;
         if (FETCH(SELECT_FLAG_SAMPLER, p, i).SELECT_FLAG_COMPONENT >= 0.5) wanted = true;
+    }
     outside = outside || !wanted;
 #endif
     return outside;
@@ -354,9 +496,15 @@ bool outside_selection(ivec2 p) {
 // The pixel takes one sample (sample 0 of everything): it is uniform (with
 // the fast path), or outside the selection. Needs load_keys(p) first.
 bool takes_one_sample(ivec2 p) {
-    bool one = outside_selection(p);
+    bool one = false;
 #ifdef FAST_PATH
-    one = one || keys_uniform();
+    one = keys_uniform();
+#ifdef PLANE_UNIFORMITY
+    one = one || plane_uniform(p);
+#endif
+#endif
+#if defined(SELECT_REGION) || defined(SELECT_MAX_DEPTH) || defined(SELECT_FLAG_SAMPLER)
+    one = one || outside_selection(p);
 #endif
     return one;
 }
@@ -380,142 +528,325 @@ void main() {
 #else
 
 #ifdef PASS_ONE_SAMPLE
+
 // Every pixel copies sample 0 and reads nothing else (slow tiles are drawn over it).
-#define RESOLVE_SELECT(S, O) O = FETCH(S, p, 0);
-#define RESOLVE_BLEND(S, O, RULE) O = FETCH(S, p, 0);
-#define RESOLVE_KEY(S, O, RULE) O = FETCH(S, p, 0);
-#else
-#define FETCH_ALL(S) load_values(S, p);
-#define RESOLVE_SELECT(S, O) O = FETCH(S, p, one_sample ? 0 : r);
-#define RESOLVE_BLEND(S, O, RULE) if (one_sample) { O = FETCH(S, p, 0); } else { FETCH_ALL(S) O = resolve_rule(RULE, r); }
-#define RESOLVE_KEY(S, O, RULE) for (int i = 0; i < NUM_SAMPLES; ++i) g_vals[i] = g_key_vals[i]; if (one_sample) { O = g_key_vals[0]; } else if (RULE == RULE_SELECT) { O = value_at(r); } else { O = resolve_rule(RULE, r); }
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+#if NUM_ATTACHMENTS > 0
+    o_att0 = FETCH(u_att0, p, 0);
 #endif
+#if NUM_ATTACHMENTS > 1
+    o_att1 = FETCH(u_att1, p, 0);
+#endif
+#if NUM_ATTACHMENTS > 2
+    o_att2 = FETCH(u_att2, p, 0);
+#endif
+#if NUM_ATTACHMENTS > 3
+    o_att3 = FETCH(u_att3, p, 0);
+#endif
+#if NUM_ATTACHMENTS > 4
+    o_att4 = FETCH(u_att4, p, 0);
+#endif
+#if NUM_ATTACHMENTS > 5
+    o_att5 = FETCH(u_att5, p, 0);
+#endif
+#if NUM_ATTACHMENTS > 6
+    o_att6 = FETCH(u_att6, p, 0);
+#endif
+#if NUM_ATTACHMENTS > 7
+    o_att7 = FETCH(u_att7, p, 0);
+#endif
+#ifdef WRITE_DEPTH
+    gl_FragDepth = FETCH(u_depth, p, 0).r;
+#endif
+#ifdef COMPLEX_OUTPUT
+    o_complex = 0.0;
+#endif
+}
+
+#else
+
+// The value of the key attachment's sample r, by selects (g_key_vals[0] for r = 0).
+vec4 key_value_at(int r) {
+    vec4 v = vec4(0.0);
+#ifdef KEY_SAMPLER
+    v = g_key_vals[0];
+    for (int i = 1; i < NUM_SAMPLES; ++i) v = i == r ? g_key_vals[i] : v;
+#endif
+    return v;
+}
+
+// The attachment blocks. A blended attachment fetches sample 0 (a one-sample
+// pixel's value) before the sample loop, and samples 1.. inside it; the
+// reference sample's value is picked up on the way. A Select attachment
+// fetches sample r once after it (r is 0 for a one-sample pixel); the key
+// attachment's samples are already in g_key_vals.
+#define BLEND_BEGIN(S, V, REF, ACC, RULE) vec4 V = vec4(FETCH(S, p, 0)); vec4 REF = V; Acc ACC = acc_new(); acc_step(ACC, RULE, V, w0);
+#define BLEND_STEP(S, REF, ACC, RULE) { vec4 x = vec4(FETCH(S, p, i)); REF = i == r ? x : REF; acc_step(ACC, RULE, x, w); }
+#define BLEND_END(O, V, REF, ACC, RULE) O = g_one ? V : acc_finish(ACC, RULE, REF);
+#define KEY_BEGIN(V, REF, ACC, RULE) vec4 V = g_key_vals[0]; vec4 REF = key_value_at(r); Acc ACC = acc_new(); acc_step(ACC, RULE, V, w0);
+#define KEY_STEP(ACC, RULE) acc_step(ACC, RULE, key_i, w);
+#define KEY_END(O, V, REF, ACC, RULE) O = g_one || RULE == RULE_SELECT ? REF : acc_finish(ACC, RULE, REF);
 
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
-
-#ifdef PASS_ONE_SAMPLE
-    const bool one_sample = true;
-#else
+    g_zero = u_infinity > 0.0 ? 0 : 1;
     load_keys(p);
-    bool one_sample = takes_one_sample(p);
-    int r = 0;
-    float reference_depth = g_raw_depth[0];
-    if (!one_sample) {
-        r = reference_sample();
-        float z_r = g_key[0];
-        bool bg_r = g_bg[0];
-        for (int i = 1; i < NUM_SAMPLES; ++i) {
-            z_r = i == r ? g_key[i] : z_r;
-            bg_r = i == r ? g_bg[i] : bg_r;
-            reference_depth = i == r ? g_raw_depth[i] : reference_depth;
-        }
-        for (int i = 0; i < NUM_SAMPLES; ++i) g_w[i] = closeness(i, r, z_r, bg_r);
-    }
-#endif
+    g_one = takes_one_sample(p);
 
+    // The reference sample (0 for a one-sample pixel, which leaves the
+    // search's loop at once) and its key, background flag and depth.
+    int r = reference_sample();
+    float z_r = g_key[0];
+    bool bg_r = g_bg[0];
+    float reference_depth = g_raw_depth[0];
+    for (int i = 1; i < NUM_SAMPLES; ++i) {
+        z_r = i == r ? g_key[i] : z_r;
+        bg_r = i == r ? g_bg[i] : bg_r;
+        reference_depth = i == r ? g_raw_depth[i] : reference_depth;
+    }
+
+    // Sample 0 of everything, then samples 1.. in one loop that a group of
+    // one-sample pixels leaves at the top of its first iteration.
+    float w0 = closeness(g_key[0], g_bg[0], r == 0, z_r, bg_r);
+    float depth_sum = w0 * g_raw_depth[0];
+    float depth_weight = w0;
 #if NUM_ATTACHMENTS > 0
 #if defined(KEY_INDEX) && KEY_INDEX == 0
-    RESOLVE_KEY(u_att0, o_att0, ATT0_RULE)
+    KEY_BEGIN(s0_0, ref_0, acc_0, ATT0_RULE)
 #elif ATT0_RULE == RULE_SELECT
-    RESOLVE_SELECT(u_att0, o_att0)
 #else
-    RESOLVE_BLEND(u_att0, o_att0, ATT0_RULE)
+    BLEND_BEGIN(u_att0, s0_0, ref_0, acc_0, ATT0_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 1
 #if defined(KEY_INDEX) && KEY_INDEX == 1
-    RESOLVE_KEY(u_att1, o_att1, ATT1_RULE)
+    KEY_BEGIN(s0_1, ref_1, acc_1, ATT1_RULE)
 #elif ATT1_RULE == RULE_SELECT
-    RESOLVE_SELECT(u_att1, o_att1)
 #else
-    RESOLVE_BLEND(u_att1, o_att1, ATT1_RULE)
+    BLEND_BEGIN(u_att1, s0_1, ref_1, acc_1, ATT1_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 2
 #if defined(KEY_INDEX) && KEY_INDEX == 2
-    RESOLVE_KEY(u_att2, o_att2, ATT2_RULE)
+    KEY_BEGIN(s0_2, ref_2, acc_2, ATT2_RULE)
 #elif ATT2_RULE == RULE_SELECT
-    RESOLVE_SELECT(u_att2, o_att2)
 #else
-    RESOLVE_BLEND(u_att2, o_att2, ATT2_RULE)
+    BLEND_BEGIN(u_att2, s0_2, ref_2, acc_2, ATT2_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 3
 #if defined(KEY_INDEX) && KEY_INDEX == 3
-    RESOLVE_KEY(u_att3, o_att3, ATT3_RULE)
+    KEY_BEGIN(s0_3, ref_3, acc_3, ATT3_RULE)
 #elif ATT3_RULE == RULE_SELECT
-    RESOLVE_SELECT(u_att3, o_att3)
 #else
-    RESOLVE_BLEND(u_att3, o_att3, ATT3_RULE)
+    BLEND_BEGIN(u_att3, s0_3, ref_3, acc_3, ATT3_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 4
 #if defined(KEY_INDEX) && KEY_INDEX == 4
-    RESOLVE_KEY(u_att4, o_att4, ATT4_RULE)
+    KEY_BEGIN(s0_4, ref_4, acc_4, ATT4_RULE)
 #elif ATT4_RULE == RULE_SELECT
-    RESOLVE_SELECT(u_att4, o_att4)
 #else
-    RESOLVE_BLEND(u_att4, o_att4, ATT4_RULE)
+    BLEND_BEGIN(u_att4, s0_4, ref_4, acc_4, ATT4_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 5
 #if defined(KEY_INDEX) && KEY_INDEX == 5
-    RESOLVE_KEY(u_att5, o_att5, ATT5_RULE)
+    KEY_BEGIN(s0_5, ref_5, acc_5, ATT5_RULE)
 #elif ATT5_RULE == RULE_SELECT
-    RESOLVE_SELECT(u_att5, o_att5)
 #else
-    RESOLVE_BLEND(u_att5, o_att5, ATT5_RULE)
+    BLEND_BEGIN(u_att5, s0_5, ref_5, acc_5, ATT5_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 6
 #if defined(KEY_INDEX) && KEY_INDEX == 6
-    RESOLVE_KEY(u_att6, o_att6, ATT6_RULE)
+    KEY_BEGIN(s0_6, ref_6, acc_6, ATT6_RULE)
 #elif ATT6_RULE == RULE_SELECT
-    RESOLVE_SELECT(u_att6, o_att6)
 #else
-    RESOLVE_BLEND(u_att6, o_att6, ATT6_RULE)
+    BLEND_BEGIN(u_att6, s0_6, ref_6, acc_6, ATT6_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 7
 #if defined(KEY_INDEX) && KEY_INDEX == 7
-    RESOLVE_KEY(u_att7, o_att7, ATT7_RULE)
+    KEY_BEGIN(s0_7, ref_7, acc_7, ATT7_RULE)
 #elif ATT7_RULE == RULE_SELECT
-    RESOLVE_SELECT(u_att7, o_att7)
 #else
-    RESOLVE_BLEND(u_att7, o_att7, ATT7_RULE)
+    BLEND_BEGIN(u_att7, s0_7, ref_7, acc_7, ATT7_RULE)
+#endif
+#endif
+    for (int i = g_zero + 1; i < NUM_SAMPLES; ++i) {
+        if (g_one) break;
+        float z_i;
+        bool bg_i;
+        float depth_i;
+        PICK(z_i, g_key, i)
+        PICK(bg_i, g_bg, i)
+        PICK(depth_i, g_raw_depth, i)
+#ifdef KEY_SAMPLER
+        vec4 key_i;
+        PICK(key_i, g_key_vals, i)
+#endif
+        float w = closeness(z_i, bg_i, i == r, z_r, bg_r);
+        depth_sum += w * depth_i;
+        depth_weight += w;
+#if NUM_ATTACHMENTS > 0
+#if defined(KEY_INDEX) && KEY_INDEX == 0
+        KEY_STEP(acc_0, ATT0_RULE)
+#elif ATT0_RULE == RULE_SELECT
+#else
+        BLEND_STEP(u_att0, ref_0, acc_0, ATT0_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 1
+#if defined(KEY_INDEX) && KEY_INDEX == 1
+        KEY_STEP(acc_1, ATT1_RULE)
+#elif ATT1_RULE == RULE_SELECT
+#else
+        BLEND_STEP(u_att1, ref_1, acc_1, ATT1_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 2
+#if defined(KEY_INDEX) && KEY_INDEX == 2
+        KEY_STEP(acc_2, ATT2_RULE)
+#elif ATT2_RULE == RULE_SELECT
+#else
+        BLEND_STEP(u_att2, ref_2, acc_2, ATT2_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 3
+#if defined(KEY_INDEX) && KEY_INDEX == 3
+        KEY_STEP(acc_3, ATT3_RULE)
+#elif ATT3_RULE == RULE_SELECT
+#else
+        BLEND_STEP(u_att3, ref_3, acc_3, ATT3_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 4
+#if defined(KEY_INDEX) && KEY_INDEX == 4
+        KEY_STEP(acc_4, ATT4_RULE)
+#elif ATT4_RULE == RULE_SELECT
+#else
+        BLEND_STEP(u_att4, ref_4, acc_4, ATT4_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 5
+#if defined(KEY_INDEX) && KEY_INDEX == 5
+        KEY_STEP(acc_5, ATT5_RULE)
+#elif ATT5_RULE == RULE_SELECT
+#else
+        BLEND_STEP(u_att5, ref_5, acc_5, ATT5_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 6
+#if defined(KEY_INDEX) && KEY_INDEX == 6
+        KEY_STEP(acc_6, ATT6_RULE)
+#elif ATT6_RULE == RULE_SELECT
+#else
+        BLEND_STEP(u_att6, ref_6, acc_6, ATT6_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 7
+#if defined(KEY_INDEX) && KEY_INDEX == 7
+        KEY_STEP(acc_7, ATT7_RULE)
+#elif ATT7_RULE == RULE_SELECT
+#else
+        BLEND_STEP(u_att7, ref_7, acc_7, ATT7_RULE)
+#endif
+#endif
+    }
+#if NUM_ATTACHMENTS > 0
+#if defined(KEY_INDEX) && KEY_INDEX == 0
+    KEY_END(o_att0, s0_0, ref_0, acc_0, ATT0_RULE)
+#elif ATT0_RULE == RULE_SELECT
+    o_att0 = FETCH(u_att0, p, r);
+#else
+    BLEND_END(o_att0, s0_0, ref_0, acc_0, ATT0_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 1
+#if defined(KEY_INDEX) && KEY_INDEX == 1
+    KEY_END(o_att1, s0_1, ref_1, acc_1, ATT1_RULE)
+#elif ATT1_RULE == RULE_SELECT
+    o_att1 = FETCH(u_att1, p, r);
+#else
+    BLEND_END(o_att1, s0_1, ref_1, acc_1, ATT1_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 2
+#if defined(KEY_INDEX) && KEY_INDEX == 2
+    KEY_END(o_att2, s0_2, ref_2, acc_2, ATT2_RULE)
+#elif ATT2_RULE == RULE_SELECT
+    o_att2 = FETCH(u_att2, p, r);
+#else
+    BLEND_END(o_att2, s0_2, ref_2, acc_2, ATT2_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 3
+#if defined(KEY_INDEX) && KEY_INDEX == 3
+    KEY_END(o_att3, s0_3, ref_3, acc_3, ATT3_RULE)
+#elif ATT3_RULE == RULE_SELECT
+    o_att3 = FETCH(u_att3, p, r);
+#else
+    BLEND_END(o_att3, s0_3, ref_3, acc_3, ATT3_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 4
+#if defined(KEY_INDEX) && KEY_INDEX == 4
+    KEY_END(o_att4, s0_4, ref_4, acc_4, ATT4_RULE)
+#elif ATT4_RULE == RULE_SELECT
+    o_att4 = FETCH(u_att4, p, r);
+#else
+    BLEND_END(o_att4, s0_4, ref_4, acc_4, ATT4_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 5
+#if defined(KEY_INDEX) && KEY_INDEX == 5
+    KEY_END(o_att5, s0_5, ref_5, acc_5, ATT5_RULE)
+#elif ATT5_RULE == RULE_SELECT
+    o_att5 = FETCH(u_att5, p, r);
+#else
+    BLEND_END(o_att5, s0_5, ref_5, acc_5, ATT5_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 6
+#if defined(KEY_INDEX) && KEY_INDEX == 6
+    KEY_END(o_att6, s0_6, ref_6, acc_6, ATT6_RULE)
+#elif ATT6_RULE == RULE_SELECT
+    o_att6 = FETCH(u_att6, p, r);
+#else
+    BLEND_END(o_att6, s0_6, ref_6, acc_6, ATT6_RULE)
+#endif
+#endif
+#if NUM_ATTACHMENTS > 7
+#if defined(KEY_INDEX) && KEY_INDEX == 7
+    KEY_END(o_att7, s0_7, ref_7, acc_7, ATT7_RULE)
+#elif ATT7_RULE == RULE_SELECT
+    o_att7 = FETCH(u_att7, p, r);
+#else
+    BLEND_END(o_att7, s0_7, ref_7, acc_7, ATT7_RULE)
 #endif
 #endif
 
 #ifdef WRITE_DEPTH
-#ifdef PASS_ONE_SAMPLE
-    gl_FragDepth = FETCH(u_depth, p, 0).r;
-#else
-    float depth_out = reference_depth;
 #ifdef BLEND_DEPTH
-    if (!one_sample) {
-        float sum = 0.0;
-        float weight = 0.0;
-        for (int i = 0; i < NUM_SAMPLES; ++i) {
-            sum += g_w[i] * g_raw_depth[i];
-            weight += g_w[i];
-        }
-        depth_out = sum / weight;
-    }
-#endif
-    gl_FragDepth = depth_out;
+    gl_FragDepth = g_one ? reference_depth : depth_sum / depth_weight;
+#else
+    gl_FragDepth = reference_depth;
 #endif
 #endif
 #ifdef COMPLEX_OUTPUT
-    o_complex = one_sample ? 0.0 : 1.0;
+    o_complex = g_one ? 0.0 : 1.0;
 #endif
 #ifdef REFERENCE_OUTPUT
 #ifdef PASS_ONE_SAMPLE
     o_reference = 0u;
 #else
-    o_reference = uint(one_sample ? 0 : r);
+    o_reference = uint(g_one ? 0 : r);
 #endif
 #endif
 }
+
+#endif
 
 #endif

@@ -451,10 +451,9 @@ fn introspect_bound(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFr
     check_error(gl, "introspecting the host framebuffer")?;
     // What no draw buffer reaches, the geometry pass cannot write: it keeps
     // what the host put there, so it is neither twinned nor resolved.
-    let (colors, undrawn): (Vec<HostAttachment>, Vec<HostAttachment>) =
-        colors.into_iter().partition(|a| {
-            matches!(a.point, Attachment::Color(n) if draw_buffers.contains(&Some(n)))
-        });
+    let (colors, undrawn): (Vec<HostAttachment>, Vec<HostAttachment>) = colors
+        .into_iter()
+        .partition(|a| matches!(a.point, Attachment::Color(n) if draw_buffers.contains(&Some(n))));
     if colors.is_empty() {
         return Err(Error::Retrofit {
             attachment: undrawn

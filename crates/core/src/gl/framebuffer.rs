@@ -1,6 +1,7 @@
 //! Framebuffer objects, checked for completeness.
 
 use super::counters::{self, Kind};
+use super::state::live_framebuffer;
 use super::{TextureRef, check_error, label_object};
 use crate::{Error, Result};
 use glow::HasContext;
@@ -248,9 +249,8 @@ impl Framebuffer {
         label_object(gl, glow::FRAMEBUFFER, self.raw.0.get(), &self.label);
         let status = unsafe { gl.check_framebuffer_status(glow::FRAMEBUFFER) };
         unsafe {
-            let restore = |v: i32| std::num::NonZeroU32::new(v as u32).map(glow::NativeFramebuffer);
-            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, restore(draw));
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, restore(read));
+            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, live_framebuffer(gl, draw));
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, live_framebuffer(gl, read));
         }
         check_error(gl, &format!("configuring framebuffer `{}`", self.label))?;
         if status != glow::FRAMEBUFFER_COMPLETE {

@@ -135,26 +135,27 @@ impl SavedState {
         unsafe {
             gl.bind_framebuffer(
                 glow::DRAW_FRAMEBUFFER,
-                NonZeroU32::new(self.framebuffer as u32).map(glow::NativeFramebuffer),
+                live_framebuffer(gl, self.framebuffer),
             );
             gl.bind_framebuffer(
                 glow::READ_FRAMEBUFFER,
-                NonZeroU32::new(self.read_framebuffer as u32).map(glow::NativeFramebuffer),
+                live_framebuffer(gl, self.read_framebuffer),
             );
             let [x, y, w, h] = self.scissor_box;
             gl.scissor(x, y, w, h);
             gl.polygon_mode(glow::FRONT_AND_BACK, self.polygon_mode as u32);
-            gl.use_program(NonZeroU32::new(self.program as u32).map(glow::NativeProgram));
+            gl.use_program(
+                NonZeroU32::new(self.program as u32)
+                    .map(glow::NativeProgram)
+                    .filter(|&p| gl.is_program(p)),
+            );
             gl.bind_vertex_array(
                 NonZeroU32::new(self.vertex_array as u32).map(glow::NativeVertexArray),
             );
             for (k, bindings) in self.textures.iter().enumerate() {
                 gl.active_texture(glow::TEXTURE0 + k as u32);
                 for ((target, _), raw) in TEXTURE_TARGETS.iter().zip(bindings) {
-                    gl.bind_texture(
-                        *target,
-                        NonZeroU32::new(*raw as u32).map(glow::NativeTexture),
-                    );
+                    gl.bind_texture(*target, live_texture(gl, *raw));
                 }
             }
             gl.active_texture(self.active_texture as u32);
@@ -261,17 +262,40 @@ impl SetupState {
         unsafe {
             gl.bind_renderbuffer(
                 glow::RENDERBUFFER,
-                NonZeroU32::new(self.renderbuffer as u32).map(glow::NativeRenderbuffer),
+                NonZeroU32::new(self.renderbuffer as u32)
+                    .map(glow::NativeRenderbuffer)
+                    .filter(|&r| gl.is_renderbuffer(r)),
             );
             for (target, raw) in self.buffers {
-                gl.bind_buffer(target, NonZeroU32::new(raw as u32).map(glow::NativeBuffer));
+                gl.bind_buffer(
+                    target,
+                    NonZeroU32::new(raw as u32)
+                        .map(glow::NativeBuffer)
+                        .filter(|&b| gl.is_buffer(b)),
+                );
             }
             for (pname, value) in self.pixel_store {
                 gl.pixel_store_i32(pname, value);
             }
             for (target, raw) in self.other_textures {
-                gl.bind_texture(target, NonZeroU32::new(raw as u32).map(glow::NativeTexture));
+                gl.bind_texture(target, live_texture(gl, raw));
             }
         }
     }
+}
+
+/// The framebuffer `raw` names, if it still exists: a binding captured
+/// before a call that deleted that object goes back to 0 (binding a deleted
+/// name is `GL_INVALID_OPERATION`).
+pub(crate) fn live_framebuffer(gl: &glow::Context, raw: i32) -> Option<glow::Framebuffer> {
+    NonZeroU32::new(raw as u32)
+        .map(glow::NativeFramebuffer)
+        .filter(|&f| unsafe { gl.is_framebuffer(f) })
+}
+
+/// The texture `raw` names, if it still exists ([`live_framebuffer`]).
+pub(crate) fn live_texture(gl: &glow::Context, raw: i32) -> Option<glow::Texture> {
+    NonZeroU32::new(raw as u32)
+        .map(glow::NativeTexture)
+        .filter(|&t| unsafe { gl.is_texture(t) })
 }

@@ -64,10 +64,7 @@ impl AllocationState {
 
     fn restore(self, gl: &glow::Context) {
         unsafe {
-            gl.bind_texture(
-                self.target,
-                std::num::NonZeroU32::new(self.binding as u32).map(glow::NativeTexture),
-            );
+            gl.bind_texture(self.target, super::state::live_texture(gl, self.binding));
             gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, self.alignment);
             gl.pixel_store_i32(glow::UNPACK_ROW_LENGTH, self.row_length);
             gl.bind_buffer(

@@ -101,7 +101,124 @@ fn max3(x: &[f64; 4]) -> f64 {
     x[0].max(x[1]).max(x[2])
 }
 
+/// The standard sample pattern for `n` samples (2, 4, 8 or 16): offsets
+/// from the pixel centre in sixteenths of a pixel, x right and y up as GL
+/// reports them (llvmpipe's 4x pattern; most GPUs use these for 2x to 16x).
+/// `resolve.frag`'s `SAMPLE_POS` holds the same numbers.
+pub fn standard_sample_positions(n: usize) -> Option<&'static [[f64; 2]]> {
+    const P2: [[f64; 2]; 2] = [[4.0, 4.0], [-4.0, -4.0]];
+    const P4: [[f64; 2]; 4] = [[-2.0, -6.0], [6.0, -2.0], [-6.0, 2.0], [2.0, 6.0]];
+    const P8: [[f64; 2]; 8] = [
+        [1.0, -3.0],
+        [-1.0, 3.0],
+        [5.0, 1.0],
+        [-3.0, -5.0],
+        [-5.0, 5.0],
+        [-7.0, -1.0],
+        [3.0, 7.0],
+        [7.0, -7.0],
+    ];
+    const P16: [[f64; 2]; 16] = [
+        [1.0, 1.0],
+        [-1.0, -3.0],
+        [-3.0, 2.0],
+        [4.0, -1.0],
+        [-5.0, -2.0],
+        [2.0, 5.0],
+        [5.0, 3.0],
+        [3.0, -5.0],
+        [-2.0, 6.0],
+        [0.0, -7.0],
+        [-4.0, -6.0],
+        [-6.0, 4.0],
+        [-8.0, 0.0],
+        [7.0, -4.0],
+        [6.0, 7.0],
+        [-7.0, -8.0],
+    ];
+    match n {
+        2 => Some(&P2),
+        4 => Some(&P4),
+        8 => Some(&P8),
+        16 => Some(&P16),
+        _ => None,
+    }
+}
+
+/// Whether depth-buffer values `depth[i]` lie on one plane over the standard
+/// sample pattern, within `2^-22·max|d| + 2^-23` (a few roundings of the
+/// rasteriser's interpolation, or of a 24-bit buffer), and whether `f32`
+/// may decide that differently (the largest residual at the tolerance).
+/// Up to 3 samples always fit. A count without a standard pattern never
+/// fits. `resolve.frag`'s `plane_fits` is the same computation in `f32`.
+///
+/// The fit is least squares over `e_i = d_i − d_0` (small and exact where
+/// the depths are close): with positions and `e` centred on their means,
+/// the slopes solve the 2x2 normal equations, and the residuals are what
+/// the plane leaves.
+pub fn plane_fits(depth: &[f64]) -> (bool, bool) {
+    let n = depth.len();
+    if n <= 3 {
+        return (true, false);
+    }
+    let Some(pos) = standard_sample_positions(n) else {
+        return (false, false);
+    };
+    let nf = n as f64;
+    let (mx, my) = (
+        pos.iter().map(|p| p[0]).sum::<f64>() / nf,
+        pos.iter().map(|p| p[1]).sum::<f64>() / nf,
+    );
+    let e: Vec<f64> = depth.iter().map(|d| d - depth[0]).collect();
+    let me = e.iter().sum::<f64>() / nf;
+    let (mut sxx, mut sxy, mut syy, mut sxe, mut sye) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for i in 0..n {
+        let (x, y, v) = (pos[i][0] - mx, pos[i][1] - my, e[i] - me);
+        sxx += x * x;
+        sxy += x * y;
+        syy += y * y;
+        sxe += x * v;
+        sye += y * v;
+    }
+    let det = sxx * syy - sxy * sxy;
+    let b = (syy * sxe - sxy * sye) / det;
+    let c = (sxx * sye - sxy * sxe) / det;
+    let mut worst: f64 = 0.0;
+    let mut spread: f64 = 0.0;
+    for i in 0..n {
+        let residual = (e[i] - me) - b * (pos[i][0] - mx) - c * (pos[i][1] - my);
+        worst = worst.max(residual.abs());
+        spread = spread.max(e[i].abs());
+    }
+    let largest = depth.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+    let tolerance = largest * 2f64.powi(-22) + 2f64.powi(-23);
+    if !worst.is_finite() {
+        return (false, false);
+    }
+    // f32 rounds the residuals by about 1e-6 of the depths' spread.
+    let ambiguous = (worst - tolerance).abs() <= 1e-3 * tolerance + 4e-6 * spread;
+    (worst <= tolerance, ambiguous)
+}
+
 impl CpuResolve {
+    /// The opt-in plane test ([`ResolveSettings::plane_uniformity`]): every
+    /// sample is geometry, the depths fit one plane ([`plane_fits`]) and the
+    /// first blended attachment's samples are all equal (as `f32` compares:
+    /// NaN never, −0 and +0 do). The second value: `f32` may decide the
+    /// plane differently.
+    fn plane_uniform(&self, px: &PixelSamples, keys: &Keys) -> (bool, bool) {
+        let Some(k) = self.rules.iter().position(|r| *r != ResolveRule::Select) else {
+            return (false, false);
+        };
+        if keys.bg.iter().any(|&b| b) {
+            return (false, false);
+        }
+        let (fits, ambiguous) = plane_fits(&px.depth);
+        let values = &px.attachments[k];
+        let equal = values.iter().all(|v| *v == values[0]);
+        (fits && equal, ambiguous && equal)
+    }
+
     fn keys(&self, px: &PixelSamples) -> Keys {
         let n = px.depth.len();
         let mut z = Vec::with_capacity(n);
@@ -232,9 +349,22 @@ impl CpuResolve {
         let n = px.depth.len();
         let keys = self.keys(px);
 
-        let uniform = self.settings.fast_path
-            && (1..n).all(|i| keys.bg[i] == keys.bg[0] && (keys.bg[0] || keys.z[i] == keys.z[0]));
-        let (outside, selection_ambiguous) = self.outside_selection(px, &keys, at);
+        // A world-space key compares whole positions (the shader's keys_uniform).
+        let same_key = |i: usize| match self.key_source {
+            CpuKeySource::WorldPosition { attachment, .. } => {
+                let a = &px.attachments[attachment];
+                a[i][..3] == a[0][..3] && px.depth[i] == px.depth[0]
+            }
+            _ => keys.z[i] == keys.z[0],
+        };
+        let mut uniform = self.settings.fast_path
+            && (1..n).all(|i| keys.bg[i] == keys.bg[0] && (keys.bg[0] || same_key(i)));
+        let (outside, mut selection_ambiguous) = self.outside_selection(px, &keys, at);
+        if self.settings.fast_path && self.settings.plane_uniformity && !uniform {
+            let (plane, ambiguous) = self.plane_uniform(px, &keys);
+            uniform = plane;
+            selection_ambiguous |= ambiguous;
+        }
         if uniform || outside {
             return ResolvedPixel {
                 attachments: px.attachments.iter().map(|a| a[0]).collect(),
@@ -298,6 +428,9 @@ impl CpuResolve {
 
 /// Weighted mean over finite samples; the reference's value when none weigh.
 pub fn blend(values: &[[f64; 4]], weights: &[f64], r: usize) -> [f64; 4] {
+    if let Some(v) = equal_contributions(values, weights) {
+        return v;
+    }
     let mut sum = [0.0; 4];
     let mut weight = 0.0;
     for (x, &w) in values.iter().zip(weights) {
@@ -313,6 +446,18 @@ pub fn blend(values: &[[f64; 4]], weights: &[f64], r: usize) -> [f64; 4] {
     } else {
         values[r]
     }
+}
+
+/// The value every contributing sample (weight above 0, finite) has, when
+/// they all have the same one: a blend of equal values is that value.
+fn equal_contributions(values: &[[f64; 4]], weights: &[f64]) -> Option<[f64; 4]> {
+    let mut used = values
+        .iter()
+        .zip(weights)
+        .filter(|(x, w)| **w > 0.0 && is_finite4(x))
+        .map(|(x, _)| *x);
+    let first = used.next()?;
+    used.all(|x| x == first).then_some(first)
 }
 
 /// xyz: the normalised weighted sum (the reference's xyz when it is shorter
@@ -374,7 +519,7 @@ pub fn blend_hdr(values: &[[f64; 4]], weights: &[f64], r: usize) -> [f64; 4] {
         (sum[0] / denominator).clamp(lo[0], hi[0]),
         (sum[1] / denominator).clamp(lo[1], hi[1]),
         (sum[2] / denominator).clamp(lo[2], hi[2]),
-        alpha / weight,
+        equal_contributions(values, weights).map_or(alpha / weight, |v| v[3]),
     ]
 }
 

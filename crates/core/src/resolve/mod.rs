@@ -73,6 +73,8 @@ pub(crate) struct ResolveProgramKey {
     pub window: Window,
     /// Uniform-pixel fast path.
     pub fast_path: bool,
+    /// The opt-in plane test of [`ResolveSettings::plane_uniformity`] (with the fast path).
+    pub plane_uniformity: bool,
     /// Write `gl_FragDepth`.
     pub write_depth: bool,
     /// Blend depth instead of selecting the reference's.
@@ -204,6 +206,16 @@ impl ResolveProgramKey {
         }
         if self.fast_path {
             def("FAST_PATH", "1".into());
+            // The plane test compares the first blended attachment's samples;
+            // without one it never fires (as in the CPU reference).
+            let first_blended = self
+                .attachments
+                .iter()
+                .position(|(rule, _)| *rule != ResolveRule::Select);
+            if let (true, Some(k)) = (self.plane_uniformity, first_blended) {
+                def("PLANE_UNIFORMITY", "1".into());
+                def("PLANE_SAMPLER", format!("u_att{k}"));
+            }
         }
         if self.write_depth {
             def("WRITE_DEPTH", "1".into());
@@ -480,6 +492,7 @@ impl Resolver {
                 s.window
             },
             fast_path: s.fast_path,
+            plane_uniformity: s.plane_uniformity && s.fast_path,
             write_depth,
             blend_depth: s.blend_depth && write_depth,
             complex_output: extra.complex,

@@ -91,6 +91,16 @@ pub struct ResolveSettings {
     pub fast_path: bool,
     /// Blend the depth attachment's value instead of selecting the reference's.
     pub blend_depth: bool,
+    /// Opt-in, with the fast path: also take sample 0 where every sample is
+    /// geometry, the depth samples lie on one plane (within rounding) over
+    /// the standard sample pattern, and the first blended attachment's
+    /// samples are all equal (default off). For hosts whose key is the depth
+    /// buffer (`KeySource::Depth`): one triangle's samples have different
+    /// depths, so the exact test (equal keys) fails on nearly every pixel it
+    /// covers. Not exact: such a pixel is taken to be one fragment, and
+    /// its depth is sample 0's (see `cpu::plane_fits`).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub plane_uniformity: bool,
     /// Selective anti-aliasing: which pixels are resolved at all; the others
     /// take one sample, as a uniform pixel does (default: every pixel).
     pub selection: Selection,
@@ -297,6 +307,7 @@ impl Default for ResolveSettings {
             c_in: 2.5,
             fast_path: true,
             blend_depth: false,
+            plane_uniformity: false,
             selection: Selection::default(),
         }
     }
