@@ -1,0 +1,935 @@
+//! What every zoo host is put through, written once: the three renders
+//! (the host as it is, the host with the two-line retrofit, the host at 4x
+//! width and height box-filtered down), the read-backs, the GL state
+//! snapshot around the retrofit's calls and the checks.
+//!
+//! Nothing here is host code: the hosts in the sibling modules are written
+//! the way their engines are, with raw glow calls; this module only drives
+//! them through [`ZooHost`].
+
+use deferred_msaa::gl::live_objects;
+use deferred_msaa::{Frame, MsaaRetrofit, RetrofitOptions};
+use deferred_msaa_lab::bench::{HALO_THRESHOLD, downsample_srgb};
+use deferred_msaa_lab::compare::{flip, halo_pixels, luminance};
+use deferred_msaa_lab::context::HeadlessContext;
+use glow::HasContext;
+use image::RgbaImage;
+
+/// The test image size (the supersampled reference is [`SS`] times each way).
+pub const W: u32 = 96;
+/// The test image height.
+pub const H: u32 = 64;
+/// The supersampling factor of the reference, each way (16 samples a pixel).
+pub const SS: u32 = 4;
+
+/// How one channel of a read-back plane is stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Channel {
+    /// `GL_UNSIGNED_BYTE` of a normalised format.
+    Unorm8,
+    /// `GL_SHORT` of a signed normalised format.
+    Snorm16,
+    /// `GL_HALF_FLOAT`.
+    F16,
+    /// `GL_FLOAT`.
+    F32,
+    /// `GL_UNSIGNED_BYTE` of an integer format (or stencil).
+    U8,
+    /// `GL_UNSIGNED_INT` of an integer format.
+    U32,
+}
+
+impl Channel {
+    /// Bytes per channel.
+    pub fn size(self) -> usize {
+        match self {
+            Channel::Unorm8 | Channel::U8 => 1,
+            Channel::Snorm16 | Channel::F16 => 2,
+            Channel::F32 | Channel::U32 => 4,
+        }
+    }
+
+    /// The GL pixel type to read it with.
+    pub fn gl_type(self) -> u32 {
+        match self {
+            Channel::Unorm8 | Channel::U8 => glow::UNSIGNED_BYTE,
+            Channel::Snorm16 => glow::SHORT,
+            Channel::F16 => glow::HALF_FLOAT,
+            Channel::F32 => glow::FLOAT,
+            Channel::U32 => glow::UNSIGNED_INT,
+        }
+    }
+
+    fn decode(self, b: &[u8]) -> f64 {
+        match self {
+            Channel::Unorm8 => b[0] as f64 / 255.0,
+            Channel::Snorm16 => (i16::from_ne_bytes([b[0], b[1]]) as f64 / 32767.0).max(-1.0),
+            Channel::F16 => half::f16::from_ne_bytes([b[0], b[1]]).to_f64(),
+            Channel::F32 => f32::from_ne_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Channel::U8 => b[0] as f64,
+            Channel::U32 => u32::from_ne_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        }
+    }
+
+    /// The slack allowed when a resolved value is compared with a range of
+    /// no-MSAA values: one step of the format (rounding on both sides).
+    fn slack(self, v: f64) -> f64 {
+        match self {
+            Channel::Unorm8 => 1.0 / 255.0,
+            Channel::Snorm16 => 1.0 / 32767.0,
+            Channel::F16 => v.abs().max(1e-3) / 1024.0,
+            Channel::F32 => v.abs().max(1e-6) * 1e-5,
+            Channel::U8 | Channel::U32 => 0.0,
+        }
+    }
+}
+
+/// What a plane must hold after the resolve, compared with the host's own
+/// no-MSAA render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Check {
+    /// The host writes one value over each face (a flat colour, an id, a
+    /// flat normal, the stencil reference): bit for bit equal inside faces.
+    /// These planes also say which face a pixel belongs to.
+    Constant,
+    /// Varies over a face (position, depth): inside faces, within the range
+    /// of the no-MSAA render's 3x3 neighbourhood (one format step of slack).
+    Smooth,
+    /// Not written by the geometry pass: bit for bit equal everywhere.
+    Untouched,
+}
+
+/// One attachment read back in its own format.
+#[derive(Clone, Debug)]
+pub struct Plane {
+    /// The attachment and its format, for messages.
+    pub name: String,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// The channel encoding.
+    pub channel: Channel,
+    /// Channels per pixel.
+    pub channels: usize,
+    /// The bytes as GL returned them (rows bottom to top, packed).
+    pub raw: Vec<u8>,
+    /// What the resolve must leave in it.
+    pub check: Check,
+}
+
+impl Plane {
+    fn bytes_per_pixel(&self) -> usize {
+        self.channel.size() * self.channels
+    }
+
+    /// The bytes of pixel `(x, y)` (GL's origin: bottom left).
+    pub fn texel(&self, x: u32, y: u32) -> &[u8] {
+        let n = self.bytes_per_pixel();
+        let i = (y * self.width + x) as usize * n;
+        &self.raw[i..i + n]
+    }
+
+    /// The decoded channels of pixel `(x, y)`.
+    pub fn values(&self, x: u32, y: u32) -> Vec<f64> {
+        let s = self.channel.size();
+        self.texel(x, y)
+            .chunks_exact(s)
+            .map(|c| self.channel.decode(c))
+            .collect()
+    }
+}
+
+/// A description of how to read one attachment.
+pub struct Read<'a> {
+    /// Plane name (attachment and format), e.g. `"GL_COLOR_ATTACHMENT0 (GL_RGBA16F)"`.
+    pub name: &'a str,
+    /// The pixel format to read with (`GL_RGBA`, `GL_RED_INTEGER`, `GL_DEPTH_COMPONENT`, …).
+    pub format: u32,
+    /// Channels in that format.
+    pub channels: usize,
+    /// Their encoding.
+    pub channel: Channel,
+    /// What the resolve must leave in it.
+    pub check: Check,
+}
+
+fn pack_scope<T>(gl: &glow::Context, f: impl FnOnce() -> T) -> T {
+    unsafe {
+        let pack = gl.get_parameter_i32(glow::PACK_ALIGNMENT);
+        gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
+        let out = f();
+        gl.pixel_store_i32(glow::PACK_ALIGNMENT, pack);
+        out
+    }
+}
+
+/// `glGetTexImage` of level 0 of a 2D texture, leaving the active unit's binding as it was.
+pub fn read_texture(
+    gl: &glow::Context,
+    texture: glow::Texture,
+    width: u32,
+    height: u32,
+    r: Read,
+) -> Plane {
+    read_texture_layers(gl, glow::TEXTURE_2D, texture, width, height, 1, 0, r)
+}
+
+/// `glGetTexImage` of a whole 2D array texture, keeping layer `layer`.
+#[allow(clippy::too_many_arguments)]
+pub fn read_texture_layers(
+    gl: &glow::Context,
+    target: u32,
+    texture: glow::Texture,
+    width: u32,
+    height: u32,
+    layers: u32,
+    layer: u32,
+    r: Read,
+) -> Plane {
+    let per_layer = (width * height) as usize * r.channels * r.channel.size();
+    let mut raw = vec![0u8; per_layer * layers as usize];
+    pack_scope(gl, || unsafe {
+        let binding = match target {
+            glow::TEXTURE_2D_ARRAY => glow::TEXTURE_BINDING_2D_ARRAY,
+            _ => glow::TEXTURE_BINDING_2D,
+        };
+        let previous = gl.get_parameter_i32(binding) as u32;
+        gl.bind_texture(target, Some(texture));
+        gl.get_tex_image(
+            target,
+            0,
+            r.format,
+            r.channel.gl_type(),
+            glow::PixelPackData::Slice(Some(&mut raw)),
+        );
+        gl.bind_texture(
+            target,
+            std::num::NonZeroU32::new(previous).map(glow::NativeTexture),
+        );
+    });
+    assert_eq!(
+        unsafe { gl.get_error() },
+        glow::NO_ERROR,
+        "reading {}",
+        r.name
+    );
+    let start = per_layer * layer as usize;
+    Plane {
+        name: r.name.to_string(),
+        width,
+        height,
+        channel: r.channel,
+        channels: r.channels,
+        raw: raw[start..start + per_layer].to_vec(),
+        check: r.check,
+    }
+}
+
+/// `glReadPixels` of a framebuffer: colour attachment `read_buffer`, or
+/// (with `None`) its depth or stencil, as `r.format` says. The read
+/// framebuffer binding is left as it was.
+pub fn read_framebuffer(
+    gl: &glow::Context,
+    fbo: glow::Framebuffer,
+    read_buffer: Option<u32>,
+    width: u32,
+    height: u32,
+    r: Read,
+) -> Plane {
+    let mut raw = vec![0u8; (width * height) as usize * r.channels * r.channel.size()];
+    pack_scope(gl, || unsafe {
+        let previous = gl.get_parameter_i32(glow::READ_FRAMEBUFFER_BINDING) as u32;
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(fbo));
+        let previous_buffer = gl.get_parameter_i32(glow::READ_BUFFER) as u32;
+        if let Some(b) = read_buffer {
+            gl.read_buffer(b);
+        }
+        gl.read_pixels(
+            0,
+            0,
+            width as i32,
+            height as i32,
+            r.format,
+            r.channel.gl_type(),
+            glow::PixelPackData::Slice(Some(&mut raw)),
+        );
+        gl.read_buffer(previous_buffer);
+        gl.bind_framebuffer(
+            glow::READ_FRAMEBUFFER,
+            std::num::NonZeroU32::new(previous).map(glow::NativeFramebuffer),
+        );
+    });
+    assert_eq!(
+        unsafe { gl.get_error() },
+        glow::NO_ERROR,
+        "reading {}",
+        r.name
+    );
+    Plane {
+        name: r.name.to_string(),
+        width,
+        height,
+        channel: r.channel,
+        channels: r.channels,
+        raw,
+        check: r.check,
+    }
+}
+
+/// An 8-bit RGBA image of a framebuffer's colour attachment 0, top row first.
+pub fn read_image(
+    gl: &glow::Context,
+    fbo: glow::Framebuffer,
+    width: u32,
+    height: u32,
+) -> RgbaImage {
+    let plane = read_framebuffer(
+        gl,
+        fbo,
+        Some(glow::COLOR_ATTACHMENT0),
+        width,
+        height,
+        Read {
+            name: "output",
+            format: glow::RGBA,
+            channels: 4,
+            channel: Channel::Unorm8,
+            check: Check::Smooth,
+        },
+    );
+    RgbaImage::from_fn(width, height, |x, y| {
+        let t = plane.texel(x, height - 1 - y);
+        image::Rgba([t[0], t[1], t[2], 255])
+    })
+}
+
+/// The engine's own shader helper: compile and link, panicking with the log.
+pub fn program(gl: &glow::Context, label: &str, vertex: &str, fragment: &str) -> glow::Program {
+    unsafe {
+        let program = gl.create_program().expect("program");
+        let mut shaders = Vec::new();
+        for (stage, source) in [
+            (glow::VERTEX_SHADER, vertex),
+            (glow::FRAGMENT_SHADER, fragment),
+        ] {
+            let shader = gl.create_shader(stage).expect("shader");
+            gl.shader_source(shader, source);
+            gl.compile_shader(shader);
+            assert!(
+                gl.get_shader_compile_status(shader),
+                "{label}: {}",
+                gl.get_shader_info_log(shader)
+            );
+            gl.attach_shader(program, shader);
+            shaders.push(shader);
+        }
+        gl.link_program(program);
+        assert!(
+            gl.get_program_link_status(program),
+            "{label}: {}",
+            gl.get_program_info_log(program)
+        );
+        for s in shaders {
+            gl.detach_shader(program, s);
+            gl.delete_shader(s);
+        }
+        program
+    }
+}
+
+/// A host engine in the zoo, as the harness drives it.
+pub trait ZooHost: Sized {
+    /// Its G-buffer at `width` x `height`, its programs, its scene upload.
+    /// It binds the G-buffer textures its lighting reads to texture units
+    /// here, once.
+    fn new(gl: &glow::Context, width: u32, height: u32) -> Self;
+    /// The host's G-buffer framebuffer.
+    fn gbuffer(&self) -> glow::Framebuffer;
+    /// The framebuffer its lighting writes (8-bit RGBA colour attachment 0).
+    fn screen(&self) -> glow::Framebuffer;
+    /// Texture units `0..units()` are the host's: the harness leaves them alone.
+    fn units(&self) -> u32;
+    /// The unchanged geometry pass, into `fbo` (its own, or the retrofit's).
+    fn geometry_pass(&self, gl: &glow::Context, fbo: glow::Framebuffer);
+    /// The unchanged lighting pass, into [`ZooHost::screen`].
+    fn lighting_pass(&self, gl: &glow::Context);
+    /// Every G-buffer attachment, read back in its own format.
+    fn read_gbuffer(&self, gl: &glow::Context) -> Vec<Plane>;
+    /// Delete everything the host made.
+    fn destroy(self, gl: &glow::Context);
+}
+
+/// The harness's own textures, bound to units the host does not use so
+/// that the state check covers every target on every unit.
+struct Clutter {
+    texture_2d: glow::Texture,
+    array: glow::Texture,
+    multisample: glow::Texture,
+}
+
+impl Clutter {
+    fn new(gl: &glow::Context) -> Clutter {
+        unsafe {
+            let previous = gl.get_parameter_i32(glow::ACTIVE_TEXTURE) as u32;
+            gl.active_texture(glow::TEXTURE0 + 31);
+            let texture_2d = gl.create_texture().unwrap();
+            gl.bind_texture(glow::TEXTURE_2D, Some(texture_2d));
+            gl.tex_image_2d(
+                glow::TEXTURE_2D,
+                0,
+                glow::RGBA8 as i32,
+                4,
+                4,
+                0,
+                glow::RGBA,
+                glow::UNSIGNED_BYTE,
+                glow::PixelUnpackData::Slice(None),
+            );
+            gl.bind_texture(glow::TEXTURE_2D, None);
+            let array = gl.create_texture().unwrap();
+            gl.bind_texture(glow::TEXTURE_2D_ARRAY, Some(array));
+            gl.tex_image_3d(
+                glow::TEXTURE_2D_ARRAY,
+                0,
+                glow::RGBA8 as i32,
+                4,
+                4,
+                2,
+                0,
+                glow::RGBA,
+                glow::UNSIGNED_BYTE,
+                glow::PixelUnpackData::Slice(None),
+            );
+            gl.bind_texture(glow::TEXTURE_2D_ARRAY, None);
+            let multisample = gl.create_texture().unwrap();
+            gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, Some(multisample));
+            gl.tex_image_2d_multisample(
+                glow::TEXTURE_2D_MULTISAMPLE,
+                4,
+                glow::RGBA8 as i32,
+                4,
+                4,
+                true,
+            );
+            gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
+            gl.active_texture(previous);
+            Clutter {
+                texture_2d,
+                array,
+                multisample,
+            }
+        }
+    }
+
+    /// Leave the state a busy engine leaves when it calls the resolve:
+    /// nothing a correct resolve may depend on, everything it must restore.
+    fn apply(&self, ctx: &HeadlessContext, host: &impl ZooHost) {
+        let gl = ctx.gl();
+        let base = host.units();
+        assert!(base <= 10, "the host uses units below 10");
+        unsafe {
+            // Distinct read and draw bindings: the draw one is the geometry pass's.
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(host.screen()));
+            for (unit, target, texture) in [
+                (12, glow::TEXTURE_2D_ARRAY, self.array),
+                (13, glow::TEXTURE_2D_MULTISAMPLE, self.multisample),
+                (14, glow::TEXTURE_2D, self.texture_2d),
+                (15, glow::TEXTURE_2D_ARRAY, self.array),
+                (15, glow::TEXTURE_2D_MULTISAMPLE, self.multisample),
+                (15, glow::TEXTURE_2D, self.texture_2d),
+            ] {
+                gl.active_texture(glow::TEXTURE0 + unit);
+                gl.bind_texture(target, Some(texture));
+            }
+            gl.active_texture(glow::TEXTURE0 + 11);
+            gl.scissor(1, 2, 7, 5);
+            gl.clear_color(0.125, 0.25, 0.375, 0.5);
+            gl.clear_depth_f64(0.75);
+            gl.clear_stencil(5);
+            gl.enable(glow::SAMPLE_ALPHA_TO_COVERAGE);
+            gl.enable(glow::SAMPLE_MASK);
+            sample_mask(ctx, 0xFFFF_FFFF);
+            gl.blend_func_separate(
+                glow::SRC_ALPHA,
+                glow::ONE_MINUS_SRC_ALPHA,
+                glow::ONE,
+                glow::ZERO,
+            );
+            if !gl.is_enabled(glow::STENCIL_TEST) {
+                gl.stencil_func_separate(glow::FRONT, glow::GEQUAL, 3, 0x7F);
+                gl.stencil_func_separate(glow::BACK, glow::LESS, 2, 0x3F);
+                gl.stencil_op_separate(glow::FRONT, glow::KEEP, glow::INCR, glow::INVERT);
+                gl.stencil_op_separate(glow::BACK, glow::DECR, glow::ZERO, glow::REPLACE);
+                gl.stencil_mask_separate(glow::FRONT, 0xF0);
+                gl.stencil_mask_separate(glow::BACK, 0x0F);
+            }
+        }
+    }
+
+    /// Put back GL's defaults for what [`Clutter::apply`] set, so that the
+    /// next host's geometry pass starts as the first one did.
+    fn reset(&self, gl: &glow::Context) {
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+            for unit in 12..16 {
+                gl.active_texture(glow::TEXTURE0 + unit);
+                gl.bind_texture(glow::TEXTURE_2D, None);
+                gl.bind_texture(glow::TEXTURE_2D_ARRAY, None);
+                gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
+            }
+            gl.active_texture(glow::TEXTURE0);
+            gl.clear_color(0.0, 0.0, 0.0, 0.0);
+            gl.clear_depth_f64(1.0);
+            gl.clear_stencil(0);
+            gl.disable(glow::SAMPLE_ALPHA_TO_COVERAGE);
+            gl.disable(glow::SAMPLE_MASK);
+            gl.blend_func(glow::ONE, glow::ZERO);
+            gl.stencil_func(glow::ALWAYS, 0, 0xFF);
+            gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+            gl.stencil_mask(0xFF);
+        }
+    }
+
+    fn destroy(self, gl: &glow::Context) {
+        unsafe {
+            gl.delete_texture(self.texture_2d);
+            gl.delete_texture(self.array);
+            gl.delete_texture(self.multisample);
+        }
+    }
+}
+
+/// `glSampleMaski(0, mask)` (glow has no wrapper for it).
+fn sample_mask(ctx: &HeadlessContext, mask: u32) {
+    let f = ctx.get_proc_address("glSampleMaski");
+    assert!(!f.is_null(), "glSampleMaski");
+    // SAFETY: glSampleMaski's signature, from a GL 3.2+ core context.
+    let f: extern "system" fn(u32, u32) = unsafe { std::mem::transmute(f) };
+    f(0, mask);
+}
+
+/// The host state the retrofit's calls must leave as they found it, by name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GlState(Vec<(String, Vec<f64>)>);
+
+impl GlState {
+    /// Read it (the active unit is walked and put back).
+    pub fn capture(gl: &glow::Context) -> GlState {
+        let mut s = Vec::new();
+        unsafe {
+            let int = |e: u32| vec![gl.get_parameter_i32(e) as f64];
+            let ints = |e: u32, n: usize| {
+                let mut v = vec![0i32; n];
+                gl.get_parameter_i32_slice(e, &mut v);
+                v.into_iter().map(f64::from).collect::<Vec<_>>()
+            };
+            let floats = |e: u32, n: usize| {
+                let mut v = vec![0f32; n];
+                gl.get_parameter_f32_slice(e, &mut v);
+                v.into_iter().map(f64::from).collect::<Vec<_>>()
+            };
+            let on = |e: u32| vec![gl.is_enabled(e) as u8 as f64];
+            let mut push = |name: &str, v: Vec<f64>| s.push((name.to_string(), v));
+            push(
+                "GL_READ_FRAMEBUFFER_BINDING",
+                int(glow::READ_FRAMEBUFFER_BINDING),
+            );
+            push(
+                "GL_DRAW_FRAMEBUFFER_BINDING",
+                int(glow::DRAW_FRAMEBUFFER_BINDING),
+            );
+            push("GL_RENDERBUFFER_BINDING", int(glow::RENDERBUFFER_BINDING));
+            push("GL_FRAMEBUFFER_SRGB", on(glow::FRAMEBUFFER_SRGB));
+            push("GL_SAMPLE_MASK", on(glow::SAMPLE_MASK));
+            push(
+                "GL_SAMPLE_MASK_VALUE",
+                vec![gl.get_parameter_indexed_i32(glow::SAMPLE_MASK_VALUE, 0) as u32 as f64],
+            );
+            push(
+                "GL_SAMPLE_ALPHA_TO_COVERAGE",
+                on(glow::SAMPLE_ALPHA_TO_COVERAGE),
+            );
+            push("GL_RASTERIZER_DISCARD", on(glow::RASTERIZER_DISCARD));
+            push("GL_MULTISAMPLE", on(glow::MULTISAMPLE));
+            let active = gl.get_parameter_i32(glow::ACTIVE_TEXTURE);
+            push("GL_ACTIVE_TEXTURE", vec![active as f64]);
+            for unit in 0..16u32 {
+                gl.active_texture(glow::TEXTURE0 + unit);
+                for (name, e) in [
+                    ("GL_TEXTURE_BINDING_2D", glow::TEXTURE_BINDING_2D),
+                    (
+                        "GL_TEXTURE_BINDING_2D_ARRAY",
+                        glow::TEXTURE_BINDING_2D_ARRAY,
+                    ),
+                    (
+                        "GL_TEXTURE_BINDING_2D_MULTISAMPLE",
+                        glow::TEXTURE_BINDING_2D_MULTISAMPLE,
+                    ),
+                ] {
+                    s.push((format!("{name} of unit {unit}"), int(e)));
+                }
+            }
+            gl.active_texture(active as u32);
+            let mut push = |name: &str, v: Vec<f64>| s.push((name.to_string(), v));
+            push("GL_SCISSOR_BOX", ints(glow::SCISSOR_BOX, 4));
+            push("GL_SCISSOR_TEST", on(glow::SCISSOR_TEST));
+            push("GL_VIEWPORT", ints(glow::VIEWPORT, 4));
+            push("GL_CURRENT_PROGRAM", int(glow::CURRENT_PROGRAM));
+            push("GL_VERTEX_ARRAY_BINDING", int(glow::VERTEX_ARRAY_BINDING));
+            push("GL_ARRAY_BUFFER_BINDING", int(glow::ARRAY_BUFFER_BINDING));
+            for (name, e) in [
+                ("GL_DEPTH_TEST", glow::DEPTH_TEST),
+                ("GL_STENCIL_TEST", glow::STENCIL_TEST),
+                ("GL_BLEND", glow::BLEND),
+                ("GL_CULL_FACE", glow::CULL_FACE),
+            ] {
+                push(name, on(e));
+            }
+            push("GL_DEPTH_FUNC", int(glow::DEPTH_FUNC));
+            push("GL_DEPTH_WRITEMASK", int(glow::DEPTH_WRITEMASK));
+            for (name, e) in [
+                ("GL_STENCIL_FUNC", glow::STENCIL_FUNC),
+                ("GL_STENCIL_REF", glow::STENCIL_REF),
+                ("GL_STENCIL_VALUE_MASK", glow::STENCIL_VALUE_MASK),
+                ("GL_STENCIL_FAIL", glow::STENCIL_FAIL),
+                ("GL_STENCIL_PASS_DEPTH_FAIL", glow::STENCIL_PASS_DEPTH_FAIL),
+                ("GL_STENCIL_PASS_DEPTH_PASS", glow::STENCIL_PASS_DEPTH_PASS),
+                ("GL_STENCIL_WRITEMASK", glow::STENCIL_WRITEMASK),
+                ("GL_STENCIL_BACK_FUNC", glow::STENCIL_BACK_FUNC),
+                ("GL_STENCIL_BACK_REF", glow::STENCIL_BACK_REF),
+                ("GL_STENCIL_BACK_VALUE_MASK", glow::STENCIL_BACK_VALUE_MASK),
+                ("GL_STENCIL_BACK_FAIL", glow::STENCIL_BACK_FAIL),
+                (
+                    "GL_STENCIL_BACK_PASS_DEPTH_FAIL",
+                    glow::STENCIL_BACK_PASS_DEPTH_FAIL,
+                ),
+                (
+                    "GL_STENCIL_BACK_PASS_DEPTH_PASS",
+                    glow::STENCIL_BACK_PASS_DEPTH_PASS,
+                ),
+                ("GL_STENCIL_BACK_WRITEMASK", glow::STENCIL_BACK_WRITEMASK),
+                ("GL_BLEND_SRC_RGB", glow::BLEND_SRC_RGB),
+                ("GL_BLEND_DST_RGB", glow::BLEND_DST_RGB),
+                ("GL_BLEND_SRC_ALPHA", glow::BLEND_SRC_ALPHA),
+                ("GL_BLEND_DST_ALPHA", glow::BLEND_DST_ALPHA),
+                ("GL_BLEND_EQUATION_RGB", glow::BLEND_EQUATION_RGB),
+                ("GL_CULL_FACE_MODE", glow::CULL_FACE_MODE),
+                ("GL_FRONT_FACE", glow::FRONT_FACE),
+                ("GL_PACK_ALIGNMENT", glow::PACK_ALIGNMENT),
+                ("GL_UNPACK_ALIGNMENT", glow::UNPACK_ALIGNMENT),
+                // The draw buffers of the bound draw framebuffer.
+                ("GL_DRAW_BUFFER0", glow::DRAW_BUFFER0),
+                ("GL_DRAW_BUFFER1", glow::DRAW_BUFFER1),
+                ("GL_DRAW_BUFFER2", glow::DRAW_BUFFER2),
+                ("GL_DRAW_BUFFER3", glow::DRAW_BUFFER3),
+            ] {
+                push(name, int(e));
+            }
+            push("GL_COLOR_WRITEMASK", ints(glow::COLOR_WRITEMASK, 4));
+            push("GL_COLOR_CLEAR_VALUE", floats(glow::COLOR_CLEAR_VALUE, 4));
+            push("GL_DEPTH_CLEAR_VALUE", floats(glow::DEPTH_CLEAR_VALUE, 1));
+            push("GL_STENCIL_CLEAR_VALUE", int(glow::STENCIL_CLEAR_VALUE));
+        }
+        assert_eq!(
+            unsafe { gl.get_error() },
+            glow::NO_ERROR,
+            "reading GL state"
+        );
+        GlState(s)
+    }
+
+    /// `"NAME: before → after"` for each difference.
+    pub fn differences(&self, after: &GlState) -> Vec<String> {
+        self.0
+            .iter()
+            .zip(&after.0)
+            .filter(|(a, b)| a.1 != b.1)
+            .map(|(a, b)| format!("{}: {:?} -> {:?}", a.0, a.1, b.1))
+            .collect()
+    }
+}
+
+/// Everything one zoo run measured.
+#[derive(Debug)]
+pub struct Outcome {
+    /// The host's name.
+    pub host: String,
+    /// FLIP mean of the host's no-MSAA image against the reference.
+    pub flip_none: f32,
+    /// FLIP mean of the retrofitted image against the reference.
+    pub flip_resolved: f32,
+    /// Halo pixels (against the reference) of each image.
+    pub halos_none: usize,
+    /// Halo pixels of the retrofitted image.
+    pub halos_resolved: usize,
+    /// Halo pixels of the retrofitted image where the no-MSAA image has none.
+    pub new_halos: usize,
+    /// Inside-face pixels compared.
+    pub inside: usize,
+    /// Distinct faces (by their constant planes) with inside pixels.
+    pub faces: usize,
+    /// Every failed check but the halo check, one line each.
+    pub failures: Vec<String>,
+    /// The halo check's failure: new halo pixels, if any.
+    pub halo_failure: Option<String>,
+}
+
+impl Outcome {
+    /// Print the numbers and panic with every failure.
+    pub fn assert_ok(&self) {
+        eprintln!(
+            "{}: FLIP none {:.4} resolved {:.4} (reference 0); halos none {} resolved {} new {}; {} inside pixels over {} faces",
+            self.host,
+            self.flip_none,
+            self.flip_resolved,
+            self.halos_none,
+            self.halos_resolved,
+            self.new_halos,
+            self.inside,
+            self.faces
+        );
+        assert!(
+            self.failures.is_empty(),
+            "{}: {} failed checks:\n{}",
+            self.host,
+            self.failures.len(),
+            self.failures.join("\n")
+        );
+    }
+}
+
+/// The key of pixel `(x, y)`: the bytes of every constant plane there.
+fn face_key(planes: &[Plane], x: u32, y: u32) -> Vec<u8> {
+    planes
+        .iter()
+        .filter(|p| p.check == Check::Constant)
+        .flat_map(|p| p.texel(x, y).to_vec())
+        .collect()
+}
+
+/// Pixels whose 3x3 neighbourhood is one face in the no-MSAA render, and
+/// how many faces that covers.
+fn inside_pixels(planes: &[Plane]) -> (Vec<(u32, u32)>, usize) {
+    let (w, h) = (planes[0].width, planes[0].height);
+    let mut inside = Vec::new();
+    let mut keys = std::collections::HashSet::new();
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let k = face_key(planes, x, y);
+            let same = (0..9).all(|i| face_key(planes, x + i % 3 - 1, y + i / 3 - 1) == k);
+            if same {
+                inside.push((x, y));
+                keys.insert(k);
+            }
+        }
+    }
+    (inside, keys.len())
+}
+
+/// Compare the retrofitted planes with the no-MSAA ones.
+fn compare_planes(
+    none: &[Plane],
+    resolved: &[Plane],
+    failures: &mut Vec<String>,
+) -> (usize, usize) {
+    assert_eq!(none.len(), resolved.len());
+    let (inside, faces) = inside_pixels(none);
+    for (a, b) in none.iter().zip(resolved) {
+        let mut bad = 0usize;
+        let mut first = None;
+        let pixels: Vec<(u32, u32)> = match a.check {
+            Check::Untouched => (0..a.height)
+                .flat_map(|y| (0..a.width).map(move |x| (x, y)))
+                .collect(),
+            _ => inside.clone(),
+        };
+        for &(x, y) in &pixels {
+            let ok = match a.check {
+                Check::Constant | Check::Untouched => a.texel(x, y) == b.texel(x, y),
+                Check::Smooth => {
+                    let got = b.values(x, y);
+                    (0..a.channels).all(|c| {
+                        let around: Vec<f64> = (0..9)
+                            .map(|i| a.values(x + i % 3 - 1, y + i / 3 - 1)[c])
+                            .collect();
+                        let lo = around.iter().copied().fold(f64::INFINITY, f64::min);
+                        let hi = around.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                        let slack = a.channel.slack(lo.abs().max(hi.abs()));
+                        got[c] >= lo - slack && got[c] <= hi + slack
+                    })
+                }
+            };
+            if !ok {
+                bad += 1;
+                first.get_or_insert((x, y));
+            }
+        }
+        if let Some((x, y)) = first {
+            let what = match a.check {
+                Check::Constant => "bit for bit inside faces",
+                Check::Smooth => "within the 3x3 range inside faces",
+                Check::Untouched => "untouched everywhere",
+            };
+            failures.push(format!(
+                "{}: {bad} of {} pixels differ from the host's own render ({what}); first at ({x}, {y}) from the bottom: no MSAA {:?} = {:?}, retrofit {:?} = {:?}",
+                a.name,
+                pixels.len(),
+                a.texel(x, y),
+                a.values(x, y),
+                b.texel(x, y),
+                b.values(x, y),
+            ));
+        }
+    }
+    (inside.len(), faces)
+}
+
+/// The three renders of host `T` and every check. `options` and the two
+/// integration lines are all that differs between the host without MSAA
+/// and with it.
+pub fn run<T: ZooHost>(
+    ctx: &HeadlessContext,
+    name: &str,
+    options: &RetrofitOptions,
+    frame: impl Fn(&T) -> Frame,
+) -> Outcome {
+    let gl = ctx.gl();
+    let clutter = Clutter::new(gl);
+    let mut failures = Vec::new();
+
+    // The host's own 16x supersampled image: the same host at 4x each way.
+    let reference = {
+        let host = T::new(gl, W * SS, H * SS);
+        host.geometry_pass(gl, host.gbuffer());
+        clutter.apply(ctx, &host);
+        host.lighting_pass(gl);
+        clutter.reset(gl);
+        let big = read_image(gl, host.screen(), W * SS, H * SS);
+        host.destroy(gl);
+        downsample_srgb(&big, SS).expect("downsample")
+    };
+
+    // The host as it is.
+    let (none_planes, none_image) = {
+        let host = T::new(gl, W, H);
+        host.geometry_pass(gl, host.gbuffer());
+        clutter.apply(ctx, &host);
+        let planes = host.read_gbuffer(gl);
+        host.lighting_pass(gl);
+        clutter.reset(gl);
+        let image = read_image(gl, host.screen(), W, H);
+        host.destroy(gl);
+        (planes, image)
+    };
+
+    // The host with the two integration lines.
+    let host = T::new(gl, W, H);
+    let before_new = GlState::capture(gl);
+    let mut msaa = match MsaaRetrofit::new(gl, host.gbuffer(), options) {
+        Ok(m) => m,
+        Err(e) => {
+            host.destroy(gl);
+            clutter.destroy(gl);
+            panic!("{name}: the retrofit refuses the host's G-buffer: {e}");
+        }
+    };
+    for d in before_new.differences(&GlState::capture(gl)) {
+        failures.push(format!("MsaaRetrofit::new changed the host's state: {d}"));
+    }
+    host.geometry_pass(gl, msaa.framebuffer());
+    clutter.apply(ctx, &host);
+    let before = GlState::capture(gl);
+    let resolved = msaa.resolve(gl, &frame(&host));
+    let after = GlState::capture(gl);
+    if let Err(e) = &resolved {
+        failures.push(format!("resolve failed: {e}"));
+    }
+    for d in before.differences(&after) {
+        failures.push(format!("resolve changed the host's state: {d}"));
+    }
+    let planes = host.read_gbuffer(gl);
+    host.lighting_pass(gl);
+    clutter.reset(gl);
+    let image = read_image(gl, host.screen(), W, H);
+    msaa.destroy(gl);
+    let live = live_objects();
+    if live.total() != 0 {
+        failures.push(format!("GL objects left after destroy: {live:?}"));
+    }
+    host.destroy(gl);
+    clutter.destroy(gl);
+    let error = unsafe { gl.get_error() };
+    if error != glow::NO_ERROR {
+        failures.push(format!("GL error 0x{error:04X} at the end"));
+    }
+
+    let (inside, faces) = compare_planes(&none_planes, &planes, &mut failures);
+    if inside < (W * H / 3) as usize || faces < 5 {
+        failures.push(format!(
+            "only {inside} inside pixels over {faces} faces: the scene does not test the planes"
+        ));
+    }
+
+    let flip_none = flip(&reference, &none_image).expect("flip").mean;
+    let flip_resolved = flip(&reference, &image).expect("flip").mean;
+    if flip_resolved >= flip_none {
+        failures.push(format!(
+            "the retrofitted image is no closer to the supersampled one than the host's own: FLIP {flip_resolved:.4} vs {flip_none:.4}"
+        ));
+    }
+    let halos_none = halo_pixels(&reference, &none_image, HALO_THRESHOLD);
+    let halos_resolved = halo_pixels(&reference, &image, HALO_THRESHOLD);
+    // The retrofitted image with the no-MSAA image's halo pixels put back
+    // to the reference: what halos remain are new.
+    let masked = RgbaImage::from_fn(W, H, |x, y| {
+        let (r, n) = (reference.get_pixel(x, y), none_image.get_pixel(x, y));
+        if luminance(n) - luminance(r) > HALO_THRESHOLD {
+            *r
+        } else {
+            *image.get_pixel(x, y)
+        }
+    });
+    let new_halos = halo_pixels(&reference, &masked, HALO_THRESHOLD);
+    let mut halo_failure = None;
+    if new_halos > 0 {
+        halo_failure = Some(format!(
+            "{new_halos} halo pixels (luminance over the reference by more than {HALO_THRESHOLD}) that the host's own image does not have"
+        ));
+    }
+    if std::env::var_os("ZOO_DUMP").is_some() {
+        let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("zoo");
+        std::fs::create_dir_all(&dir).unwrap();
+        reference
+            .save(dir.join(format!("{name}-reference.png")))
+            .unwrap();
+        none_image
+            .save(dir.join(format!("{name}-none.png")))
+            .unwrap();
+        image
+            .save(dir.join(format!("{name}-resolved.png")))
+            .unwrap();
+    }
+    Outcome {
+        host: name.to_string(),
+        flip_none,
+        flip_resolved,
+        halos_none,
+        halos_resolved,
+        new_halos,
+        halo_failure,
+        inside,
+        faces,
+        failures,
+    }
+}
+
+/// Assert a refusal is the one-line typed error the brief asks for: it names
+/// `attachment` and the GL enum `gl_enum` by name, never in hex.
+pub fn assert_refusal(error: &deferred_msaa::Error, attachment: &str, gl_enum: &str) {
+    let text = error.to_string();
+    assert_eq!(text.lines().count(), 1, "one line: {text}");
+    assert!(text.contains(attachment), "names {attachment}: {text}");
+    assert!(text.contains(gl_enum), "names {gl_enum}: {text}");
+    assert!(!text.contains("0x"), "no enum in hex: {text}");
+}
