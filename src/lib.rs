@@ -2,7 +2,7 @@
 //!
 //! The lab on top of [`deferred_msaa`], the core a host engine links: a demo
 //! deferred renderer written as a host of the retrofit ([`renderer`]) with
-//! its scene-adaptive plan ([`plan`]), built-in scenes and glTF loading
+//! its scene-adaptive plan ([`renderer::plan`]), built-in scenes and glTF loading
 //! ([`scene`]), the image measures ([`compare`]), the error-against-time
 //! benchmark ([`bench`](mod@bench)), the per-sample dump ([`dump`]) and the
 //! `deferred-msaa` command line ([`cli`]). Headless contexts come from
@@ -18,7 +18,6 @@ pub mod cli;
 pub mod compare;
 pub mod dump;
 pub mod error;
-pub mod plan;
 pub mod renderer;
 pub mod scene;
 

@@ -8,7 +8,7 @@ mod common;
 use deferred_msaa::Error;
 use deferred_msaa_lab::gbuffer::{MemoryBudget, choose_samples, gbuffer_bytes, real_sample_count};
 use deferred_msaa_lab::gl::live_objects;
-use deferred_msaa_lab::plan::{Plan, PlanContext};
+use deferred_msaa_lab::renderer::plan::{Plan, PlanContext};
 use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
 use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
 use deferred_msaa_lab::scene::Scene;

@@ -557,9 +557,9 @@ fn viewer_runs_in_a_window_and_switches_live() {
     // sample count, every view round to the final image, orbit away and
     // back. The viewer fails on any blank frame. The views are the final
     // image, the attachments the scene-adaptive plan keeps, depth and complex.
-    let plan = deferred_msaa_lab::plan::Plan::for_scene(
+    let plan = deferred_msaa_lab::renderer::plan::Plan::for_scene(
         &Scene::load("builtin:box").expect("the built-in scene"),
-        &deferred_msaa_lab::plan::PlanContext {
+        &deferred_msaa_lab::renderer::plan::PlanContext {
             sample_counts: vec![4],
             driver_memory: None,
         },

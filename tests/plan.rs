@@ -8,7 +8,7 @@ mod common;
 use deferred_msaa_lab::compare;
 use deferred_msaa_lab::gbuffer::GBufferLayout;
 use deferred_msaa_lab::gl::{TextureRef, live_objects};
-use deferred_msaa_lab::plan::{Pass, Plan, PlanContext, SceneNeeds, SpecularResponse};
+use deferred_msaa_lab::renderer::plan::{Pass, Plan, PlanContext, SceneNeeds, SpecularResponse};
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
 use deferred_msaa_lab::resolve::{KeySource, ResolveSettings, ResolveSlot};

@@ -18,7 +18,7 @@
 //! uniform-pixel fast path). `+fxaa` after any entry runs the crate's FXAA
 //! after tonemapping: `median:hard+fxaa`, `none+fxaa`. `:full` after any
 //! method renders with every attachment of the layout instead of the
-//! scene-adaptive plan (see [`crate::plan`]): `median` against
+//! scene-adaptive plan (see [`crate::renderer::plan`]): `median` against
 //! `median:full` shows what the plan saves (its `gbuffer_bytes`) and costs.
 //!
 //! A run's `method` field in the report is the entry exactly as written.

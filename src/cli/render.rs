@@ -4,7 +4,7 @@ use super::CommonArgs;
 use crate::context::HeadlessContext;
 use crate::gbuffer::{GBufferLayout, MemoryBudget};
 use crate::gl::TextureRef;
-use crate::plan::{Plan, PlanContext};
+use crate::renderer::plan::{Plan, PlanContext};
 use crate::readback::{Readback, SampleImage};
 use crate::renderer::{AaMode, DepthMode, RenderOptions, Renderer, SparseOptions};
 use crate::resolve::{Region, ResolveMethod, ResolveSettings, Selection, Window};

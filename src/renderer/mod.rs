@@ -65,6 +65,7 @@
 //! depth function and the clear depth. Before allocating, the layout is
 //! checked against the scene's depth range ([`Renderer::warnings`]).
 
+pub mod plan;
 mod background;
 mod background_copy;
 mod complex_mask;
@@ -91,7 +92,7 @@ use crate::gl::{
     Attachment, Capabilities, Framebuffer, GpuTimer, Texture2d, TextureRef, TimerKind, VertexArray,
     check_error, framebuffer_status_name,
 };
-use crate::plan::{Pass, Plan, PlanContext, SceneNeeds};
+use plan::{Pass, Plan, PlanContext, SceneNeeds};
 use crate::resolve::{KeySource, ResolveSettings, ResolveSlot, SelectionFlag};
 use crate::retrofit::{MsaaRetrofit, PositionSpace, RetrofitOptions};
 use crate::scene::{Background, Camera, Light, Scene};
@@ -251,7 +252,7 @@ pub struct RenderOptions {
     /// and left cleared). Default: [`GBufferLayout::recommended`].
     pub layout: GBufferLayout,
     /// Build the G-buffer from the scene-adaptive [`Plan`]: `layout` less
-    /// what the scene does not need (see [`crate::plan`];
+    /// what the scene does not need (see [`plan`];
     /// [`Renderer::layout`] is what it became). `false`: `layout` as given.
     /// Default: `true`.
     pub adaptive: bool,
@@ -993,7 +994,7 @@ impl Renderer {
         &self.options
     }
 
-    /// The scene-adaptive plan in effect (see [`crate::plan`]).
+    /// The scene-adaptive plan in effect (see [`plan`]).
     pub fn plan(&self) -> &Plan {
         &self.plan
     }
