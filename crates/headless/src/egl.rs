@@ -443,7 +443,7 @@ fn open_display(lib: &EglLib) -> Result<OpenDisplay> {
     Err(Error::BackendUnavailable {
         backend: BACKEND,
         reason: format!(
-            "no headless EGL display ({}); {INSTALL_HINT}, or use --backend osmesa",
+            "no headless EGL display ({}); {INSTALL_HINT}, or use the OSMesa backend",
             reasons.join("; ")
         ),
     })
