@@ -12,7 +12,10 @@ use super::lighting::{AMBIENT, LIGHTING_FRAG, LightBatch, StandIns, set_batch_bl
 use super::pass::{LightTarget, draw_fullscreen};
 use super::tonemap::{EXPOSURE, TONEMAP_FRAG, WHITE};
 use crate::gl::FULLSCREEN_VERT;
-use crate::gl::{Buffer, Program, ShaderStage, TextureRef, VertexArray, check_error, preamble};
+use crate::gl::{
+    Buffer, Program, SamplesPassedQuery, ShaderStage, TextureRef, VertexArray, check_error,
+    preamble,
+};
 use crate::retrofit::MsaaRetrofit;
 use crate::{Error, Result};
 use glow::HasContext;
@@ -147,7 +150,7 @@ pub(crate) struct PerSampleLightingPass {
     program: Program,
     slots: GBufferSlots,
     lights: LightBlock,
-    query: Option<glow::Query>,
+    query: Option<SamplesPassedQuery>,
 }
 
 impl PerSampleLightingPass {
@@ -175,7 +178,7 @@ impl PerSampleLightingPass {
                 return Err(e);
             }
         };
-        let query = unsafe { gl.create_query() }.ok();
+        let query = SamplesPassedQuery::new(gl).ok();
         Ok(PerSampleLightingPass {
             program,
             slots,
@@ -265,7 +268,7 @@ impl PerSampleLightingPass {
         p.set_f32(gl, "u_white", WHITE);
         p.set_vec3(gl, "u_ambient", AMBIENT);
         self.lights.bind(gl);
-        let query = self.query.filter(|_| count);
+        let query = self.query.as_ref().filter(|_| count);
         for (index, block) in blocks.iter().enumerate() {
             self.lights.upload(gl, block);
             set_batch_blend(gl, index, false);
@@ -273,11 +276,11 @@ impl PerSampleLightingPass {
             p.set_i32(gl, "u_first_batch", i32::from(index == 0));
             let counted = query.filter(|_| index == 0);
             if let Some(q) = counted {
-                unsafe { gl.begin_query(glow::SAMPLES_PASSED, q) };
+                q.begin(gl);
             }
             draw_fullscreen(gl, vao);
-            if counted.is_some() {
-                unsafe { gl.end_query(glow::SAMPLES_PASSED) };
+            if let Some(q) = counted {
+                q.end(gl);
             }
         }
         LightBlock::unbind(gl);
@@ -289,7 +292,7 @@ impl PerSampleLightingPass {
             }
         }
         check_error(gl, "the per-sample lighting pass")?;
-        Ok(query.map(|q| u64::from(unsafe { gl.get_query_parameter_u32(q, glow::QUERY_RESULT) })))
+        Ok(query.map(|q| q.result(gl)))
     }
 
     /// Free the program, the buffer and the query.
@@ -297,7 +300,7 @@ impl PerSampleLightingPass {
         self.program.destroy(gl);
         self.lights.destroy(gl);
         if let Some(q) = self.query {
-            unsafe { gl.delete_query(q) };
+            q.destroy(gl);
         }
     }
 }

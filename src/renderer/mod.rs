@@ -65,7 +65,6 @@
 //! depth function and the clear depth. Before allocating, the layout is
 //! checked against the scene's depth range ([`Renderer::warnings`]).
 
-pub mod plan;
 mod background;
 mod background_copy;
 mod complex_mask;
@@ -79,6 +78,7 @@ mod lighting;
 mod lighting_per_sample;
 mod mesh;
 mod pass;
+pub mod plan;
 mod slow_path;
 mod sparse;
 mod targets;
@@ -92,7 +92,6 @@ use crate::gl::{
     Attachment, Capabilities, Framebuffer, GpuTimer, Texture2d, TextureRef, TimerKind, VertexArray,
     check_error, framebuffer_status_name,
 };
-use plan::{Pass, Plan, PlanContext, SceneNeeds};
 use crate::resolve::{KeySource, ResolveSettings, ResolveSlot, SelectionFlag};
 use crate::retrofit::{MsaaRetrofit, PositionSpace, RetrofitOptions};
 use crate::scene::{Background, Camera, Light, Scene};
@@ -112,6 +111,7 @@ use lighting::{LightingPass, StandIns, light_batches};
 use lighting_per_sample::{PerSampleLightingPass, SampleInputs};
 use mesh::GpuScene;
 use pass::{LightTarget, StencilSelect};
+use plan::{Pass, Plan, PlanContext, SceneNeeds};
 pub use sparse::{
     DEFAULT_POOL_BLOCKS_PER_PIXEL, MASK_OVERFLOW, MASK_SINGLE, MAX_SPARSE_SAMPLES, SparseMemory,
     SparseOptions, SparseStats,

@@ -26,7 +26,7 @@ pub use framebuffer::{
     Attachment, ColorAttachment, Framebuffer, HostImage, framebuffer_status_name,
 };
 pub use program::{Program, ShaderStage, preamble};
-pub use query::{GpuTimer, TimerKind};
+pub use query::{GpuTimer, SamplesPassedQuery, TimerKind};
 pub use state::{SavedState, SetupState};
 pub use texture::{Texture2d, Texture2dArray, Texture2dMultisample, TextureRef};
 

@@ -110,3 +110,43 @@ impl GpuTimer {
         }
     }
 }
+
+/// A `GL_SAMPLES_PASSED` occlusion query: counts the samples a stretch of
+/// drawing lets through.
+#[derive(Debug)]
+pub struct SamplesPassedQuery {
+    raw: glow::Query,
+}
+
+impl SamplesPassedQuery {
+    /// Create the query object.
+    pub fn new(gl: &glow::Context) -> Result<Self> {
+        let raw = unsafe { gl.create_query() }.map_err(|reason| Error::Create {
+            what: "samples-passed query".into(),
+            reason,
+        })?;
+        counters::created(Kind::Query);
+        Ok(SamplesPassedQuery { raw })
+    }
+
+    /// Start counting.
+    pub fn begin(&self, gl: &glow::Context) {
+        unsafe { gl.begin_query(glow::SAMPLES_PASSED, self.raw) };
+    }
+
+    /// Stop counting.
+    pub fn end(&self, gl: &glow::Context) {
+        unsafe { gl.end_query(glow::SAMPLES_PASSED) };
+    }
+
+    /// The count of the last begin/end pair (waits for the GPU).
+    pub fn result(&self, gl: &glow::Context) -> u64 {
+        u64::from(unsafe { gl.get_query_parameter_u32(self.raw, glow::QUERY_RESULT) })
+    }
+
+    /// Free the query object.
+    pub fn destroy(self, gl: &glow::Context) {
+        unsafe { gl.delete_query(self.raw) };
+        counters::destroyed(Kind::Query);
+    }
+}
