@@ -17,10 +17,10 @@ use super::scene;
 use deferred_msaa::{Frame, RetrofitOptions};
 use glow::HasContext;
 
-const MODEL_VS: &str = r#"#version 330 core
-layout (location = 0) in vec3 in_position;
-layout (location = 1) in vec3 in_normal;
-layout (location = 2) in vec4 in_albedo_spec;
+const MODEL_VS: &str = r#"#version 150
+in vec3 in_position;
+in vec3 in_normal;
+in vec4 in_albedo_spec;
 uniform mat4 view_matrix;
 uniform mat4 projection_matrix;
 out vec3 view_position;
@@ -35,13 +35,13 @@ void main() {
 }
 "#;
 
-const MODEL_FS: &str = r#"#version 330 core
+const MODEL_FS: &str = r#"#version 150
 in vec3 view_position;
 flat in vec3 view_normal;
 flat in vec4 albedo_spec;
-layout (location = 0) out vec4 out_albedo_spec;
-layout (location = 1) out vec4 out_normal;
-layout (location = 2) out vec4 out_position;
+out vec4 out_albedo_spec;
+out vec4 out_normal;
+out vec4 out_position;
 void main() {
     out_albedo_spec = albedo_spec;
     out_normal = vec4(normalize(view_normal), 0.0);
@@ -49,14 +49,14 @@ void main() {
 }
 "#;
 
-const FULLSCREEN_VS: &str = r#"#version 330 core
+const FULLSCREEN_VS: &str = r#"#version 150
 void main() {
     vec2 corner = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
     gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
 }
 "#;
 
-const LIGHT_FS: &str = r#"#version 330 core
+const LIGHT_FS: &str = r#"#version 150
 uniform sampler2D albedo_spec_map;
 uniform sampler2D normal_map;
 uniform sampler2D position_map;
@@ -83,7 +83,7 @@ void main() {
 }
 "#;
 
-const SKY_FS: &str = r#"#version 330 core
+const SKY_FS: &str = r#"#version 150
 uniform vec2 viewport_size;
 out vec4 frag_color;
 void main() {
@@ -199,7 +199,19 @@ impl ZooHost for StencilEngine {
             );
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
 
-            let model = harness::program(gl, "stencil model", MODEL_VS, MODEL_FS);
+            // A GL 3.2 engine: GLSL 1.50, locations bound before linking.
+            let model = harness::program_with_locations(
+                gl,
+                "stencil model",
+                MODEL_VS,
+                MODEL_FS,
+                &[(0, "in_position"), (1, "in_normal"), (2, "in_albedo_spec")],
+                &[
+                    (0, "out_albedo_spec"),
+                    (1, "out_normal"),
+                    (2, "out_position"),
+                ],
+            );
             let light = harness::program(gl, "stencil light", FULLSCREEN_VS, LIGHT_FS);
             let sky = harness::program(gl, "stencil sky", FULLSCREEN_VS, SKY_FS);
             let mut data: Vec<f32> = Vec::new();
@@ -412,6 +424,10 @@ impl ZooHost for StencilEngine {
                 Check::Constant,
             ),
         ]
+    }
+
+    fn needs_gl() -> (u32, u32) {
+        (3, 2)
     }
 
     fn destroy(self, gl: &glow::Context) {
