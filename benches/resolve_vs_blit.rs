@@ -18,7 +18,9 @@
 //! Other options: `--warmup N`, `--triangles N`, `--seed N`, `--scene S`
 //! (a built-in scene or glTF file seen through its camera instead of the
 //! random triangles, drawn by the same host shader),
-//! `--timer auto|query|wall`. Each run is timed both by a `GL_TIME_ELAPSED`
+//! `--timer auto|query|wall`, `--key position|depth` (the depth key: what a
+//! host without a position attachment gets), `--plane-uniformity` (the
+//! fast path with the opt-in plane test). Each run is timed both by a `GL_TIME_ELAPSED`
 //! query (where the context has one) and by `glFinish`-bracketed wall time;
 //! `auto` reports the query, except on software renderers, whose query does
 //! not span the pass (llvmpipe restarts it at every tile a thread rasterises).
@@ -35,7 +37,7 @@ use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::resolve::Schedule;
 use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
 use deferred_msaa_lab::resolve::{
-    DepthProjection, ResolveParams, ResolveRule, ResolveSettings, TILE_SIZE,
+    DepthProjection, KeySource, ResolveParams, ResolveRule, ResolveSettings, TILE_SIZE,
 };
 use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
 use deferred_msaa_lab::scene::{Camera, Scene};
@@ -97,6 +99,11 @@ struct Args {
     timer: TimerChoice,
     /// A scene (`builtin:NAME` or a glTF path) instead of random triangles.
     scene: Option<String>,
+    /// Where the depth key comes from: the position attachment, or (as for
+    /// a host without one) the depth buffer.
+    key_from_depth: bool,
+    /// The opt-in plane test on the fast path (`ResolveSettings::plane_uniformity`).
+    plane_uniformity: bool,
 }
 
 /// Which timer's numbers are the headline (both are always taken).
@@ -111,7 +118,8 @@ enum TimerChoice {
 }
 
 const USAGE: &str = "usage: resolve_vs_blit [--size WxH] [--samples N] [--runs K] [--warmup N] \
-                     [--triangles N] [--seed N] [--scene builtin:NAME|FILE.gltf] [--timer auto|query|wall]";
+                     [--triangles N] [--seed N] [--scene builtin:NAME|FILE.gltf] [--timer auto|query|wall] \
+                     [--key position|depth] [--plane-uniformity]";
 
 /// `v` as a whole number of at least `min`.
 fn number<T>(name: &str, v: &str, min: T) -> Result<T, String>
@@ -137,6 +145,8 @@ fn parse_args() -> Result<Args, String> {
         seed: 1,
         timer: TimerChoice::Auto,
         scene: None,
+        key_from_depth: false,
+        plane_uniformity: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -168,6 +178,16 @@ fn parse_args() -> Result<Args, String> {
             "--triangles" => args.triangles = number("--triangles", &value("a count")?, 0usize)?,
             "--seed" => args.seed = number("--seed", &value("a number")?, 0u64)?,
             "--scene" => args.scene = Some(value("a scene")?),
+            "--key" => {
+                args.key_from_depth = match value("position|depth")?.as_str() {
+                    "position" => false,
+                    "depth" => true,
+                    other => {
+                        return Err(format!("--key: expected position or depth, got `{other}`"));
+                    }
+                }
+            }
+            "--plane-uniformity" => args.plane_uniformity = true,
             "--timer" => {
                 args.timer = match value("auto|query|wall")?.as_str() {
                     "auto" => TimerChoice::Auto,
@@ -517,7 +537,10 @@ fn count_complex(
     let cpu = CpuResolve {
         settings: params.settings,
         rules: msaa.rules().to_vec(),
-        key_source: CpuKeySource::Position(1),
+        key_source: match msaa.key() {
+            KeySource::Depth => CpuKeySource::Depth(params.projection),
+            _ => CpuKeySource::Position(1),
+        },
         clear_depth: params.projection.clear_depth,
         footprint: params.footprint(),
     };
@@ -649,7 +672,7 @@ fn run(args: &Args) -> Result<(), String> {
         samples: args.samples,
         // As the recommended layout resolves normals: the reference sample's.
         rules: vec![(ColorAttachment(2), ResolveRule::Select)],
-        position_attachment: Some(ColorAttachment(1)),
+        position_attachment: (!args.key_from_depth).then_some(ColorAttachment(1)),
         ..RetrofitOptions::default()
     };
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).map_err(e)?;
@@ -662,7 +685,10 @@ fn run(args: &Args) -> Result<(), String> {
     unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, None) };
     check_error(gl, "drawing the scene").map_err(e)?;
 
-    let fast = host.params(ResolveSettings::default());
+    let fast = host.params(ResolveSettings {
+        plane_uniformity: args.plane_uniformity,
+        ..ResolveSettings::default()
+    });
     let nofast = host.params(ResolveSettings {
         fast_path: false,
         ..ResolveSettings::default()
@@ -825,6 +851,19 @@ fn run(args: &Args) -> Result<(), String> {
         }
     );
     println!(
+        "key: {}{}",
+        if args.key_from_depth {
+            "the depth buffer, linearised"
+        } else {
+            "the view-space position attachment"
+        },
+        if args.plane_uniformity {
+            "; fast path with the opt-in plane test"
+        } else {
+            ""
+        }
+    );
+    println!(
         "context: EGL, {} | GL {} | GLSL {}",
         version.renderer, version.version_string, version.glsl_string
     );
@@ -913,6 +952,8 @@ fn run(args: &Args) -> Result<(), String> {
         "triangles": args.triangles,
         "scene": args.scene,
         "seed": args.seed,
+        "key": if args.key_from_depth { "depth" } else { "position" },
+        "plane_uniformity": args.plane_uniformity,
         "pixels": complexity.pixels,
         "complex_pixels": complexity.complex_key,
         "complex_fraction": frac(complexity.complex_key),
