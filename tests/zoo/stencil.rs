@@ -14,6 +14,7 @@
 
 use super::harness::{self, Channel, Check, Plane, Read, ZooHost};
 use super::scene;
+use deferred_msaa::resolve::StencilCopy;
 use deferred_msaa::{Frame, RetrofitOptions};
 use glow::HasContext;
 
@@ -469,4 +470,33 @@ fn a_stencil_marking_engine_keeps_its_stencil_through_the_resolve() {
         return;
     };
     outcome(&ctx).assert_ok();
+}
+
+/// The same engine where the driver cannot export stencil from a shader:
+/// eight one-bit passes write the same values.
+#[test]
+fn the_stencil_comes_back_the_same_in_one_bit_passes() {
+    let Some(ctx) = crate::common::egl_context() else {
+        return;
+    };
+    let options = RetrofitOptions {
+        stencil: StencilCopy::BitPasses,
+        ..RetrofitOptions::default()
+    };
+    harness::run::<StencilEngine>(&ctx, "stencil-bit-passes", &options, StencilEngine::frame)
+        .assert_ok();
+}
+
+/// Without stencil texturing the stencil is blitted: the driver's sample,
+/// which inside faces is every sample's value.
+#[test]
+fn a_blitted_stencil_holds_inside_faces() {
+    let Some(ctx) = crate::common::egl_context() else {
+        return;
+    };
+    let options = RetrofitOptions {
+        stencil: StencilCopy::Blit,
+        ..RetrofitOptions::default()
+    };
+    harness::run::<StencilEngine>(&ctx, "stencil-blit", &options, StencilEngine::frame).assert_ok();
 }
