@@ -860,6 +860,20 @@ impl MsaaRetrofit {
 
     /// Compile the programs the options' resolve uses.
     fn prepare(&mut self, gl: &glow::Context) -> Result<()> {
+        let extra = self.extra_outputs();
+        self.run_resolver(gl, None, None, extra)
+    }
+
+    /// The resolver on the twins: a resolve into `target` (the host's
+    /// images when `None`) under `params`, or, without `params`, only the
+    /// compilation of what such a resolve uses.
+    fn run_resolver(
+        &mut self,
+        gl: &glow::Context,
+        target: Option<&Framebuffer>,
+        params: Option<&ResolveParams>,
+        extra: ExtraOutputs,
+    ) -> Result<()> {
         let (depth, colors, points) = self.inputs()?;
         let inputs = ResolveInputs {
             depth,
@@ -869,9 +883,13 @@ impl MsaaRetrofit {
             key: self.key,
             samples: self.twin.samples,
         };
-        let extra = self.extra_outputs();
-        self.resolver
-            .prepare(gl, &inputs, &self.target, &self.options.resolve, extra)
+        let target = target.unwrap_or(&self.target);
+        match params {
+            None => self
+                .resolver
+                .prepare(gl, &inputs, target, &self.options.resolve, extra),
+            Some(params) => self.resolver.run(gl, &inputs, target, params, extra),
+        }
     }
 
     /// The resolve's outputs beyond the host's attachments: the reference
@@ -961,18 +979,8 @@ impl MsaaRetrofit {
     /// geometry pass, before the host's lighting reads its G-buffer.
     pub fn resolve(&mut self, gl: &glow::Context, frame: &Frame) -> Result<()> {
         let params = self.params(frame)?;
-        let (depth, colors, points) = self.inputs()?;
-        let inputs = ResolveInputs {
-            depth,
-            colors: &colors,
-            attachments: &points,
-            rules: &self.rules,
-            key: self.key,
-            samples: self.twin.samples,
-        };
         let extra = self.extra_outputs();
-        self.resolver
-            .run(gl, &inputs, &self.target, &params, extra)?;
+        self.run_resolver(gl, None, Some(&params), extra)?;
         if let (Some(s), Some(depth)) = (&self.stencil, self.twin.depth()) {
             s.pass
                 .run(gl, depth, &self.twin.fbo, &s.reference, &s.target)?;
@@ -992,17 +1000,7 @@ impl MsaaRetrofit {
         complex_output: bool,
     ) -> Result<()> {
         let params = self.params(frame)?;
-        let (depth, colors, points) = self.inputs()?;
-        let inputs = ResolveInputs {
-            depth,
-            colors: &colors,
-            attachments: &points,
-            rules: &self.rules,
-            key: self.key,
-            samples: self.twin.samples,
-        };
-        self.resolver
-            .run(gl, &inputs, target, &params, complex_output)
+        self.run_resolver(gl, Some(target), Some(&params), complex_output.into())
     }
 
     /// Change the options. Only what they change is rebuilt: the twins
