@@ -186,6 +186,7 @@ impl RenderArgs {
                 fast_path: !self.no_fast_path,
                 blend_depth: false,
                 plane_uniformity: false,
+                position_uniformity: false,
                 selection: Selection {
                     region: self.aa_region,
                     max_depth: self.aa_max_depth,

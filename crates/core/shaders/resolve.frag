@@ -15,6 +15,9 @@
 //   METHOD                 METHOD_AVERAGE, METHOD_FRONT, METHOD_MEDIAN or METHOD_BACK
 //   WINDOW_HARD            hard window (smooth otherwise)
 //   FAST_PATH              uniform pixels copy sample 0
+//   POSITION_UNIFORMITY    with FAST_PATH and KEY_SAMPLER: a pixel is uniform when
+//                          the key attachment's samples are all equal; depth
+//                          samples 1.. are read only where it is not (opt-in)
 //   PLANE_UNIFORMITY, PLANE_SAMPLER
 //                          with FAST_PATH: also pixels whose depths fit one plane
 //                          and whose PLANE_SAMPLER samples are equal (opt-in)
@@ -185,8 +188,46 @@ bool is_finite(vec4 x) {
     return !any(isnan(x)) && !any(isinf(x));
 }
 
+#ifdef POSITION_UNIFORMITY
+// The key attachment's samples all equal (as floats compare): the opt-in test
+// of ResolveSettings::position_uniformity, cpu.rs's position_uniform.
+bool g_positions_equal = false;
+#endif
+
 // Fill g_raw_depth, g_key, g_bg and g_sort (and the key attachment's samples) for pixel p.
 void load_keys(ivec2 p) {
+#ifdef POSITION_UNIFORMITY
+    // The key attachment first; the depth samples then in a loop that a group
+    // of pixels whose positions all agree leaves after sample 0.
+    for (int i = 0; i < NUM_SAMPLES; ++i) g_key_vals[i] = FETCH(KEY_SAMPLER, p, i);
+    g_positions_equal = true;
+    for (int i = 1; i < NUM_SAMPLES; ++i)
+        g_positions_equal = g_positions_equal && g_key_vals[i] == g_key_vals[0];
+    for (int i = 0; i < NUM_SAMPLES; ++i) {
+        g_raw_depth[i] = 0.0;
+        g_key[i] = 0.0;
+        g_bg[i] = true;
+        g_sort[i] = u_infinity;
+    }
+    for (int i = g_zero; i < NUM_SAMPLES; ++i) {
+        float depth = FETCH(u_depth, p, i).r;
+        vec4 key;
+        PICK(key, g_key_vals, i)
+#ifdef KEY_WORLD
+        float z = -dot(u_view_row, vec4(key.xyz, 1.0));
+#else
+        float z = -key.z;
+#endif
+        bool bg = depth == u_clear_depth || isnan(z) || isinf(z);
+        for (int k = 0; k < NUM_SAMPLES; ++k) {
+            g_raw_depth[k] = k == i ? depth : g_raw_depth[k];
+            g_key[k] = k == i ? z : g_key[k];
+            g_bg[k] = k == i ? bg : g_bg[k];
+            g_sort[k] = k == i ? (bg ? u_infinity : z) : g_sort[k];
+        }
+        if (g_positions_equal) break;
+    }
+#else
     for (int i = 0; i < NUM_SAMPLES; ++i) {
         float depth = FETCH(u_depth, p, i).r;
         g_raw_depth[i] = depth;
@@ -204,6 +245,7 @@ void load_keys(ivec2 p) {
         g_key[i] = z;
         g_sort[i] = g_bg[i] ? u_infinity : z;
     }
+#endif
 }
 
 // key_less(i, j), the strict order by (z, index) with background at
@@ -498,7 +540,11 @@ bool outside_selection(ivec2 p) {
 bool takes_one_sample(ivec2 p) {
     bool one = false;
 #ifdef FAST_PATH
+#ifdef POSITION_UNIFORMITY
+    one = g_positions_equal;
+#else
     one = keys_uniform();
+#endif
 #ifdef PLANE_UNIFORMITY
     one = one || plane_uniform(p);
 #endif
@@ -581,10 +627,10 @@ vec4 key_value_at(int r) {
 // reference sample's value is picked up on the way. A Select attachment
 // fetches sample r once after it (r is 0 for a one-sample pixel); the key
 // attachment's samples are already in g_key_vals.
-#define BLEND_BEGIN(S, V, REF, ACC, RULE) vec4 V = vec4(FETCH(S, p, 0)); vec4 REF = V; Acc ACC = acc_new(); acc_step(ACC, RULE, V, w0);
-#define BLEND_STEP(S, REF, ACC, RULE) { vec4 x = vec4(FETCH(S, p, i)); REF = i == r ? x : REF; acc_step(ACC, RULE, x, w); }
+#define BLEND_BEGIN(S, V, REF, ACC, RULE) vec4 V = vec4(0.0); vec4 REF = vec4(0.0); Acc ACC = acc_new();
+#define BLEND_STEP(S, V, REF, ACC, RULE) { vec4 x = vec4(FETCH(S, p, i)); V = i == 0 ? x : V; REF = i == r ? x : REF; acc_step(ACC, RULE, x, w); }
 #define BLEND_END(O, V, REF, ACC, RULE) O = g_one ? V : acc_finish(ACC, RULE, REF);
-#define KEY_BEGIN(V, REF, ACC, RULE) vec4 V = g_key_vals[0]; vec4 REF = key_value_at(r); Acc ACC = acc_new(); acc_step(ACC, RULE, V, w0);
+#define KEY_BEGIN(V, REF, ACC, RULE) vec4 V = g_key_vals[0]; vec4 REF = key_value_at(r); Acc ACC = acc_new();
 #define KEY_STEP(ACC, RULE) acc_step(ACC, RULE, key_i, w);
 #define KEY_END(O, V, REF, ACC, RULE) O = g_one || RULE == RULE_SELECT ? REF : acc_finish(ACC, RULE, REF);
 
@@ -608,9 +654,8 @@ void main() {
 
     // Sample 0 of everything, then samples 1.. in one loop that a group of
     // one-sample pixels leaves at the top of its first iteration.
-    float w0 = closeness(g_key[0], g_bg[0], r == 0, z_r, bg_r);
-    float depth_sum = w0 * g_raw_depth[0];
-    float depth_weight = w0;
+    float depth_sum = 0.0;
+    float depth_weight = 0.0;
 #if NUM_ATTACHMENTS > 0
 #if defined(KEY_INDEX) && KEY_INDEX == 0
     KEY_BEGIN(s0_0, ref_0, acc_0, ATT0_RULE)
@@ -675,8 +720,7 @@ void main() {
     BLEND_BEGIN(u_att7, s0_7, ref_7, acc_7, ATT7_RULE)
 #endif
 #endif
-    for (int i = g_zero + 1; i < NUM_SAMPLES; ++i) {
-        if (g_one) break;
+    for (int i = g_zero; i < NUM_SAMPLES; ++i) {
         float z_i;
         bool bg_i;
         float depth_i;
@@ -695,7 +739,7 @@ void main() {
         KEY_STEP(acc_0, ATT0_RULE)
 #elif ATT0_RULE == RULE_SELECT
 #else
-        BLEND_STEP(u_att0, ref_0, acc_0, ATT0_RULE)
+        BLEND_STEP(u_att0, s0_0, ref_0, acc_0, ATT0_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 1
@@ -703,7 +747,7 @@ void main() {
         KEY_STEP(acc_1, ATT1_RULE)
 #elif ATT1_RULE == RULE_SELECT
 #else
-        BLEND_STEP(u_att1, ref_1, acc_1, ATT1_RULE)
+        BLEND_STEP(u_att1, s0_1, ref_1, acc_1, ATT1_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 2
@@ -711,7 +755,7 @@ void main() {
         KEY_STEP(acc_2, ATT2_RULE)
 #elif ATT2_RULE == RULE_SELECT
 #else
-        BLEND_STEP(u_att2, ref_2, acc_2, ATT2_RULE)
+        BLEND_STEP(u_att2, s0_2, ref_2, acc_2, ATT2_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 3
@@ -719,7 +763,7 @@ void main() {
         KEY_STEP(acc_3, ATT3_RULE)
 #elif ATT3_RULE == RULE_SELECT
 #else
-        BLEND_STEP(u_att3, ref_3, acc_3, ATT3_RULE)
+        BLEND_STEP(u_att3, s0_3, ref_3, acc_3, ATT3_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 4
@@ -727,7 +771,7 @@ void main() {
         KEY_STEP(acc_4, ATT4_RULE)
 #elif ATT4_RULE == RULE_SELECT
 #else
-        BLEND_STEP(u_att4, ref_4, acc_4, ATT4_RULE)
+        BLEND_STEP(u_att4, s0_4, ref_4, acc_4, ATT4_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 5
@@ -735,7 +779,7 @@ void main() {
         KEY_STEP(acc_5, ATT5_RULE)
 #elif ATT5_RULE == RULE_SELECT
 #else
-        BLEND_STEP(u_att5, ref_5, acc_5, ATT5_RULE)
+        BLEND_STEP(u_att5, s0_5, ref_5, acc_5, ATT5_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 6
@@ -743,7 +787,7 @@ void main() {
         KEY_STEP(acc_6, ATT6_RULE)
 #elif ATT6_RULE == RULE_SELECT
 #else
-        BLEND_STEP(u_att6, ref_6, acc_6, ATT6_RULE)
+        BLEND_STEP(u_att6, s0_6, ref_6, acc_6, ATT6_RULE)
 #endif
 #endif
 #if NUM_ATTACHMENTS > 7
@@ -751,9 +795,11 @@ void main() {
         KEY_STEP(acc_7, ATT7_RULE)
 #elif ATT7_RULE == RULE_SELECT
 #else
-        BLEND_STEP(u_att7, ref_7, acc_7, ATT7_RULE)
+        BLEND_STEP(u_att7, s0_7, ref_7, acc_7, ATT7_RULE)
 #endif
 #endif
+        // A group of one-sample pixels leaves here, after sample 0.
+        if (g_one) break;
     }
 #if NUM_ATTACHMENTS > 0
 #if defined(KEY_INDEX) && KEY_INDEX == 0

@@ -357,10 +357,28 @@ impl CpuResolve {
             }
             _ => keys.z[i] == keys.z[0],
         };
-        let mut uniform = self.settings.fast_path
-            && (1..n).all(|i| keys.bg[i] == keys.bg[0] && (keys.bg[0] || same_key(i)));
+        let position_test = match self.key_source {
+            CpuKeySource::Position(k) | CpuKeySource::WorldPosition { attachment: k, .. }
+                if self.settings.fast_path && self.settings.position_uniformity =>
+            {
+                Some(k)
+            }
+            _ => None,
+        };
+        let mut uniform = match position_test {
+            // The opt-in test: the key attachment's samples alone (f32 compares).
+            Some(k) => px.attachments[k].iter().all(|v| *v == px.attachments[k][0]),
+            None => {
+                self.settings.fast_path
+                    && (1..n).all(|i| keys.bg[i] == keys.bg[0] && (keys.bg[0] || same_key(i)))
+            }
+        };
         let (outside, mut selection_ambiguous) = self.outside_selection(px, &keys, at);
-        if self.settings.fast_path && self.settings.plane_uniformity && !uniform {
+        if self.settings.fast_path
+            && self.settings.plane_uniformity
+            && position_test.is_none()
+            && !uniform
+        {
             let (plane, ambiguous) = self.plane_uniform(px, &keys);
             uniform = plane;
             selection_ambiguous |= ambiguous;

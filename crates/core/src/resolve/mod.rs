@@ -75,6 +75,9 @@ pub(crate) struct ResolveProgramKey {
     pub fast_path: bool,
     /// The opt-in plane test of [`ResolveSettings::plane_uniformity`] (with the fast path).
     pub plane_uniformity: bool,
+    /// The opt-in test of [`ResolveSettings::position_uniformity`] (with the
+    /// fast path and a position key).
+    pub position_uniformity: bool,
     /// Write `gl_FragDepth`.
     pub write_depth: bool,
     /// Blend depth instead of selecting the reference's.
@@ -212,7 +215,9 @@ impl ResolveProgramKey {
                 .attachments
                 .iter()
                 .position(|(rule, _)| *rule != ResolveRule::Select);
-            if let (true, Some(k)) = (self.plane_uniformity, first_blended) {
+            if self.position_uniformity {
+                def("POSITION_UNIFORMITY", "1".into());
+            } else if let (true, Some(k)) = (self.plane_uniformity, first_blended) {
                 def("PLANE_UNIFORMITY", "1".into());
                 def("PLANE_SAMPLER", format!("u_att{k}"));
             }
@@ -493,6 +498,9 @@ impl Resolver {
             },
             fast_path: s.fast_path,
             plane_uniformity: s.plane_uniformity && s.fast_path,
+            position_uniformity: s.position_uniformity
+                && s.fast_path
+                && !matches!(inputs.key, KeySource::Depth),
             write_depth,
             blend_depth: s.blend_depth && write_depth,
             complex_output: extra.complex,

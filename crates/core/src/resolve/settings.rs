@@ -101,6 +101,17 @@ pub struct ResolveSettings {
     /// its depth is sample 0's (see `cpu::plane_fits`).
     #[cfg_attr(feature = "serde", serde(default))]
     pub plane_uniformity: bool,
+    /// Opt-in, with the fast path and a position key: a pixel is uniform
+    /// when the position attachment's samples are all equal (as floats
+    /// compare), and its depth samples after the first are not read
+    /// (default off). The exact test also reads every depth sample, for
+    /// each sample's background test. Not exact where a geometry sample's
+    /// position equals a background sample's (an attachment cleared to a
+    /// value geometry writes), or where one fragment's depth samples
+    /// straddle the clear depth; such a pixel takes sample 0. No effect with
+    /// a depth key; takes precedence over `plane_uniformity`.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub position_uniformity: bool,
     /// Selective anti-aliasing: which pixels are resolved at all; the others
     /// take one sample, as a uniform pixel does (default: every pixel).
     pub selection: Selection,
@@ -308,6 +319,7 @@ impl Default for ResolveSettings {
             fast_path: true,
             blend_depth: false,
             plane_uniformity: false,
+            position_uniformity: false,
             selection: Selection::default(),
         }
     }
