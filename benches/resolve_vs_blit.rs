@@ -20,7 +20,8 @@
 //! random triangles, drawn by the same host shader),
 //! `--timer auto|query|wall`, `--key position|depth` (the depth key: what a
 //! host without a position attachment gets), `--plane-uniformity` (the
-//! fast path with the opt-in plane test). Each run is timed both by a `GL_TIME_ELAPSED`
+//! fast path with the opt-in plane test), `--position-uniformity` (the opt-in
+//! position test), `--json FILE` (where the report goes). Each run is timed both by a `GL_TIME_ELAPSED`
 //! query (where the context has one) and by `glFinish`-bracketed wall time;
 //! `auto` reports the query, except on software renderers, whose query does
 //! not span the pass (llvmpipe restarts it at every tile a thread rasterises).
@@ -104,6 +105,10 @@ struct Args {
     key_from_depth: bool,
     /// The opt-in plane test on the fast path (`ResolveSettings::plane_uniformity`).
     plane_uniformity: bool,
+    /// The opt-in position test (`ResolveSettings::position_uniformity`).
+    position_uniformity: bool,
+    /// Where the JSON report goes (default `target/resolve_vs_blit.json`).
+    json: Option<PathBuf>,
 }
 
 /// Which timer's numbers are the headline (both are always taken).
@@ -119,7 +124,7 @@ enum TimerChoice {
 
 const USAGE: &str = "usage: resolve_vs_blit [--size WxH] [--samples N] [--runs K] [--warmup N] \
                      [--triangles N] [--seed N] [--scene builtin:NAME|FILE.gltf] [--timer auto|query|wall] \
-                     [--key position|depth] [--plane-uniformity]";
+                     [--key position|depth] [--plane-uniformity] [--position-uniformity] [--json FILE]";
 
 /// `v` as a whole number of at least `min`.
 fn number<T>(name: &str, v: &str, min: T) -> Result<T, String>
@@ -147,6 +152,8 @@ fn parse_args() -> Result<Args, String> {
         scene: None,
         key_from_depth: false,
         plane_uniformity: false,
+        position_uniformity: false,
+        json: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -188,6 +195,8 @@ fn parse_args() -> Result<Args, String> {
                 }
             }
             "--plane-uniformity" => args.plane_uniformity = true,
+            "--position-uniformity" => args.position_uniformity = true,
+            "--json" => args.json = Some(PathBuf::from(value("a path")?)),
             "--timer" => {
                 args.timer = match value("auto|query|wall")?.as_str() {
                     "auto" => TimerChoice::Auto,
@@ -515,12 +524,18 @@ struct Complexity {
     /// Tiles of the resolve's tile grid, and those with a complex pixel.
     tiles: u64,
     complex_tiles: u64,
+    /// With an opt-in test: pixels whose result differs from the exact
+    /// resolve's (fast path without the option), and the largest difference
+    /// of any attachment component or depth.
+    option_changed: u64,
+    option_max_difference: f64,
 }
 
 fn count_complex(
     gl: &glow::Context,
     msaa: &MsaaRetrofit,
     params: &ResolveParams,
+    exact: &ResolveParams,
 ) -> deferred_msaa::Result<Complexity> {
     let mut readback = Readback::new(gl)?;
     let (depth_ref, color_refs, _) = msaa.inputs()?;
@@ -534,7 +549,7 @@ fn count_complex(
     })();
     readback.destroy(gl);
     let (colors, depth) = read?;
-    let cpu = CpuResolve {
+    let cpu_for = |params: &ResolveParams| CpuResolve {
         settings: params.settings,
         rules: msaa.rules().to_vec(),
         key_source: match msaa.key() {
@@ -544,6 +559,9 @@ fn count_complex(
         clear_depth: params.projection.clear_depth,
         footprint: params.footprint(),
     };
+    let cpu = cpu_for(params);
+    let cpu_exact = cpu_for(exact);
+    let with_option = params.settings != exact.settings;
     let n = depth.samples;
     let mut c = Complexity {
         pixels: 0,
@@ -551,6 +569,8 @@ fn count_complex(
         complex_depth: 0,
         tiles: 0,
         complex_tiles: 0,
+        option_changed: 0,
+        option_max_difference: 0.0,
     };
     let (tw, th) = (
         depth.width.div_ceil(TILE_SIZE),
@@ -567,7 +587,22 @@ fn count_complex(
                     .collect(),
             };
             c.pixels += 1;
-            let complex = cpu.resolve_pixel(&px).complex;
+            let resolved = cpu.resolve_pixel(&px);
+            let complex = resolved.complex;
+            if with_option {
+                let want = cpu_exact.resolve_pixel(&px);
+                let mut worst = (resolved.depth - want.depth).abs();
+                for (a, b) in resolved.attachments.iter().zip(&want.attachments) {
+                    for (x, y) in a.iter().zip(b) {
+                        // NaN stays NaN; only finite differences count.
+                        if x.is_finite() && y.is_finite() {
+                            worst = worst.max((x - y).abs());
+                        }
+                    }
+                }
+                c.option_changed += (worst > 0.0) as u64;
+                c.option_max_difference = c.option_max_difference.max(worst);
+            }
             c.complex_key += complex as u64;
             // Tiles count from the bottom row up, as GL's window coordinates do.
             let y_gl = depth.height - 1 - y;
@@ -687,13 +722,15 @@ fn run(args: &Args) -> Result<(), String> {
 
     let fast = host.params(ResolveSettings {
         plane_uniformity: args.plane_uniformity,
+        position_uniformity: args.position_uniformity,
         ..ResolveSettings::default()
     });
+    let exact = host.params(ResolveSettings::default());
     let nofast = host.params(ResolveSettings {
         fast_path: false,
         ..ResolveSettings::default()
     });
-    let complexity = count_complex(gl, &msaa, &fast).map_err(e)?;
+    let complexity = count_complex(gl, &msaa, &fast, &exact).map_err(e)?;
 
     let trivial = Program::build(
         gl,
@@ -857,10 +894,13 @@ fn run(args: &Args) -> Result<(), String> {
         } else {
             "the view-space position attachment"
         },
-        if args.plane_uniformity {
-            "; fast path with the opt-in plane test"
-        } else {
-            ""
+        match (
+            args.plane_uniformity,
+            args.position_uniformity && !args.key_from_depth
+        ) {
+            (_, true) => "; fast path with the opt-in position test",
+            (true, false) => "; fast path with the opt-in plane test",
+            _ => "",
         }
     );
     println!(
@@ -894,8 +934,20 @@ fn run(args: &Args) -> Result<(), String> {
         args.warmup, args.runs
     );
     print_table(&primary_stats);
+    if args.plane_uniformity || args.position_uniformity {
+        println!(
+            "the opt-in test changes {} pixels ({:.2}%) against the exact resolve, by at most {:.3e}",
+            complexity.option_changed,
+            100.0 * frac(complexity.option_changed),
+            complexity.option_max_difference
+        );
+    }
     println!("ratio resolve/blit (medians, fast path on):  {ratio_fast:.3}");
     println!("ratio resolve/blit (medians, fast path off): {ratio_nofast:.3}");
+    println!(
+        "ratio resolve fast path on/off (medians):    {:.3}",
+        ratio_fast / ratio_nofast
+    );
     if let Some(st) = &secondary_stats {
         let (f, n) = ratios(st);
         println!(
@@ -954,6 +1006,9 @@ fn run(args: &Args) -> Result<(), String> {
         "seed": args.seed,
         "key": if args.key_from_depth { "depth" } else { "position" },
         "plane_uniformity": args.plane_uniformity,
+        "position_uniformity": args.position_uniformity && !args.key_from_depth,
+        "option_changed_pixels": complexity.option_changed,
+        "option_max_difference": complexity.option_max_difference,
         "pixels": complexity.pixels,
         "complex_pixels": complexity.complex_key,
         "complex_fraction": frac(complexity.complex_key),
@@ -969,10 +1024,14 @@ fn run(args: &Args) -> Result<(), String> {
         "methods": methods_json(&primary_stats, primary_ms),
         "ratio_resolve_fast_over_blit": ratio_fast,
         "ratio_resolve_nofast_over_blit": ratio_nofast,
+        "ratio_resolve_fast_over_nofast": ratio_fast / ratio_nofast,
         "other_timer": secondary_json,
     });
-    let dir = target_dir();
-    let path = dir.join("resolve_vs_blit.json");
+    let path = args
+        .json
+        .clone()
+        .unwrap_or_else(|| target_dir().join("resolve_vs_blit.json"));
+    let dir = path.parent().map(PathBuf::from).unwrap_or_default();
     let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
     std::fs::create_dir_all(&dir)
         .and_then(|()| std::fs::write(&path, text + "\n"))
