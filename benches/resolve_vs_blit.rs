@@ -6,11 +6,18 @@
 //! background triangle, and then these are timed, interleaved round-robin so
 //! that machine noise hits every method alike:
 //!
-//! 1. `MsaaRetrofit::resolve`, median, smooth window, fast path on;
-//! 2. the same with the fast path off;
-//! 3. three `glBlitFramebuffer` calls (twin → host, one per colour
-//!    attachment, `GL_NEAREST`): what a hardware resolve costs;
-//! 4. a trivial full-screen pass writing the three attachments, for scale.
+//! 1. `MsaaRetrofit::resolve`, median, smooth window, fast path on (with the
+//!    opt-in uniformity test when one is asked for);
+//! 2. the same with the exact uniformity test (the same as 1 without an
+//!    opt-in test: then the pair shows the run's noise);
+//! 3. the same with the fast path off (every pixel takes the slow path);
+//! 4. three `glBlitFramebuffer` calls (twin → host, one per colour
+//!    attachment) plus one depth blit: what a hardware resolve costs, and
+//!    the same without the depth blit;
+//! 5. a trivial full-screen pass writing the three attachments, for scale.
+//!
+//! `--summarize DIR` measures nothing and prints a markdown table of the
+//! reports in DIR (`scripts/resolve-cost` runs every case and calls it).
 //!
 //! ```text
 //! cargo bench --bench resolve_vs_blit [-- --size 640x360 --samples 4 --runs 30]
@@ -35,10 +42,9 @@ use deferred_msaa_lab::gl::{
     TimerKind, VertexArray, check_error, preamble,
 };
 use deferred_msaa_lab::readback::Readback;
-use deferred_msaa_lab::resolve::Schedule;
 use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
 use deferred_msaa_lab::resolve::{
-    DepthProjection, KeySource, ResolveParams, ResolveRule, ResolveSettings, TILE_SIZE,
+    DepthProjection, KeySource, ResolveParams, ResolveRule, ResolveSettings,
 };
 use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
 use deferred_msaa_lab::scene::{Camera, Scene};
@@ -109,6 +115,8 @@ struct Args {
     position_uniformity: bool,
     /// Where the JSON report goes (default `target/resolve_vs_blit.json`).
     json: Option<PathBuf>,
+    /// Measure nothing: print a markdown table of the reports in this folder.
+    summarize: Option<PathBuf>,
 }
 
 /// Which timer's numbers are the headline (both are always taken).
@@ -124,7 +132,7 @@ enum TimerChoice {
 
 const USAGE: &str = "usage: resolve_vs_blit [--size WxH] [--samples N] [--runs K] [--warmup N] \
                      [--triangles N] [--seed N] [--scene builtin:NAME|FILE.gltf] [--timer auto|query|wall] \
-                     [--key position|depth] [--plane-uniformity] [--position-uniformity] [--json FILE]";
+                     [--key position|depth] [--plane-uniformity] [--position-uniformity] [--json FILE] | --summarize DIR";
 
 /// `v` as a whole number of at least `min`.
 fn number<T>(name: &str, v: &str, min: T) -> Result<T, String>
@@ -154,6 +162,7 @@ fn parse_args() -> Result<Args, String> {
         plane_uniformity: false,
         position_uniformity: false,
         json: None,
+        summarize: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -197,6 +206,7 @@ fn parse_args() -> Result<Args, String> {
             "--plane-uniformity" => args.plane_uniformity = true,
             "--position-uniformity" => args.position_uniformity = true,
             "--json" => args.json = Some(PathBuf::from(value("a path")?)),
+            "--summarize" => args.summarize = Some(PathBuf::from(value("a folder")?)),
             "--timer" => {
                 args.timer = match value("auto|query|wall")?.as_str() {
                     "auto" => TimerChoice::Auto,
@@ -521,9 +531,6 @@ struct Complexity {
     pixels: u64,
     complex_key: u64,
     complex_depth: u64,
-    /// Tiles of the resolve's tile grid, and those with a complex pixel.
-    tiles: u64,
-    complex_tiles: u64,
     /// With an opt-in test: pixels whose result differs from the exact
     /// resolve's (fast path without the option), and the largest difference
     /// of any attachment component or depth.
@@ -567,16 +574,9 @@ fn count_complex(
         pixels: 0,
         complex_key: 0,
         complex_depth: 0,
-        tiles: 0,
-        complex_tiles: 0,
         option_changed: 0,
         option_max_difference: 0.0,
     };
-    let (tw, th) = (
-        depth.width.div_ceil(TILE_SIZE),
-        depth.height.div_ceil(TILE_SIZE),
-    );
-    let mut slow_tiles = vec![false; (tw * th) as usize];
     for y in 0..depth.height {
         for x in 0..depth.width {
             let px = PixelSamples {
@@ -604,17 +604,12 @@ fn count_complex(
                 c.option_max_difference = c.option_max_difference.max(worst);
             }
             c.complex_key += complex as u64;
-            // Tiles count from the bottom row up, as GL's window coordinates do.
-            let y_gl = depth.height - 1 - y;
-            slow_tiles[((y_gl / TILE_SIZE) * tw + x / TILE_SIZE) as usize] |= complex;
             c.complex_depth +=
                 px.depth
                     .iter()
                     .any(|d| d.to_bits() != px.depth[0].to_bits()) as u64;
         }
     }
-    c.tiles = slow_tiles.len() as u64;
-    c.complex_tiles = slow_tiles.iter().filter(|&&t| t).count() as u64;
     Ok(c)
 }
 
@@ -651,7 +646,7 @@ fn stats(times: &[f64]) -> Stats {
 #[derive(Clone, Copy, PartialEq)]
 enum Method {
     ResolveFast,
-    ResolveFastTiles,
+    ResolveExact,
     ResolveNoFast,
     Blit,
     BlitColor,
@@ -661,7 +656,7 @@ enum Method {
 impl Method {
     const ALL: [Method; 6] = [
         Method::ResolveFast,
-        Method::ResolveFastTiles,
+        Method::ResolveExact,
         Method::ResolveNoFast,
         Method::Blit,
         Method::BlitColor,
@@ -670,7 +665,7 @@ impl Method {
     fn key(self) -> &'static str {
         match self {
             Method::ResolveFast => "resolve_median_smooth_fast",
-            Method::ResolveFastTiles => "resolve_median_smooth_fast_tiles",
+            Method::ResolveExact => "resolve_median_smooth_fast_exact",
             Method::ResolveNoFast => "resolve_median_smooth_nofast",
             Method::Blit => "blit_x3_depth",
             Method::BlitColor => "blit_x3",
@@ -679,8 +674,10 @@ impl Method {
     }
     fn label(self) -> &'static str {
         match self {
-            Method::ResolveFast => "resolve median smooth, fast path on (one pass, the default)",
-            Method::ResolveFastTiles => "resolve median smooth, fast path on, 8x8 tiles",
+            Method::ResolveFast => {
+                "resolve median smooth, fast path on (with the opt-in test if asked)"
+            }
+            Method::ResolveExact => "resolve median smooth, fast path on, exact test",
             Method::ResolveNoFast => "resolve median smooth, fast path off",
             Method::Blit => "3x glBlitFramebuffer + depth (hardware resolve)",
             Method::BlitColor => "3x glBlitFramebuffer, colour only",
@@ -777,23 +774,16 @@ fn run(args: &Args) -> Result<(), String> {
     };
 
     let frame = host.frame();
-    let with = |resolve: ResolveSettings, schedule: Schedule| RetrofitOptions {
+    let with = |resolve: ResolveSettings| RetrofitOptions {
         resolve,
-        schedule,
         ..options.clone()
     };
     // The resolve's variants, all compiled now: switching between them
     // (outside the timed region) only picks a cached program.
     let variants = [
-        (Method::ResolveFast, with(fast.settings, Schedule::OnePass)),
-        (
-            Method::ResolveFastTiles,
-            with(fast.settings, Schedule::Tiles(TILE_SIZE)),
-        ),
-        (
-            Method::ResolveNoFast,
-            with(nofast.settings, Schedule::OnePass),
-        ),
+        (Method::ResolveFast, with(fast.settings)),
+        (Method::ResolveExact, with(exact.settings)),
+        (Method::ResolveNoFast, with(nofast.settings)),
     ];
     for (_, v) in &variants {
         msaa.set_options(gl, v).map_err(e)?;
@@ -807,7 +797,7 @@ fn run(args: &Args) -> Result<(), String> {
             q.begin(gl);
         }
         match m {
-            Method::ResolveFast | Method::ResolveFastTiles | Method::ResolveNoFast => {
+            Method::ResolveFast | Method::ResolveExact | Method::ResolveNoFast => {
                 msaa.resolve(gl, &frame)?
             }
             Method::Blit => blit_resolve(gl, twin, &host, true),
@@ -924,12 +914,6 @@ fn run(args: &Args) -> Result<(), String> {
         complexity.complex_depth
     );
     println!(
-        "slow tiles ({TILE_SIZE}x{TILE_SIZE}): {:.2}% ({} of {})",
-        100.0 * complexity.complex_tiles as f64 / complexity.tiles.max(1) as f64,
-        complexity.complex_tiles,
-        complexity.tiles
-    );
-    println!(
         "{} warm-up rounds, then {} runs per method, interleaved round-robin",
         args.warmup, args.runs
     );
@@ -1014,9 +998,6 @@ fn run(args: &Args) -> Result<(), String> {
         "complex_fraction": frac(complexity.complex_key),
         "depth_differs_pixels": complexity.complex_depth,
         "depth_differs_fraction": frac(complexity.complex_depth),
-        "tile_size": TILE_SIZE,
-        "slow_tiles": complexity.complex_tiles,
-        "tiles": complexity.tiles,
         "timer": primary.name(),
         "timer_reason": reason,
         "warmup": args.warmup,
@@ -1059,6 +1040,95 @@ fn print_table(st: &[Stats]) {
     }
 }
 
+/// The median of `method` in a report.
+fn median_of(report: &serde_json::Value, method: &str) -> Option<f64> {
+    report["methods"]
+        .as_array()?
+        .iter()
+        .find(|m| m["method"] == method)?["median_ms"]
+        .as_f64()
+}
+
+/// A markdown table of every report (`*.json`) in `dir`, in file-name order.
+fn summarize(dir: &std::path::Path) -> Result<(), String> {
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| format!("reading {}: {e}", dir.display()))?
+        .filter_map(|entry| entry.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    paths.sort();
+    if paths.is_empty() {
+        return Err(format!("no reports (*.json) in {}", dir.display()));
+    }
+    println!(
+        "| scene | key | opt-in test | complex pixels | resolve, ms | blits, ms | resolve / blits | \
+         resolve / always-slow | exact test / blits | always-slow / blits | changed by the opt-in test |"
+    );
+    println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|");
+    let mut renderer = None;
+    for path in &paths {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("reading {}: {e}", path.display()))?;
+        let r: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| format!("{}: not a resolve_vs_blit report ({e})", path.display()))?;
+        let median = |m: &str| {
+            median_of(&r, m).ok_or_else(|| format!("{}: no median for {m}", path.display()))
+        };
+        let (fast, exact, slow, blit) = (
+            median("resolve_median_smooth_fast")?,
+            median("resolve_median_smooth_fast_exact")?,
+            median("resolve_median_smooth_nofast")?,
+            median("blit_x3_depth")?,
+        );
+        let scene = match r["scene"].as_str() {
+            Some(s) => std::path::Path::new(s)
+                .file_stem()
+                .map_or(s.to_string(), |f| f.to_string_lossy().into_owned()),
+            None => format!("{} random triangles", r["triangles"]),
+        };
+        let option = if r["position_uniformity"] == true {
+            "position"
+        } else if r["plane_uniformity"] == true {
+            "plane"
+        } else {
+            "none (exact)"
+        };
+        let changed = if option.starts_with("none") {
+            "".to_string()
+        } else {
+            format!(
+                "{} px, by at most {:.2e}",
+                r["option_changed_pixels"],
+                r["option_max_difference"].as_f64().unwrap_or(f64::NAN)
+            )
+        };
+        println!(
+            "| {scene} | {} | {option} | {:.1} % | {fast:.1} | {blit:.1} | {:.2} | {:.2} | {:.2} | {:.2} | {changed} |",
+            r["key"].as_str().unwrap_or("?"),
+            100.0 * r["complex_fraction"].as_f64().unwrap_or(f64::NAN),
+            fast / blit,
+            fast / slow,
+            exact / blit,
+            slow / blit,
+        );
+        renderer.get_or_insert_with(|| {
+            format!(
+                "{}x{}, {}x, {} runs each, {}; {}",
+                r["width"],
+                r["height"],
+                r["samples"],
+                r["runs"],
+                r["timer"].as_str().unwrap_or("?"),
+                r["renderer"].as_str().unwrap_or("?")
+            )
+        });
+    }
+    if let Some(line) = renderer {
+        println!("\n{line}");
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let args = match parse_args() {
         Ok(a) => a,
@@ -1067,7 +1137,11 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    match run(&args) {
+    let result = match &args.summarize {
+        Some(dir) => summarize(dir),
+        None => run(&args),
+    };
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
             eprintln!("resolve_vs_blit: {msg}");

@@ -11,7 +11,7 @@ use deferred_msaa_lab::gl::{Attachment, Format, Texture2d, TextureRef, live_obje
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
 use deferred_msaa_lab::resolve::{
-    Region, ResolveMethod, ResolveRule, ResolveSettings, Schedule, Selection, SelectionFlag, Window,
+    Region, ResolveMethod, ResolveRule, ResolveSettings, Selection, SelectionFlag, Window,
 };
 use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions, introspect};
 use glow::HasContext;
@@ -145,8 +145,9 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
         .collect();
     keys.sort_by(f64::total_cmp);
     let max_depth = keys[keys.len() / 2];
-    // Every method, window and fast path with the default schedule; the
-    // other schedules (an odd tile size included); and selective AA.
+    // Every method, window and fast path; the opt-in uniformity tests (on
+    // rasterised samples the position test agrees with its CPU mirror); and
+    // selective AA.
     let mut cases = Vec::new();
     for &method in ResolveMethod::all() {
         for &window in Window::all() {
@@ -157,13 +158,16 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
                     fast_path,
                     ..ResolveSettings::default()
                 };
-                cases.push((settings, msaa.options().schedule));
+                cases.push(settings);
             }
         }
     }
-    let median = ResolveSettings::default();
-    for schedule in [Schedule::Tiles(8), Schedule::Tiles(3), Schedule::Tiles(16)] {
-        cases.push((median, schedule));
+    for (position_uniformity, plane_uniformity) in [(true, false), (false, true), (true, true)] {
+        cases.push(ResolveSettings {
+            position_uniformity,
+            plane_uniformity,
+            ..ResolveSettings::default()
+        });
     }
     let selections = [
         Selection {
@@ -199,25 +203,24 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
     ];
     for selection in selections {
         for fast_path in [true, false] {
-            for schedule in [Schedule::Tiles(8), Schedule::OnePass] {
-                let settings = ResolveSettings {
+            for position_uniformity in [false, true] {
+                cases.push(ResolveSettings {
                     fast_path,
                     selection,
+                    position_uniformity,
                     ..ResolveSettings::default()
-                };
-                cases.push((settings, schedule));
+                });
             }
         }
     }
     let default_options = msaa.options().clone();
     let mut complex_pixels = 0;
     let mut outside_pixels = 0;
-    for (settings, schedule) in cases {
+    for settings in cases {
         {
             {
                 let options = RetrofitOptions {
                     resolve: settings,
-                    schedule,
                     ..default_options.clone()
                 };
                 msaa.set_options(gl, &options).unwrap();
@@ -290,7 +293,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
                 }
                 assert!(
                     bad.is_empty(),
-                    "{settings:?} {schedule:?}: {} mismatches: {:#?}",
+                    "{settings:?}: {} mismatches: {:#?}",
                     bad.len(),
                     &bad[..bad.len().min(6)]
                 );

@@ -31,11 +31,6 @@
 //   SELECT_FLAG_SAMPLER, SELECT_FLAG_COMPONENT
 //                          selective AA: a pixel none of whose samples has this
 //                          attachment component >= 0.5 takes one sample
-//   PASS_CLASSIFY_TILES    the pass is the tile classification: one fragment per
-//                          TILE_SIZE^2 tile writes 1.0 when any pixel of the tile
-//                          needs the slow path (see src/resolve/tiles.rs)
-//   PASS_ONE_SAMPLE        every pixel copies sample 0 of everything, nothing else is
-//                          read; the slow tiles are drawn over it next
 
 #define RULE_BLEND 0
 #define RULE_BLEND_NORMAL 1
@@ -74,68 +69,42 @@ uniform vec4 u_region;           // rect (x0, y0, x1, y1); ellipse (cx, cy, 1/rx
 uniform float u_max_depth;
 #endif
 
-#ifdef PASS_CLASSIFY_TILES
-// Only the key attachment's sampler is needed; the others are declared
-// without outputs (unused samplers cost nothing).
-#define DECLARE_OUTPUTS 0
-out float o_tile;
-uniform ivec2 u_size;            // the resolve target's size in pixels
-#else
-#define DECLARE_OUTPUTS 1
-#endif
-
 #if NUM_ATTACHMENTS > 0
 uniform ATT0_SAMPLER u_att0;
-#if DECLARE_OUTPUTS
 out ATT0_VEC o_att0;
-#endif
 #endif
 #if NUM_ATTACHMENTS > 1
 uniform ATT1_SAMPLER u_att1;
-#if DECLARE_OUTPUTS
 out ATT1_VEC o_att1;
-#endif
 #endif
 #if NUM_ATTACHMENTS > 2
 uniform ATT2_SAMPLER u_att2;
-#if DECLARE_OUTPUTS
 out ATT2_VEC o_att2;
-#endif
 #endif
 #if NUM_ATTACHMENTS > 3
 uniform ATT3_SAMPLER u_att3;
-#if DECLARE_OUTPUTS
 out ATT3_VEC o_att3;
-#endif
 #endif
 #if NUM_ATTACHMENTS > 4
 uniform ATT4_SAMPLER u_att4;
-#if DECLARE_OUTPUTS
 out ATT4_VEC o_att4;
-#endif
 #endif
 #if NUM_ATTACHMENTS > 5
 uniform ATT5_SAMPLER u_att5;
-#if DECLARE_OUTPUTS
 out ATT5_VEC o_att5;
-#endif
 #endif
 #if NUM_ATTACHMENTS > 6
 uniform ATT6_SAMPLER u_att6;
-#if DECLARE_OUTPUTS
 out ATT6_VEC o_att6;
-#endif
 #endif
 #if NUM_ATTACHMENTS > 7
 uniform ATT7_SAMPLER u_att7;
-#if DECLARE_OUTPUTS
 out ATT7_VEC o_att7;
 #endif
-#endif
-#if defined(COMPLEX_OUTPUT) && DECLARE_OUTPUTS
+#ifdef COMPLEX_OUTPUT
 out float o_complex;
 #endif
-#if defined(REFERENCE_OUTPUT) && DECLARE_OUTPUTS
+#ifdef REFERENCE_OUTPUT
 out uint o_reference;
 #endif
 
@@ -555,63 +524,6 @@ bool takes_one_sample(ivec2 p) {
     return one;
 }
 
-#ifdef PASS_CLASSIFY_TILES
-
-void main() {
-    ivec2 origin = ivec2(gl_FragCoord.xy) * TILE_SIZE;
-    ivec2 end = min(origin + TILE_SIZE, u_size);
-    bool slow = false;
-    // Stop at the first slow pixel: a loop ends once every lane has left it.
-    for (int y = origin.y; y < end.y && !slow; ++y) {
-        for (int x = origin.x; x < end.x && !slow; ++x) {
-            load_keys(ivec2(x, y));
-            if (!takes_one_sample(ivec2(x, y))) slow = true;
-        }
-    }
-    o_tile = slow ? 1.0 : 0.0;
-}
-
-#else
-
-#ifdef PASS_ONE_SAMPLE
-
-// Every pixel copies sample 0 and reads nothing else (slow tiles are drawn over it).
-void main() {
-    ivec2 p = ivec2(gl_FragCoord.xy);
-#if NUM_ATTACHMENTS > 0
-    o_att0 = FETCH(u_att0, p, 0);
-#endif
-#if NUM_ATTACHMENTS > 1
-    o_att1 = FETCH(u_att1, p, 0);
-#endif
-#if NUM_ATTACHMENTS > 2
-    o_att2 = FETCH(u_att2, p, 0);
-#endif
-#if NUM_ATTACHMENTS > 3
-    o_att3 = FETCH(u_att3, p, 0);
-#endif
-#if NUM_ATTACHMENTS > 4
-    o_att4 = FETCH(u_att4, p, 0);
-#endif
-#if NUM_ATTACHMENTS > 5
-    o_att5 = FETCH(u_att5, p, 0);
-#endif
-#if NUM_ATTACHMENTS > 6
-    o_att6 = FETCH(u_att6, p, 0);
-#endif
-#if NUM_ATTACHMENTS > 7
-    o_att7 = FETCH(u_att7, p, 0);
-#endif
-#ifdef WRITE_DEPTH
-    gl_FragDepth = FETCH(u_depth, p, 0).r;
-#endif
-#ifdef COMPLEX_OUTPUT
-    o_complex = 0.0;
-#endif
-}
-
-#else
-
 // The value of the key attachment's sample r, by selects (g_key_vals[0] for r = 0).
 vec4 key_value_at(int r) {
     vec4 v = vec4(0.0);
@@ -885,14 +797,6 @@ void main() {
     o_complex = g_one ? 0.0 : 1.0;
 #endif
 #ifdef REFERENCE_OUTPUT
-#ifdef PASS_ONE_SAMPLE
-    o_reference = 0u;
-#else
     o_reference = uint(g_one ? 0 : r);
 #endif
-#endif
 }
-
-#endif
-
-#endif

@@ -2,7 +2,7 @@
 //! depth buffer is stored.
 //!
 //! Everything else (samples, rules, key source, method, window, selection,
-//! schedule, memory budget) is set once in
+//! memory budget) is set once in
 //! [`RetrofitOptions`](crate::RetrofitOptions). The resolve needs the
 //! projection for two things: to turn depth-buffer values back into view
 //! distances (the depth key, when no position attachment carries it), and to

@@ -18,7 +18,7 @@ use crate::gl::{
 };
 use crate::resolve::{
     ExtraOutputs, KeySource, ResolveInputs, ResolveParams, ResolveRule, ResolveSettings,
-    ResolveSlot, Resolver, Schedule, StencilCopy, StencilPass,
+    ResolveSlot, Resolver, StencilCopy, StencilPass,
 };
 use crate::{Error, Result};
 use glow::HasContext;
@@ -49,8 +49,6 @@ pub struct RetrofitOptions {
     /// How a depth-stencil host's stencil is written back after the
     /// resolve ([`StencilCopy`]: by default the reference sample's value).
     pub stencil: StencilCopy,
-    /// How one-sample pixels are found ([`Schedule`]).
-    pub schedule: Schedule,
     /// A limit on the twins' memory: over it, the sample count steps down
     /// (with a line in [`MsaaRetrofit::warnings`]) or, strict, the retrofit
     /// refuses with [`Error::MemoryBudget`].
@@ -66,7 +64,6 @@ impl Default for RetrofitOptions {
             position_space: PositionSpace::View,
             resolve: ResolveSettings::default(),
             stencil: StencilCopy::Auto,
-            schedule: Schedule::OnePass,
             memory_budget: None,
         }
     }
@@ -660,11 +657,7 @@ impl MsaaRetrofit {
         host_fbo: glow::Framebuffer,
         options: &RetrofitOptions,
     ) -> Result<Self> {
-        let mut resolver = Resolver::new(gl)?;
-        if let Err(e) = resolver.set_schedule(options.schedule) {
-            resolver.destroy(gl);
-            return Err(e);
-        }
+        let resolver = Resolver::new(gl)?;
         let built = match Self::build(gl, host_fbo, options) {
             Ok(b) => b,
             Err(e) => {
@@ -1025,12 +1018,9 @@ impl MsaaRetrofit {
             return self.rebuild(gl, options);
         }
         let previous = self.options.clone();
-        let previous_schedule = self.resolver.schedule();
-        self.resolver.set_schedule(options.schedule)?;
         self.options = options.clone();
         if let Err(e) = self.prepare(gl) {
             self.options = previous;
-            self.resolver.set_schedule(previous_schedule)?;
             return Err(e);
         }
         Ok(())
@@ -1063,11 +1053,6 @@ impl MsaaRetrofit {
 
     fn rebuild_within(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
         let built = Self::build(gl, self.host.fbo, options)?;
-        let previous_schedule = self.resolver.schedule();
-        if let Err(e) = self.resolver.set_schedule(options.schedule) {
-            built.destroy(gl);
-            return Err(e);
-        }
         let old = Built {
             host: std::mem::replace(&mut self.host, built.host),
             twin: std::mem::replace(&mut self.twin, built.twin),
@@ -1096,7 +1081,6 @@ impl MsaaRetrofit {
                 };
                 new.destroy(gl);
                 self.options = old_options;
-                self.resolver.set_schedule(previous_schedule)?;
                 Err(e)
             }
         }

@@ -9,7 +9,6 @@
 pub mod cpu;
 mod settings;
 mod stencil;
-pub(crate) mod tiles;
 
 pub use settings::{
     DepthProjection, Region, ResolveMethod, ResolveRule, ResolveSettings, Selection, SelectionFlag,
@@ -17,8 +16,6 @@ pub use settings::{
 };
 pub(crate) use stencil::StencilPass;
 pub use stencil::{STENCIL_COPY_FRAG, StencilCopy};
-pub use tiles::TILE_SIZE;
-use tiles::{RESOLVE_TILES_VERT, TileMask};
 
 use crate::gl::format::SampleKind;
 use crate::gl::{
@@ -86,29 +83,8 @@ pub(crate) struct ResolveProgramKey {
     pub complex_output: bool,
     /// Write the reference sample's index to the output after those.
     pub reference_output: bool,
-    /// Which of the resolve's passes this program is.
-    pub pass: ResolvePass,
     /// Selective anti-aliasing criteria compiled in.
     pub selection: SelectionKey,
-}
-
-/// The passes of a resolve ([`tiles`] explains the tiled schedule).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub(crate) enum ResolvePass {
-    /// The whole resolve over a full-screen triangle.
-    Single,
-    /// The tile classification, `tile_size` pixels square.
-    ClassifyTiles {
-        /// Tile edge in pixels.
-        tile_size: u32,
-    },
-    /// Every pixel copies sample 0 (the slow tiles are drawn over it next).
-    OneSample,
-    /// The tiles with a slow pixel: the single-pass program on the tile grid.
-    SlowTiles {
-        /// Tile edge in pixels.
-        tile_size: u32,
-    },
 }
 
 /// The compiled-in shape of a [`Selection`] (its numbers are uniforms).
@@ -234,15 +210,6 @@ impl ResolveProgramKey {
         if self.reference_output {
             def("REFERENCE_OUTPUT", "1".into());
         }
-        match self.pass {
-            ResolvePass::Single => {}
-            ResolvePass::ClassifyTiles { tile_size } => {
-                def("PASS_CLASSIFY_TILES", "1".into());
-                def("TILE_SIZE", tile_size.to_string());
-            }
-            ResolvePass::OneSample => def("PASS_ONE_SAMPLE", "1".into()),
-            ResolvePass::SlowTiles { tile_size } => def("TILE_SIZE", tile_size.to_string()),
-        }
         let sel = self.selection;
         if let Some(ellipse) = sel.region_ellipse {
             let shape = if ellipse {
@@ -261,16 +228,6 @@ impl ResolveProgramKey {
             def("SELECT_FLAG_COMPONENT", component.into());
         }
         d
-    }
-
-    /// The vertex shader this pass draws with.
-    fn vertex_shader(&self) -> (&'static str, &'static str) {
-        match self.pass {
-            ResolvePass::Single | ResolvePass::ClassifyTiles { .. } | ResolvePass::OneSample => {
-                ("fullscreen.vert", FULLSCREEN_VERT)
-            }
-            ResolvePass::SlowTiles { .. } => ("resolve_tiles.vert", RESOLVE_TILES_VERT),
-        }
     }
 }
 
@@ -363,54 +320,15 @@ impl ResolveParams {
 pub struct Resolver {
     programs: HashMap<ResolveProgramKey, Program>,
     vao: VertexArray,
-    schedule: Schedule,
-    tiles: Option<TileMask>,
-}
-
-/// How a resolve finds the pixels that take one sample (uniform pixels on
-/// the fast path, pixels outside a selective-AA selection). Every schedule
-/// gives the same values; they differ in speed, by GPU.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Schedule {
-    /// One full-screen pass; a per-pixel branch skips the slow path (the
-    /// default). Where branches are real (GPUs take them 32–64 pixels at a
-    /// time) uniform regions skip it.
-    OnePass,
-    /// Classify tiles of this many pixels ([`TILE_SIZE`] is the size
-    /// measured), copy sample 0 everywhere, then draw only the slow tiles
-    /// with the full program: for a rasteriser that runs both
-    /// sides of every branch, as llvmpipe does, but never visits a tile it
-    /// is not given. Measured on llvmpipe (README, "What the resolve
-    /// costs") it wins only where slow tiles are few, by less than the
-    /// noise, and loses 2x where they are many, because classifying costs
-    /// about what the slow path saves there.
-    Tiles(u32),
 }
 
 impl Resolver {
-    /// Create the pass (programs are built on first use), with the
-    /// one-pass schedule ([`Schedule`]).
+    /// Create the pass (programs are built on first use).
     pub fn new(gl: &glow::Context) -> Result<Self> {
         Ok(Resolver {
             programs: HashMap::new(),
             vao: VertexArray::new(gl, "resolve full-screen triangle")?,
-            schedule: Schedule::OnePass,
-            tiles: None,
         })
-    }
-
-    /// Choose how one-sample pixels are found (see [`Schedule`]).
-    pub fn set_schedule(&mut self, schedule: Schedule) -> Result<()> {
-        if schedule == Schedule::Tiles(0) {
-            return Err(Error::invalid("a resolve tile must be at least 1 pixel"));
-        }
-        self.schedule = schedule;
-        Ok(())
-    }
-
-    /// The schedule in use.
-    pub fn schedule(&self) -> Schedule {
-        self.schedule
     }
 
     /// The program for `key`, built on first use.
@@ -505,19 +423,8 @@ impl Resolver {
             blend_depth: s.blend_depth && write_depth,
             complex_output: extra.complex,
             reference_output: extra.reference,
-            pass: ResolvePass::Single,
             selection: SelectionKey::of(&s.selection, inputs)?,
         })
-    }
-
-    /// The schedule a resolve under `settings` runs: splitting pays off only
-    /// when some pixels may take one sample.
-    fn schedule_for(&self, settings: &ResolveSettings) -> Schedule {
-        if settings.fast_path || settings.selection.is_active() {
-            self.schedule
-        } else {
-            Schedule::OnePass
-        }
     }
 
     /// Compile now every program that [`Resolver::run`] with these inputs,
@@ -531,35 +438,10 @@ impl Resolver {
         settings: &ResolveSettings,
         extra: impl Into<ExtraOutputs>,
     ) -> Result<()> {
-        let base = Self::base_key(inputs, target, settings, extra.into())?;
-        let mut keys = Vec::new();
-        match self.schedule_for(settings) {
-            Schedule::OnePass => keys.push(base),
-            Schedule::Tiles(tile_size) => {
-                keys.push(ResolveProgramKey {
-                    pass: ResolvePass::ClassifyTiles { tile_size },
-                    write_depth: false,
-                    blend_depth: false,
-                    complex_output: false,
-                    reference_output: false,
-                    ..base.clone()
-                });
-                keys.push(ResolveProgramKey {
-                    pass: ResolvePass::OneSample,
-                    ..base.clone()
-                });
-                keys.push(ResolveProgramKey {
-                    pass: ResolvePass::SlowTiles { tile_size },
-                    ..base
-                });
-            }
-        }
-        for key in &keys {
-            self.program(gl, key)?;
-        }
+        let key = Self::base_key(inputs, target, settings, extra.into())?;
+        self.program(gl, &key)?;
         Ok(())
     }
-
     /// Resolve `inputs` into `target`, whose colour attachment `k` (draw buffer
     /// `k`) receives input `k`, whose depth attachment (if any) receives the
     /// resolved depth, and whose draw buffer `colors.len()` receives the
@@ -585,75 +467,15 @@ impl Resolver {
         if let Err(e) = check_error(gl, "the host's GL calls before the resolve") {
             log::warn!("{e}");
         }
-        // Units 0..=colors hold the inputs, one more the tile mask.
-        let state = SavedState::capture(gl, inputs.colors.len() as u32 + 2);
-        let result = match self.schedule_for(&params.settings) {
-            Schedule::OnePass => self.draw(gl, &base, inputs, target, params, None),
-            Schedule::Tiles(tile_size) => {
-                self.run_tiled(gl, base, inputs, target, params, tile_size)
-            }
-        };
+        // Units 0..=colors hold the inputs.
+        let state = SavedState::capture(gl, inputs.colors.len() as u32 + 1);
+        let result = self.draw(gl, &base, inputs, target, params);
         state.restore(gl);
         result?;
         check_error(gl, "the resolve pass")
     }
 
-    /// The tiled schedule: classify, then one-sample tiles, then slow tiles.
-    fn run_tiled(
-        &mut self,
-        gl: &glow::Context,
-        base: ResolveProgramKey,
-        inputs: &ResolveInputs<'_>,
-        target: &Framebuffer,
-        params: &ResolveParams,
-        tile_size: u32,
-    ) -> Result<()> {
-        let size = (target.width, target.height);
-        let stale = self
-            .tiles
-            .as_ref()
-            .is_some_and(|t| t.target != size || t.tile_size != tile_size);
-        if stale {
-            if let Some(old) = self.tiles.take() {
-                old.destroy(gl);
-            }
-        }
-        if self.tiles.is_none() {
-            self.tiles = Some(TileMask::new(gl, size.0, size.1, tile_size)?);
-        }
-        let Some(mask) = self.tiles.take() else {
-            return Err(Error::invalid("the resolve tile mask is missing"));
-        };
-        let result = (|| {
-            let classify = ResolveProgramKey {
-                pass: ResolvePass::ClassifyTiles { tile_size },
-                write_depth: false,
-                blend_depth: false,
-                complex_output: false,
-                ..base.clone()
-            };
-            self.draw(gl, &classify, inputs, mask.framebuffer(), params, None)?;
-            // Sample 0 everywhere, over a full-screen triangle: cheaper than
-            // drawing the one-sample tiles apart, whose two triangles each
-            // would make a rasteriser shade the blocks on their shared
-            // diagonal twice. The slow tiles are then drawn over it.
-            let one = ResolveProgramKey {
-                pass: ResolvePass::OneSample,
-                ..base.clone()
-            };
-            self.draw(gl, &one, inputs, target, params, None)?;
-            let slow = ResolveProgramKey {
-                pass: ResolvePass::SlowTiles { tile_size },
-                ..base
-            };
-            self.draw(gl, &slow, inputs, target, params, Some(&mask))
-        })();
-        self.tiles = Some(mask);
-        result
-    }
-
-    /// One draw of the program for `key` into `target`; over the tile grid
-    /// of `tiles` when given, else a full-screen triangle.
+    /// One draw of the program for `key` into `target`, a full-screen triangle.
     fn draw(
         &mut self,
         gl: &glow::Context,
@@ -661,7 +483,6 @@ impl Resolver {
         inputs: &ResolveInputs<'_>,
         target: &Framebuffer,
         params: &ResolveParams,
-        tiles: Option<&TileMask>,
     ) -> Result<()> {
         let vao = self.vao.raw;
         let program = self.program(gl, key)?;
@@ -710,76 +531,51 @@ impl Resolver {
             if let Some(d) = s.selection.max_depth {
                 program.set_f32(gl, "u_max_depth", d as f32);
             }
-            if let Some(loc) = program.uniform(gl, "u_size") {
-                // The resolved pixels' extent (the inputs' size).
-                let (w, h) = (inputs.depth.width as i32, inputs.depth.height as i32);
-                gl.uniform_2_i32(Some(&loc), w, h);
-            }
             gl.bind_vertex_array(Some(vao));
-            match tiles {
-                None => gl.draw_arrays(glow::TRIANGLES, 0, 3),
-                Some(mask) => {
-                    let unit = 1 + inputs.colors.len() as u32;
-                    mask.texture().bind(gl, unit);
-                    program.set_i32(gl, "u_tiles", unit as i32);
-                    gl.draw_arrays(glow::TRIANGLES, 0, 6 * mask.tiles() as i32);
-                }
-            }
+            gl.draw_arrays(glow::TRIANGLES, 0, 3);
         }
         Ok(())
     }
 
-    /// Free the programs, the vertex array and the tile mask.
+    /// Free the programs and the vertex array.
     pub fn destroy(self, gl: &glow::Context) {
         for (_, program) in self.programs {
             program.destroy(gl);
         }
         self.vao.destroy(gl);
-        if let Some(t) = self.tiles {
-            t.destroy(gl);
-        }
     }
 }
 
 fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program> {
     let mut frag_outputs: Vec<(String, u32)> = Vec::new();
-    if matches!(key.pass, ResolvePass::ClassifyTiles { .. }) {
-        frag_outputs.push(("o_tile".into(), 0));
-    } else {
-        for k in 0..key.attachments.len() {
-            frag_outputs.push((format!("o_att{k}"), k as u32));
-        }
-        let mut next = key.attachments.len() as u32;
-        if key.complex_output {
-            frag_outputs.push(("o_complex".into(), next));
-            next += 1;
-        }
-        if key.reference_output {
-            frag_outputs.push(("o_reference".into(), next));
-        }
+    for k in 0..key.attachments.len() {
+        frag_outputs.push((format!("o_att{k}"), k as u32));
+    }
+    let mut next = key.attachments.len() as u32;
+    if key.complex_output {
+        frag_outputs.push(("o_complex".into(), next));
+        next += 1;
+    }
+    if key.reference_output {
+        frag_outputs.push(("o_reference".into(), next));
     }
     let frag_outputs: Vec<(&str, u32)> = frag_outputs
         .iter()
         .map(|(name, k)| (name.as_str(), *k))
         .collect();
     let label = format!(
-        "resolve {}x {} {} ({} attachments, {:?})",
+        "resolve {}x {} {} ({} attachments)",
         key.samples,
         key.method,
         key.window,
         key.attachments.len(),
-        key.pass
     );
     Program::build(
         gl,
         &label,
         &preamble(&[], &key.defines()),
         &[
-            (
-                ShaderStage::Vertex,
-                key.vertex_shader().0,
-                key.vertex_shader().1,
-            ),
+            (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
             (ShaderStage::Fragment, "resolve.frag", RESOLVE_FRAG),
         ],
         &frag_outputs,
