@@ -14,7 +14,11 @@
 //! 4. three `glBlitFramebuffer` calls (twin → host, one per colour
 //!    attachment) plus one depth blit: what a hardware resolve costs, and
 //!    the same without the depth blit;
-//! 5. a trivial full-screen pass writing the three attachments, for scale.
+//! 5. the floors of a one-pass resolve at 0 % complex pixels: a pass that
+//!    reads only what the exact uniformity test needs (every depth and
+//!    position sample) and writes sample 0, and one that reads what the
+//!    opt-in position test needs (every position sample, depth sample 0);
+//! 6. a trivial full-screen pass writing the three attachments, for scale.
 //!
 //! `--summarize DIR` measures nothing and prints a markdown table of the
 //! reports in DIR (`scripts/resolve-cost` runs every case and calls it).
@@ -81,6 +85,42 @@ void main() {
     o_color = vec4(v_color, 1.0);
     o_position = vec4(v_view, 1.0);
     o_normal = vec4(normalize(cross(dFdx(v_view), dFdy(v_view))), 0.5);
+}
+";
+/// The floors of the one-pass resolve at 0 % complex pixels: full-screen
+/// passes that read only what a uniformity test needs (every depth and
+/// position sample for the exact test; every position sample and depth
+/// sample 0 for the opt-in position test) and write sample 0 of every
+/// attachment and of depth. No resolve that makes that test can cost less.
+const FLOOR_FRAG: &str = "
+uniform sampler2DMS u_depth;
+uniform sampler2DMS u_color;
+uniform sampler2DMS u_position;
+uniform sampler2DMS u_normal;
+uniform float u_clear_depth;
+out vec4 o_color;
+out vec4 o_position;
+out vec4 o_normal;
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    float d0 = texelFetch(u_depth, p, 0).r;
+    vec4 k0 = texelFetch(u_position, p, 0);
+    bool same = true;
+    for (int i = 1; i < NUM_SAMPLES; ++i) {
+        vec4 k = texelFetch(u_position, p, i);
+#ifdef EXACT_TEST
+        bool bg0 = d0 == u_clear_depth;
+        bool bg = texelFetch(u_depth, p, i).r == u_clear_depth;
+        same = same && bg == bg0 && (bg0 || k.z == k0.z);
+#else
+        same = same && k == k0;
+#endif
+    }
+    // A pixel that fails the test is marked, so the test is not optimised away.
+    o_color = same ? texelFetch(u_color, p, 0) : vec4(1.0, 0.0, 1.0, 1.0);
+    o_position = k0;
+    o_normal = texelFetch(u_normal, p, 0);
+    gl_FragDepth = d0;
 }
 ";
 /// The scale pass: a full-screen triangle writing constants to the three attachments.
@@ -511,6 +551,41 @@ fn blit_resolve(gl: &glow::Context, twin: glow::Framebuffer, host: &Host, depth:
 }
 
 /// A full-screen triangle writing constants into the host's three attachments.
+/// One floor pass (`FLOOR_FRAG`) from the twin's textures into the host's.
+fn floor_pass(
+    gl: &glow::Context,
+    program: &Program,
+    vao: &VertexArray,
+    host: &Host,
+    msaa: &MsaaRetrofit,
+) -> deferred_msaa::Result<()> {
+    let (depth, colors, _) = msaa.inputs()?;
+    unsafe {
+        host.fbo.bind(gl);
+        gl.enable(glow::DEPTH_TEST);
+        gl.depth_func(glow::ALWAYS);
+        gl.depth_mask(true);
+        gl.disable(glow::BLEND);
+        program.bind(gl);
+        depth.bind(gl, 0);
+        program.set_i32(gl, "u_depth", 0);
+        for (k, name) in ["u_color", "u_position", "u_normal"].iter().enumerate() {
+            if let Some(t) = colors.get(k) {
+                t.bind(gl, 1 + k as u32);
+                program.set_i32(gl, name, 1 + k as i32);
+            }
+        }
+        program.set_f32(gl, "u_clear_depth", 1.0);
+        vao.bind(gl);
+        gl.draw_arrays(glow::TRIANGLES, 0, 3);
+        gl.bind_vertex_array(None);
+        gl.use_program(None);
+        gl.disable(glow::DEPTH_TEST);
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+    }
+    Ok(())
+}
+
 fn trivial_pass(gl: &glow::Context, program: &Program, vao: &VertexArray, host: &Host) {
     unsafe {
         host.fbo.bind(gl);
@@ -650,16 +725,20 @@ enum Method {
     ResolveNoFast,
     Blit,
     BlitColor,
+    FloorExact,
+    FloorPosition,
     Trivial,
 }
 
 impl Method {
-    const ALL: [Method; 6] = [
+    const ALL: [Method; 8] = [
         Method::ResolveFast,
         Method::ResolveExact,
         Method::ResolveNoFast,
         Method::Blit,
         Method::BlitColor,
+        Method::FloorExact,
+        Method::FloorPosition,
         Method::Trivial,
     ];
     fn key(self) -> &'static str {
@@ -669,6 +748,8 @@ impl Method {
             Method::ResolveNoFast => "resolve_median_smooth_nofast",
             Method::Blit => "blit_x3_depth",
             Method::BlitColor => "blit_x3",
+            Method::FloorExact => "floor_exact_test",
+            Method::FloorPosition => "floor_position_test",
             Method::Trivial => "fullscreen_trivial",
         }
     }
@@ -681,6 +762,8 @@ impl Method {
             Method::ResolveNoFast => "resolve median smooth, fast path off",
             Method::Blit => "3x glBlitFramebuffer + depth (hardware resolve)",
             Method::BlitColor => "3x glBlitFramebuffer, colour only",
+            Method::FloorExact => "floor: the exact test's reads, sample 0 written",
+            Method::FloorPosition => "floor: the position test's reads, sample 0 written",
             Method::Trivial => "trivial full-screen pass (3 outputs)",
         }
     }
@@ -740,6 +823,28 @@ fn run(args: &Args) -> Result<(), String> {
         &[("o_color", 0), ("o_position", 1), ("o_normal", 2)],
     )
     .map_err(e)?;
+    let floor = |exact: bool| {
+        let mut defines = vec![("NUM_SAMPLES".to_string(), samples.to_string())];
+        if exact {
+            defines.push(("EXACT_TEST".to_string(), "1".to_string()));
+        }
+        Program::build(
+            gl,
+            if exact {
+                "floor of the exact test"
+            } else {
+                "floor of the position test"
+            },
+            &preamble(&[], &defines),
+            &[
+                (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
+                (ShaderStage::Fragment, "floor.frag", FLOOR_FRAG),
+            ],
+            &[("o_color", 0), ("o_position", 1), ("o_normal", 2)],
+        )
+    };
+    let floor_exact = floor(true).map_err(e)?;
+    let floor_position = floor(false).map_err(e)?;
     let empty_vao = VertexArray::new(gl, "trivial pass vao").map_err(e)?;
     // Every run is timed twice at once: a GL_TIME_ELAPSED query (where the
     // context has one) inside a glFinish-bracketed wall clock.
@@ -802,6 +907,8 @@ fn run(args: &Args) -> Result<(), String> {
             }
             Method::Blit => blit_resolve(gl, twin, &host, true),
             Method::BlitColor => blit_resolve(gl, twin, &host, false),
+            Method::FloorExact => floor_pass(gl, &floor_exact, &empty_vao, &host, &msaa)?,
+            Method::FloorPosition => floor_pass(gl, &floor_position, &empty_vao, &host, &msaa)?,
             Method::Trivial => trivial_pass(gl, &trivial, &empty_vao, &host),
         }
         let q_ms = query.as_mut().map(|q| q.end(gl));
@@ -836,6 +943,8 @@ fn run(args: &Args) -> Result<(), String> {
     }
     trivial.destroy(gl);
     empty_vao.destroy(gl);
+    floor_exact.destroy(gl);
+    floor_position.destroy(gl);
     msaa.destroy(gl);
     host.destroy(gl);
 
@@ -1062,9 +1171,10 @@ fn summarize(dir: &std::path::Path) -> Result<(), String> {
     }
     println!(
         "| scene | key | opt-in test | complex pixels | resolve, ms | blits, ms | resolve / blits | \
-         resolve / always-slow | exact test / blits | always-slow / blits | changed by the opt-in test |"
+         resolve / always-slow | exact test / blits | always-slow / blits | \
+         floor, exact test / blits | floor, position test / blits | changed by the opt-in test |"
     );
-    println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|");
+    println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|");
     let mut renderer = None;
     for path in &paths {
         let text = std::fs::read_to_string(path)
@@ -1074,6 +1184,8 @@ fn summarize(dir: &std::path::Path) -> Result<(), String> {
         let median = |m: &str| {
             median_of(&r, m).ok_or_else(|| format!("{}: no median for {m}", path.display()))
         };
+        let (floor_exact, floor_position) =
+            (median("floor_exact_test")?, median("floor_position_test")?);
         let (fast, exact, slow, blit) = (
             median("resolve_median_smooth_fast")?,
             median("resolve_median_smooth_fast_exact")?,
@@ -1103,13 +1215,15 @@ fn summarize(dir: &std::path::Path) -> Result<(), String> {
             )
         };
         println!(
-            "| {scene} | {} | {option} | {:.1} % | {fast:.1} | {blit:.1} | {:.2} | {:.2} | {:.2} | {:.2} | {changed} |",
+            "| {scene} | {} | {option} | {:.1} % | {fast:.1} | {blit:.1} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {changed} |",
             r["key"].as_str().unwrap_or("?"),
             100.0 * r["complex_fraction"].as_f64().unwrap_or(f64::NAN),
             fast / blit,
             fast / slow,
             exact / blit,
             slow / blit,
+            floor_exact / blit,
+            floor_position / blit,
         );
         renderer.get_or_insert_with(|| {
             format!(

@@ -15,7 +15,9 @@
 //! Options of the resolve methods: `:hard` / `:smooth` (the closeness
 //! window), `:c=F` (outer width; when given without `c_in`, `c_in` becomes
 //! `min(2.5, c/2)`), `:c_in=F` (also spelt `c-in`), `:nofast` (no
-//! uniform-pixel fast path). `+fxaa` after any entry runs the crate's FXAA
+//! uniform-pixel fast path), `:position-uniformity` and `:plane-uniformity`
+//! (the fast path's opt-in tests, `ResolveSettings::position_uniformity` and
+//! `plane_uniformity`). `+fxaa` after any entry runs the crate's FXAA
 //! after tonemapping: `median:hard+fxaa`, `none+fxaa`. `:full` after any
 //! method renders with every attachment of the layout instead of the
 //! scene-adaptive plan (see [`crate::renderer::plan`]): `median` against
@@ -66,7 +68,7 @@ pub const METHOD_NAMES: &[&str] = &[
 
 /// What the accepted entries look like, for error messages.
 const ACCEPTED: &str = "accepted: none, average, front, median, back, per-sample, complex, gbaa, sparse; \
-resolve options after colons (:hard, :smooth, :c=F, :c_in=F, :nofast); sparse's :pool=N; :full (the full G-buffer layout) \
+resolve options after colons (:hard, :smooth, :c=F, :c_in=F, :nofast, :position-uniformity, :plane-uniformity); sparse's :pool=N; :full (the full G-buffer layout) \
 and +fxaa after any entry";
 
 /// How a method anti-aliases, before FXAA.
@@ -267,6 +269,16 @@ impl FromStr for MethodEntry {
                         None if *option == "hard" => settings.window = Window::Hard,
                         None if *option == "smooth" => settings.window = Window::Smooth,
                         None if *option == "nofast" => settings.fast_path = false,
+                        None if matches!(
+                            *option,
+                            "position-uniformity" | "position_uniformity"
+                        ) =>
+                        {
+                            settings.position_uniformity = true
+                        }
+                        None if matches!(*option, "plane-uniformity" | "plane_uniformity") => {
+                            settings.plane_uniformity = true
+                        }
                         Some(("c", v)) => settings.c = parse_number(label, "c", v)?,
                         Some(("c_in" | "c-in", v)) => {
                             settings.c_in = parse_number(label, "c_in", v)?;
