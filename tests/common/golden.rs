@@ -7,16 +7,27 @@
 //!   the golden (git-ignored).
 //!
 //! Per-sample goldens (`NAME.samples.gz`) hold every sample of every
-//! attachment and depth as half floats, deflated: one line of JSON naming the
-//! planes and their shapes, then the data. Final images are PNGs compared with FLIP.
+//! attachment and depth as half floats, deflated: a line `blessed on: DRIVER`,
+//! one line of JSON naming the planes and their shapes, then the data. Final
+//! images are PNGs compared with FLIP; a `tEXt` chunk `blessed on` right after
+//! `IHDR` names the driver. DRIVER is `GL_RENDERER | GL_VERSION` of the context
+//! that blessed the file (see [`driver`]), so a mismatch after a Mesa upgrade
+//! says which Mesa the golden came from. Reading ignores it; files from before
+//! it have none and get one when re-blessed.
 #![allow(dead_code)]
 
+use deferred_msaa_lab::context::HeadlessContext;
 use flate2::Compression;
 use flate2::read::DeflateDecoder;
 use flate2::write::DeflateEncoder;
 use image::RgbaImage;
 use std::io::{Read, Write};
 use std::path::PathBuf;
+
+/// The first line of a per-sample golden, before the driver.
+const BLESSED_ON: &str = "blessed on: ";
+/// The keyword of a PNG golden's `tEXt` chunk naming the driver.
+const PNG_KEYWORD: &str = "blessed on";
 
 fn golden_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden")
@@ -29,6 +40,38 @@ pub fn blessing() -> bool {
         Ok(v) if v == "1" => true,
         Ok(v) => panic!("DEFERRED_MSAA_BLESS must be unset or exactly `1`, not `{v}`"),
     }
+}
+
+/// The driver a golden records as its blesser: `GL_RENDERER | GL_VERSION`, e.g.
+/// `llvmpipe (LLVM 15.0.6, 256 bits) | 4.5 (Core Profile) Mesa 22.3.6`.
+pub fn driver(ctx: &HeadlessContext) -> String {
+    let v = ctx.version();
+    format!("{} | {}", v.renderer, v.version_string)
+}
+
+/// The driver on one line of printable ASCII, so it fits a header line and a
+/// PNG `tEXt` chunk (Latin-1) alike.
+fn one_line(driver: &str) -> String {
+    driver
+        .chars()
+        .map(|c| {
+            if c.is_ascii() && !c.is_ascii_control() {
+                c
+            } else {
+                ' '
+            }
+        })
+        .collect::<String>()
+        .trim()
+        .to_string()
+}
+
+fn provenance(blessed_on: Option<&str>, driver: &str) -> String {
+    format!(
+        "golden blessed on: {}; this run: {}",
+        blessed_on.unwrap_or("(not recorded)"),
+        one_line(driver)
+    )
 }
 
 fn missing(name: &str, file: &str, write: impl FnOnce(&std::path::Path)) -> ! {
@@ -61,12 +104,14 @@ pub struct SampleTolerance {
     pub outlier_fraction: f32,
 }
 
-fn encode(planes: &[Plane]) -> Vec<u8> {
+/// A per-sample golden's bytes, headed by the driver that blessed it.
+pub fn encode(planes: &[Plane], driver: &str) -> Vec<u8> {
+    let mut out = format!("{BLESSED_ON}{}\n", one_line(driver)).into_bytes();
     let header: Vec<serde_json::Value> = planes
         .iter()
         .map(|p| serde_json::json!({"name": p.name, "shape": p.shape}))
         .collect();
-    let mut out = serde_json::to_vec(&header).expect("header");
+    out.extend(serde_json::to_vec(&header).expect("header"));
     out.push(b'\n');
     let mut enc = DeflateEncoder::new(Vec::new(), Compression::best());
     for p in planes {
@@ -79,7 +124,22 @@ fn encode(planes: &[Plane]) -> Vec<u8> {
     out
 }
 
-fn decode(bytes: &[u8]) -> Vec<Plane> {
+/// The driver that blessed a per-sample golden (`None` for files from before
+/// the header) and its planes.
+pub fn decode(bytes: &[u8]) -> (Option<String>, Vec<Plane>) {
+    let (blessed_on, bytes) = match bytes.strip_prefix(BLESSED_ON.as_bytes()) {
+        Some(rest) => {
+            let end = rest
+                .iter()
+                .position(|&b| b == b'\n')
+                .expect("golden `blessed on` line");
+            (
+                Some(String::from_utf8_lossy(&rest[..end]).into_owned()),
+                &rest[end + 1..],
+            )
+        }
+        None => (None, bytes),
+    };
     let split = bytes
         .iter()
         .position(|&b| b == b'\n')
@@ -93,7 +153,7 @@ fn decode(bytes: &[u8]) -> Vec<Plane> {
     let mut values = raw
         .chunks_exact(2)
         .map(|c| half::f16::from_le_bytes([c[0], c[1]]).to_f32());
-    header
+    let planes = header
         .iter()
         .map(|h| {
             let shape: Vec<usize> = serde_json::from_value(h["shape"].clone()).expect("shape");
@@ -105,7 +165,51 @@ fn decode(bytes: &[u8]) -> Vec<Plane> {
                 data: values.by_ref().take(n).collect(),
             }
         })
-        .collect()
+        .collect();
+    (blessed_on, planes)
+}
+
+/// A PNG golden's bytes: `image` encoded, with a `tEXt` chunk naming the
+/// driver inserted right after `IHDR` (where readers meet it first).
+pub fn encode_png(image: &RgbaImage, driver: &str) -> Vec<u8> {
+    let mut png = Vec::new();
+    image
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .expect("encoding PNG");
+    // Signature (8 bytes), then IHDR: length, type, 13 bytes, CRC.
+    const IHDR_END: usize = 8 + 4 + 4 + 13 + 4;
+    assert_eq!(&png[12..16], b"IHDR", "a PNG starts with IHDR");
+    let mut data = format!("{PNG_KEYWORD}\0{}", one_line(driver)).into_bytes();
+    let mut crc = flate2::Crc::new();
+    crc.update(b"tEXt");
+    crc.update(&data);
+    let mut chunk = (data.len() as u32).to_be_bytes().to_vec();
+    chunk.extend_from_slice(b"tEXt");
+    chunk.append(&mut data);
+    chunk.extend_from_slice(&crc.sum().to_be_bytes());
+    png.splice(IHDR_END..IHDR_END, chunk);
+    png
+}
+
+/// The driver a PNG golden's `tEXt` chunk names, `None` for files from before it.
+pub fn png_blessed_on(png: &[u8]) -> Option<String> {
+    let mut at = 8;
+    while at + 8 <= png.len() {
+        let len = u32::from_be_bytes(png[at..at + 4].try_into().ok()?) as usize;
+        let kind = &png[at + 4..at + 8];
+        let data = png.get(at + 8..at + 8 + len)?;
+        if kind == b"IDAT" || kind == b"IEND" {
+            return None;
+        }
+        if kind == b"tEXt"
+            && let Some(text) = data.strip_prefix(format!("{PNG_KEYWORD}\0").as_bytes())
+        {
+            // tEXt is Latin-1; what we write is ASCII.
+            return Some(text.iter().map(|&b| b as char).collect());
+        }
+        at += 12 + len;
+    }
+    None
 }
 
 /// Values are stored as half floats; compare what half precision keeps.
@@ -123,26 +227,28 @@ fn same(a: f32, b: f32, tol: SampleTolerance) -> bool {
     (a - b).abs() <= tol.abs + tol.rel * b.abs().max(a.abs())
 }
 
-/// Compare every sample of every plane with the golden `NAME.samples.gz`.
-pub fn check_samples(name: &str, planes: &[Plane], tol: SampleTolerance) {
+/// Compare every sample of every plane with the golden `NAME.samples.gz`;
+/// `driver` ([`driver`]) is what a blessed file records and a failure reports.
+pub fn check_samples(name: &str, planes: &[Plane], tol: SampleTolerance, driver: &str) {
     let file = format!("{name}.samples.gz");
     let path = golden_dir().join(&file);
     if blessing() {
         std::fs::create_dir_all(golden_dir()).expect("tests/golden");
-        std::fs::write(&path, encode(planes)).expect("writing golden");
-        eprintln!("blessed {}", path.display());
+        std::fs::write(&path, encode(planes, driver)).expect("writing golden");
+        eprintln!("blessed {} on {}", path.display(), one_line(driver));
         return;
     }
     let Ok(bytes) = std::fs::read(&path) else {
         missing(name, &file, |p| {
-            std::fs::write(p, encode(planes)).expect("writing candidate")
+            std::fs::write(p, encode(planes, driver)).expect("writing candidate")
         });
     };
-    let golden = decode(&bytes);
+    let (blessed_on, golden) = decode(&bytes);
+    let from = provenance(blessed_on.as_deref(), driver);
     assert_eq!(
         golden.len(),
         planes.len(),
-        "{name}: the golden has {} planes, the test {}",
+        "{name}: the golden has {} planes, the test {} ({from})",
         golden.len(),
         planes.len()
     );
@@ -152,7 +258,7 @@ pub fn check_samples(name: &str, planes: &[Plane], tol: SampleTolerance) {
         assert_eq!(
             (g.name.as_str(), g.shape),
             (p.name.as_str(), p.shape),
-            "{name}: plane layout changed"
+            "{name}: plane layout changed ({from})"
         );
         let mut bad = 0usize;
         let mut diff = vec![0.0f32; p.shape[1] * p.shape[2]];
@@ -208,7 +314,7 @@ pub fn check_samples(name: &str, planes: &[Plane], tol: SampleTolerance) {
         let _ = actual.save(golden_dir().join(format!("{name}-actual.png")));
         let _ = difference.save(golden_dir().join(format!("{name}-difference.png")));
         panic!(
-            "{name}: per-sample golden mismatch ({tol:?}):\n  {}\n  images: tests/golden/{name}-actual.png, {name}-difference.png",
+            "{name}: per-sample golden mismatch ({tol:?}):\n  {}\n  images: tests/golden/{name}-actual.png, {name}-difference.png\n  {from}",
             report.join("\n  ")
         );
     }
@@ -221,23 +327,29 @@ pub struct FlipTolerance {
     pub p99: f32,
 }
 
-/// Compare a final image with the golden `NAME.png` by FLIP.
-pub fn check_image(name: &str, image: &RgbaImage, tol: FlipTolerance) {
+/// Compare a final image with the golden `NAME.png` by FLIP; `driver` as for
+/// [`check_samples`].
+pub fn check_image(name: &str, image: &RgbaImage, tol: FlipTolerance, driver: &str) {
     let file = format!("{name}.png");
     let path = golden_dir().join(&file);
     if blessing() {
         std::fs::create_dir_all(golden_dir()).expect("tests/golden");
-        image.save(&path).expect("writing golden");
-        eprintln!("blessed {}", path.display());
+        std::fs::write(&path, encode_png(image, driver)).expect("writing golden");
+        eprintln!("blessed {} on {}", path.display(), one_line(driver));
         return;
     }
-    let Ok(golden) = image::open(&path) else {
-        missing(name, &file, |p| image.save(p).expect("writing candidate"));
+    let Ok(bytes) = std::fs::read(&path) else {
+        missing(name, &file, |p| {
+            std::fs::write(p, encode_png(image, driver)).expect("writing candidate")
+        });
     };
-    let golden = golden.to_rgba8();
+    let from = provenance(png_blessed_on(&bytes).as_deref(), driver);
+    let golden = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png)
+        .unwrap_or_else(|e| panic!("{name}: {} does not decode: {e}", path.display()))
+        .to_rgba8();
     let stats = deferred_msaa_lab::compare::flip(&golden, image).unwrap_or_else(|| {
         panic!(
-            "{name}: size {:?} differs from the golden's {:?}",
+            "{name}: size {:?} differs from the golden's {:?} ({from})",
             image.dimensions(),
             golden.dimensions()
         )
@@ -248,7 +360,7 @@ pub fn check_image(name: &str, image: &RgbaImage, tol: FlipTolerance) {
             .map
             .save(golden_dir().join(format!("{name}-difference.png")));
         panic!(
-            "{name}: FLIP mean {:.4} (allowed {}), p99 {:.4} (allowed {}); images: tests/golden/{name}-actual.png, {name}-difference.png",
+            "{name}: FLIP mean {:.4} (allowed {}), p99 {:.4} (allowed {}); images: tests/golden/{name}-actual.png, {name}-difference.png; {from}",
             stats.mean, tol.mean, stats.p99, tol.p99
         );
     }
