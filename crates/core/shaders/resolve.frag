@@ -8,6 +8,8 @@
 //   NUM_ATTACHMENTS        colour attachments 0..7
 //   ATTk_SAMPLER, ATTk_VEC sampler and value type of attachment k
 //   ATTk_RULE              RULE_BLEND, RULE_BLEND_NORMAL, RULE_BLEND_HDR or RULE_SELECT
+//   ATTACHMENT_DECLARATIONS, ATTACHMENT_BEGINS, ATTACHMENT_STEPS, ATTACHMENT_ENDS
+//                          the per-attachment code, one template call per attachment
 //   KEY_WORLD              the position attachment holds world-space positions:
 //                          the key is -dot(u_view_row, (p, 1)), view space's -z
 //   KEY_SAMPLER, KEY_INDEX the position attachment's sampler and number, when
@@ -69,38 +71,8 @@ uniform vec4 u_region;           // rect (x0, y0, x1, y1); ellipse (cx, cy, 1/rx
 uniform float u_max_depth;
 #endif
 
-#if NUM_ATTACHMENTS > 0
-uniform ATT0_SAMPLER u_att0;
-out ATT0_VEC o_att0;
-#endif
-#if NUM_ATTACHMENTS > 1
-uniform ATT1_SAMPLER u_att1;
-out ATT1_VEC o_att1;
-#endif
-#if NUM_ATTACHMENTS > 2
-uniform ATT2_SAMPLER u_att2;
-out ATT2_VEC o_att2;
-#endif
-#if NUM_ATTACHMENTS > 3
-uniform ATT3_SAMPLER u_att3;
-out ATT3_VEC o_att3;
-#endif
-#if NUM_ATTACHMENTS > 4
-uniform ATT4_SAMPLER u_att4;
-out ATT4_VEC o_att4;
-#endif
-#if NUM_ATTACHMENTS > 5
-uniform ATT5_SAMPLER u_att5;
-out ATT5_VEC o_att5;
-#endif
-#if NUM_ATTACHMENTS > 6
-uniform ATT6_SAMPLER u_att6;
-out ATT6_VEC o_att6;
-#endif
-#if NUM_ATTACHMENTS > 7
-uniform ATT7_SAMPLER u_att7;
-out ATT7_VEC o_att7;
-#endif
+// uniform ATTk_SAMPLER u_attk; out ATTk_VEC o_attk; for every attachment k.
+ATTACHMENT_DECLARATIONS
 #ifdef COMPLEX_OUTPUT
 out float o_complex;
 #endif
@@ -534,17 +506,22 @@ vec4 key_value_at(int r) {
     return v;
 }
 
-// The attachment blocks. A blended attachment fetches sample 0 (a one-sample
-// pixel's value) before the sample loop, and samples 1.. inside it; the
-// reference sample's value is picked up on the way. A Select attachment
-// fetches sample r once after it (r is 0 for a one-sample pixel); the key
-// attachment's samples are already in g_key_vals.
+// The per-attachment template. src/resolve/mod.rs writes, for each
+// attachment k in order, one call of these into ATTACHMENT_BEGINS (before
+// the sample loop), ATTACHMENT_STEPS (its body) and ATTACHMENT_ENDS (after
+// it): KEY_* for the key attachment, whose samples are already in
+// g_key_vals; BLEND_* for a blended one, which fetches sample i in
+// iteration i (sample 0, a one-sample pixel's value, in the first) and
+// picks up the reference sample's value on the way; SELECT_END alone for a
+// Select one, which fetches sample r once after the loop (r is 0 for a
+// one-sample pixel).
 #define BLEND_BEGIN(S, V, REF, ACC, RULE) vec4 V = vec4(0.0); vec4 REF = vec4(0.0); Acc ACC = acc_new();
 #define BLEND_STEP(S, V, REF, ACC, RULE) { vec4 x = vec4(FETCH(S, p, i)); V = i == 0 ? x : V; REF = i == r ? x : REF; acc_step(ACC, RULE, x, w); }
 #define BLEND_END(O, V, REF, ACC, RULE) O = g_one ? V : acc_finish(ACC, RULE, REF);
 #define KEY_BEGIN(V, REF, ACC, RULE) vec4 V = g_key_vals[0]; vec4 REF = key_value_at(r); Acc ACC = acc_new();
 #define KEY_STEP(ACC, RULE) acc_step(ACC, RULE, key_i, w);
 #define KEY_END(O, V, REF, ACC, RULE) O = g_one || RULE == RULE_SELECT ? REF : acc_finish(ACC, RULE, REF);
+#define SELECT_END(O, S) O = FETCH(S, p, r);
 
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
@@ -568,70 +545,7 @@ void main() {
     // one-sample pixels leaves at the top of its first iteration.
     float depth_sum = 0.0;
     float depth_weight = 0.0;
-#if NUM_ATTACHMENTS > 0
-#if defined(KEY_INDEX) && KEY_INDEX == 0
-    KEY_BEGIN(s0_0, ref_0, acc_0, ATT0_RULE)
-#elif ATT0_RULE == RULE_SELECT
-#else
-    BLEND_BEGIN(u_att0, s0_0, ref_0, acc_0, ATT0_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 1
-#if defined(KEY_INDEX) && KEY_INDEX == 1
-    KEY_BEGIN(s0_1, ref_1, acc_1, ATT1_RULE)
-#elif ATT1_RULE == RULE_SELECT
-#else
-    BLEND_BEGIN(u_att1, s0_1, ref_1, acc_1, ATT1_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 2
-#if defined(KEY_INDEX) && KEY_INDEX == 2
-    KEY_BEGIN(s0_2, ref_2, acc_2, ATT2_RULE)
-#elif ATT2_RULE == RULE_SELECT
-#else
-    BLEND_BEGIN(u_att2, s0_2, ref_2, acc_2, ATT2_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 3
-#if defined(KEY_INDEX) && KEY_INDEX == 3
-    KEY_BEGIN(s0_3, ref_3, acc_3, ATT3_RULE)
-#elif ATT3_RULE == RULE_SELECT
-#else
-    BLEND_BEGIN(u_att3, s0_3, ref_3, acc_3, ATT3_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 4
-#if defined(KEY_INDEX) && KEY_INDEX == 4
-    KEY_BEGIN(s0_4, ref_4, acc_4, ATT4_RULE)
-#elif ATT4_RULE == RULE_SELECT
-#else
-    BLEND_BEGIN(u_att4, s0_4, ref_4, acc_4, ATT4_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 5
-#if defined(KEY_INDEX) && KEY_INDEX == 5
-    KEY_BEGIN(s0_5, ref_5, acc_5, ATT5_RULE)
-#elif ATT5_RULE == RULE_SELECT
-#else
-    BLEND_BEGIN(u_att5, s0_5, ref_5, acc_5, ATT5_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 6
-#if defined(KEY_INDEX) && KEY_INDEX == 6
-    KEY_BEGIN(s0_6, ref_6, acc_6, ATT6_RULE)
-#elif ATT6_RULE == RULE_SELECT
-#else
-    BLEND_BEGIN(u_att6, s0_6, ref_6, acc_6, ATT6_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 7
-#if defined(KEY_INDEX) && KEY_INDEX == 7
-    KEY_BEGIN(s0_7, ref_7, acc_7, ATT7_RULE)
-#elif ATT7_RULE == RULE_SELECT
-#else
-    BLEND_BEGIN(u_att7, s0_7, ref_7, acc_7, ATT7_RULE)
-#endif
-#endif
+    ATTACHMENT_BEGINS
     for (int i = g_zero; i < NUM_SAMPLES; ++i) {
         float z_i;
         bool bg_i;
@@ -646,145 +560,11 @@ void main() {
         float w = closeness(z_i, bg_i, i == r, z_r, bg_r);
         depth_sum += w * depth_i;
         depth_weight += w;
-#if NUM_ATTACHMENTS > 0
-#if defined(KEY_INDEX) && KEY_INDEX == 0
-        KEY_STEP(acc_0, ATT0_RULE)
-#elif ATT0_RULE == RULE_SELECT
-#else
-        BLEND_STEP(u_att0, s0_0, ref_0, acc_0, ATT0_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 1
-#if defined(KEY_INDEX) && KEY_INDEX == 1
-        KEY_STEP(acc_1, ATT1_RULE)
-#elif ATT1_RULE == RULE_SELECT
-#else
-        BLEND_STEP(u_att1, s0_1, ref_1, acc_1, ATT1_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 2
-#if defined(KEY_INDEX) && KEY_INDEX == 2
-        KEY_STEP(acc_2, ATT2_RULE)
-#elif ATT2_RULE == RULE_SELECT
-#else
-        BLEND_STEP(u_att2, s0_2, ref_2, acc_2, ATT2_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 3
-#if defined(KEY_INDEX) && KEY_INDEX == 3
-        KEY_STEP(acc_3, ATT3_RULE)
-#elif ATT3_RULE == RULE_SELECT
-#else
-        BLEND_STEP(u_att3, s0_3, ref_3, acc_3, ATT3_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 4
-#if defined(KEY_INDEX) && KEY_INDEX == 4
-        KEY_STEP(acc_4, ATT4_RULE)
-#elif ATT4_RULE == RULE_SELECT
-#else
-        BLEND_STEP(u_att4, s0_4, ref_4, acc_4, ATT4_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 5
-#if defined(KEY_INDEX) && KEY_INDEX == 5
-        KEY_STEP(acc_5, ATT5_RULE)
-#elif ATT5_RULE == RULE_SELECT
-#else
-        BLEND_STEP(u_att5, s0_5, ref_5, acc_5, ATT5_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 6
-#if defined(KEY_INDEX) && KEY_INDEX == 6
-        KEY_STEP(acc_6, ATT6_RULE)
-#elif ATT6_RULE == RULE_SELECT
-#else
-        BLEND_STEP(u_att6, s0_6, ref_6, acc_6, ATT6_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 7
-#if defined(KEY_INDEX) && KEY_INDEX == 7
-        KEY_STEP(acc_7, ATT7_RULE)
-#elif ATT7_RULE == RULE_SELECT
-#else
-        BLEND_STEP(u_att7, s0_7, ref_7, acc_7, ATT7_RULE)
-#endif
-#endif
+        ATTACHMENT_STEPS
         // A group of one-sample pixels leaves here, after sample 0.
         if (g_one) break;
     }
-#if NUM_ATTACHMENTS > 0
-#if defined(KEY_INDEX) && KEY_INDEX == 0
-    KEY_END(o_att0, s0_0, ref_0, acc_0, ATT0_RULE)
-#elif ATT0_RULE == RULE_SELECT
-    o_att0 = FETCH(u_att0, p, r);
-#else
-    BLEND_END(o_att0, s0_0, ref_0, acc_0, ATT0_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 1
-#if defined(KEY_INDEX) && KEY_INDEX == 1
-    KEY_END(o_att1, s0_1, ref_1, acc_1, ATT1_RULE)
-#elif ATT1_RULE == RULE_SELECT
-    o_att1 = FETCH(u_att1, p, r);
-#else
-    BLEND_END(o_att1, s0_1, ref_1, acc_1, ATT1_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 2
-#if defined(KEY_INDEX) && KEY_INDEX == 2
-    KEY_END(o_att2, s0_2, ref_2, acc_2, ATT2_RULE)
-#elif ATT2_RULE == RULE_SELECT
-    o_att2 = FETCH(u_att2, p, r);
-#else
-    BLEND_END(o_att2, s0_2, ref_2, acc_2, ATT2_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 3
-#if defined(KEY_INDEX) && KEY_INDEX == 3
-    KEY_END(o_att3, s0_3, ref_3, acc_3, ATT3_RULE)
-#elif ATT3_RULE == RULE_SELECT
-    o_att3 = FETCH(u_att3, p, r);
-#else
-    BLEND_END(o_att3, s0_3, ref_3, acc_3, ATT3_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 4
-#if defined(KEY_INDEX) && KEY_INDEX == 4
-    KEY_END(o_att4, s0_4, ref_4, acc_4, ATT4_RULE)
-#elif ATT4_RULE == RULE_SELECT
-    o_att4 = FETCH(u_att4, p, r);
-#else
-    BLEND_END(o_att4, s0_4, ref_4, acc_4, ATT4_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 5
-#if defined(KEY_INDEX) && KEY_INDEX == 5
-    KEY_END(o_att5, s0_5, ref_5, acc_5, ATT5_RULE)
-#elif ATT5_RULE == RULE_SELECT
-    o_att5 = FETCH(u_att5, p, r);
-#else
-    BLEND_END(o_att5, s0_5, ref_5, acc_5, ATT5_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 6
-#if defined(KEY_INDEX) && KEY_INDEX == 6
-    KEY_END(o_att6, s0_6, ref_6, acc_6, ATT6_RULE)
-#elif ATT6_RULE == RULE_SELECT
-    o_att6 = FETCH(u_att6, p, r);
-#else
-    BLEND_END(o_att6, s0_6, ref_6, acc_6, ATT6_RULE)
-#endif
-#endif
-#if NUM_ATTACHMENTS > 7
-#if defined(KEY_INDEX) && KEY_INDEX == 7
-    KEY_END(o_att7, s0_7, ref_7, acc_7, ATT7_RULE)
-#elif ATT7_RULE == RULE_SELECT
-    o_att7 = FETCH(u_att7, p, r);
-#else
-    BLEND_END(o_att7, s0_7, ref_7, acc_7, ATT7_RULE)
-#endif
-#endif
+    ATTACHMENT_ENDS
 
 #ifdef WRITE_DEPTH
 #ifdef BLEND_DEPTH

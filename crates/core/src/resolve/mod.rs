@@ -164,12 +164,39 @@ impl ResolveProgramKey {
             };
             def(&format!("ATT{k}_RULE"), rule.into());
         }
-        if let KeySource::Position(ResolveSlot(k)) | KeySource::WorldPosition(ResolveSlot(k)) =
-            self.key
-        {
-            def("KEY_SAMPLER", format!("u_att{k}"));
-            def("KEY_INDEX", k.to_string());
+        let key_index = match self.key {
+            KeySource::Position(ResolveSlot(k)) | KeySource::WorldPosition(ResolveSlot(k)) => {
+                def("KEY_SAMPLER", format!("u_att{k}"));
+                def("KEY_INDEX", k.to_string());
+                Some(k as usize)
+            }
+            KeySource::Depth => None,
+        };
+        // The per-attachment code: one call of resolve.frag's template per
+        // attachment, in order.
+        let (mut declarations, mut begins, mut steps, mut ends) =
+            (String::new(), String::new(), String::new(), String::new());
+        for (k, (rule, _)) in self.attachments.iter().enumerate() {
+            let args = format!("s0_{k}, ref_{k}, acc_{k}, ATT{k}_RULE");
+            declarations.push_str(&format!(
+                "uniform ATT{k}_SAMPLER u_att{k}; out ATT{k}_VEC o_att{k}; "
+            ));
+            if key_index == Some(k) {
+                begins.push_str(&format!("KEY_BEGIN({args}) "));
+                steps.push_str(&format!("KEY_STEP(acc_{k}, ATT{k}_RULE) "));
+                ends.push_str(&format!("KEY_END(o_att{k}, {args}) "));
+            } else if *rule == ResolveRule::Select {
+                ends.push_str(&format!("SELECT_END(o_att{k}, u_att{k}) "));
+            } else {
+                begins.push_str(&format!("BLEND_BEGIN(u_att{k}, {args}) "));
+                steps.push_str(&format!("BLEND_STEP(u_att{k}, {args}) "));
+                ends.push_str(&format!("BLEND_END(o_att{k}, {args}) "));
+            }
         }
+        def("ATTACHMENT_DECLARATIONS", declarations);
+        def("ATTACHMENT_BEGINS", begins);
+        def("ATTACHMENT_STEPS", steps);
+        def("ATTACHMENT_ENDS", ends);
         if matches!(self.key, KeySource::WorldPosition(_)) {
             def("KEY_WORLD", "1".into());
         }
