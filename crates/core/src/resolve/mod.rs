@@ -168,7 +168,7 @@ impl ResolveProgramKey {
             KeySource::Position(ResolveSlot(k)) | KeySource::WorldPosition(ResolveSlot(k)) => {
                 def("KEY_SAMPLER", format!("u_att{k}"));
                 def("KEY_INDEX", k.to_string());
-                Some(k as usize)
+                Some(k)
             }
             KeySource::Depth => None,
         };
