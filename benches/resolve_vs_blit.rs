@@ -160,7 +160,7 @@ struct Args {
 }
 
 /// Which timer's numbers are the headline (both are always taken).
-#[derive(Clone, Copy, PartialEq)]
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
 enum TimerChoice {
     /// `GL_TIME_ELAPSED` where it is trustworthy, else wall time.
     Auto,
@@ -170,103 +170,98 @@ enum TimerChoice {
     Wall,
 }
 
-const USAGE: &str = "usage: resolve_vs_blit [--size WxH] [--samples N] [--runs K] [--warmup N] \
-                     [--triangles N] [--seed N] [--scene builtin:NAME|FILE.gltf] [--timer auto|query|wall] \
-                     [--key position|depth] [--plane-uniformity] [--position-uniformity] [--json FILE] | --summarize DIR";
+/// Where the depth key comes from.
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+enum KeyChoice {
+    /// The view-space position attachment.
+    Position,
+    /// The depth buffer, linearised (a host without a position attachment).
+    Depth,
+}
 
-/// `v` as a whole number of at least `min`.
-fn number<T>(name: &str, v: &str, min: T) -> Result<T, String>
-where
-    T: std::str::FromStr + PartialOrd + std::fmt::Display + Copy,
-{
-    match v.parse::<T>() {
-        Ok(n) if n >= min => Ok(n),
+/// The command line (see the module docs).
+#[derive(clap::Parser)]
+#[command(
+    name = "resolve_vs_blit",
+    about = "The depth-aware resolve against the hardware resolve"
+)]
+struct Cli {
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x360", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Samples per pixel asked for (the context's real count is used).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+    samples: u32,
+    /// Timed runs per method.
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u64).range(1..))]
+    runs: u64,
+    /// Untimed rounds first.
+    #[arg(long, default_value_t = 5)]
+    warmup: u64,
+    /// Random triangles over the background.
+    #[arg(long, default_value_t = 600)]
+    triangles: u64,
+    /// The random scene's seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Which timer is the headline.
+    #[arg(long, value_enum, default_value_t = TimerChoice::Auto)]
+    timer: TimerChoice,
+    /// A scene (`builtin:NAME` or a glTF path) seen through its camera
+    /// instead of the random triangles.
+    #[arg(long, value_name = "S")]
+    scene: Option<String>,
+    /// Where the depth key comes from.
+    #[arg(long, value_enum, default_value_t = KeyChoice::Position)]
+    key: KeyChoice,
+    /// The fast path with the opt-in plane test.
+    #[arg(long)]
+    plane_uniformity: bool,
+    /// The fast path with the opt-in position test.
+    #[arg(long)]
+    position_uniformity: bool,
+    /// Where the JSON report goes (default `target/resolve_vs_blit.json`).
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+    /// Measure nothing: print a markdown table of the reports in DIR.
+    #[arg(long, value_name = "DIR")]
+    summarize: Option<PathBuf>,
+    /// Passed by `cargo bench` to every bench target.
+    #[arg(long, hide = true)]
+    bench: bool,
+}
+
+/// `WIDTHxHEIGHT`, both at least 1.
+fn parse_size(v: &str) -> Result<(u32, u32), String> {
+    let (w, h) = v
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got `{v}`"))?;
+    match (w.parse::<u32>(), h.parse::<u32>()) {
+        (Ok(w), Ok(h)) if w > 0 && h > 0 => Ok((w, h)),
         _ => Err(format!(
-            "{name}: expected a whole number of at least {min}, got `{v}`"
+            "expected two whole numbers of at least 1, got `{v}`"
         )),
     }
 }
 
-fn parse_args() -> Result<Args, String> {
-    let mut args = Args {
-        width: 640,
-        height: 360,
-        samples: 4,
-        runs: 30,
-        warmup: 5,
-        triangles: 600,
-        seed: 1,
-        timer: TimerChoice::Auto,
-        scene: None,
-        key_from_depth: false,
-        plane_uniformity: false,
-        position_uniformity: false,
-        json: None,
-        summarize: None,
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(arg) = it.next() {
-        // `--name=value` and `--name value` both work.
-        let (name, inline) = match arg.split_once('=') {
-            Some((n, v)) if n.starts_with("--") => (n.to_string(), Some(v.to_string())),
-            _ => (arg.clone(), None),
-        };
-        let mut value = |what: &str| -> Result<String, String> {
-            inline
-                .clone()
-                .or_else(|| it.next())
-                .ok_or_else(|| format!("{name} needs {what}"))
-        };
-        match name.as_str() {
-            // cargo passes `--bench` to every bench target.
-            "--bench" => {}
-            "--size" => {
-                let v = value("WxH")?;
-                let (w, h) = v
-                    .split_once(['x', 'X'])
-                    .ok_or_else(|| format!("--size: expected WxH, got `{v}`"))?;
-                args.width = number("--size width", w, 1u32)?;
-                args.height = number("--size height", h, 1u32)?;
-            }
-            "--samples" => args.samples = number("--samples", &value("a count")?, 1u32)?,
-            "--runs" => args.runs = number("--runs", &value("a count")?, 1usize)?,
-            "--warmup" => args.warmup = number("--warmup", &value("a count")?, 0usize)?,
-            "--triangles" => args.triangles = number("--triangles", &value("a count")?, 0usize)?,
-            "--seed" => args.seed = number("--seed", &value("a number")?, 0u64)?,
-            "--scene" => args.scene = Some(value("a scene")?),
-            "--key" => {
-                args.key_from_depth = match value("position|depth")?.as_str() {
-                    "position" => false,
-                    "depth" => true,
-                    other => {
-                        return Err(format!("--key: expected position or depth, got `{other}`"));
-                    }
-                }
-            }
-            "--plane-uniformity" => args.plane_uniformity = true,
-            "--position-uniformity" => args.position_uniformity = true,
-            "--json" => args.json = Some(PathBuf::from(value("a path")?)),
-            "--summarize" => args.summarize = Some(PathBuf::from(value("a folder")?)),
-            "--timer" => {
-                args.timer = match value("auto|query|wall")?.as_str() {
-                    "auto" => TimerChoice::Auto,
-                    "query" => TimerChoice::Query,
-                    "wall" => TimerChoice::Wall,
-                    other => {
-                        return Err(format!(
-                            "--timer: expected auto, query or wall, got `{other}`"
-                        ));
-                    }
-                }
-            }
-            "--help" | "-h" => {
-                println!("{USAGE}");
-                std::process::exit(0);
-            }
-            other => return Err(format!("unknown argument `{other}`\n{USAGE}")),
-        }
+fn parse_args() -> Args {
+    let cli = <Cli as clap::Parser>::parse();
+    Args {
+        width: cli.size.0,
+        height: cli.size.1,
+        samples: cli.samples,
+        runs: cli.runs as usize,
+        warmup: cli.warmup as usize,
+        triangles: cli.triangles as usize,
+        seed: cli.seed,
+        timer: cli.timer,
+        scene: cli.scene,
+        key_from_depth: cli.key == KeyChoice::Depth,
+        plane_uniformity: cli.plane_uniformity,
+        position_uniformity: cli.position_uniformity,
+        json: cli.json,
+        summarize: cli.summarize,
     }
-    Ok(args)
 }
 
 /// xorshift64*: a reproducible scene without a dependency.
@@ -1244,13 +1239,7 @@ fn summarize(dir: &std::path::Path) -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
-    let args = match parse_args() {
-        Ok(a) => a,
-        Err(msg) => {
-            eprintln!("resolve_vs_blit: {msg}");
-            return ExitCode::from(2);
-        }
-    };
+    let args = parse_args();
     let result = match &args.summarize {
         Some(dir) => summarize(dir),
         None => run(&args),
