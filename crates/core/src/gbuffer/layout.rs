@@ -73,14 +73,10 @@ impl GBufferLayout {
     /// Why `select`: at a convex edge inside a model the blended normal,
     /// renormalised, points between the two faces, so a light between
     /// their normals lights it more squarely than either face: edge pixels
-    /// come out brighter than the faces they average (median's image of
-    /// `builtin:hull` was 2.6 % brighter than the supersampled reference,
-    /// `none`'s within 0.3 %). Lambert shading is linear in the normal, so
-    /// the unbiased value is the average of the shaded faces, which one
-    /// face's normal approaches and the renormalised sum overshoots. Measured
-    /// at 640x360 4x on `builtin:hull` (FLIP against `ssaa`): median 0.0218
-    /// with `blend-normal`, 0.0110 with `select`, `none` 0.0120 (README,
-    /// "Benchmark").
+    /// come out brighter than the faces they average. Lambert shading is
+    /// linear in the normal, so the unbiased value is the average of the
+    /// shaded faces, which one face's normal approaches and the renormalised
+    /// sum overshoots (docs/bench.md shows what it measures).
     pub fn recommended() -> Self {
         let mut layout = Self::freespace_open();
         layout.colors[1].format = Format::Rgba32f;
