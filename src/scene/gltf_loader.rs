@@ -1,9 +1,10 @@
 //! glTF 2.0 loading (`.gltf` with external or embedded buffers, `.glb`).
 //!
-//! The `gltf` crate parses and validates the JSON; everything that touches
-//! bytes from the file (the GLB container, buffers, URIs, accessors, images)
-//! is read here with explicit bounds checks, so a damaged file yields an
-//! error or a warning, never a panic.
+//! The `gltf` crate parses the JSON into its unvalidated document, which the
+//! loader readies for the crate's validation. Everything that touches bytes
+//! from the file (the GLB container, buffers, URIs, accessors, images) is read
+//! here with explicit bounds checks, so a damaged file yields an error or a
+//! warning, never a panic; each place says what the crate (1.4) does instead.
 //!
 //! What is honoured: the default scene's node tree with its transforms, mesh
 //! primitives in the triangle modes (strips and fans converted), positions,
@@ -153,6 +154,7 @@ fn le_u32(bytes: &[u8], at: usize) -> Option<u32> {
 }
 
 /// Splits a `.glb` into its JSON and BIN chunks.
+// Not gltf::Glb::from_slice: it underflows on a declared length under 12 and refuses unknown chunk types, which the spec says to skip.
 fn parse_glb(bytes: &[u8]) -> Result<Glb<'_>, String> {
     const JSON: u32 = 0x4E4F_534A;
     const BIN: u32 = 0x004E_4942;
@@ -211,7 +213,7 @@ fn parse_document(json: &[u8]) -> Result<(gltf::Document, Vec<String>), String> 
     if first != Some(b'{') {
         return Err("not a glTF file: neither the binary magic 'glTF' nor a JSON object".into());
     }
-    let mut root: gltf::json::Root = match serde_json::from_slice(json) {
+    let mut root = match gltf::json::Root::from_slice(json) {
         Ok(root) => root,
         Err(e) => {
             // A glTF 1.0 file fails the 2.0 schema: say so rather than quote
@@ -347,6 +349,7 @@ enum UriSource {
     File(PathBuf),
 }
 
+// Not the crate's importer: it panics on %-escapes that are not UTF-8, skips decoding file: paths and calls drive letters or a ':' in a path unsupported schemes.
 fn resolve_uri(uri: &str, base: Option<&Path>) -> Result<UriSource, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let Some((_, payload)) = rest.split_once(',') else {
@@ -421,6 +424,7 @@ fn percent_decode(s: &str) -> Vec<u8> {
 }
 
 /// Standard or URL-safe base64, padding optional, whitespace ignored.
+// Not the crate's importer: it takes strict base64 only (no whitespace, URL-safe letters or stray trailing bits) and no plain data URIs.
 fn decode_base64(s: &str) -> Result<Vec<u8>, String> {
     let mut out = Vec::with_capacity(s.len() / 4 * 3);
     let (mut acc, mut bits) = (0u32, 0u32);
@@ -446,6 +450,7 @@ fn decode_base64(s: &str) -> Result<Vec<u8>, String> {
     Ok(out)
 }
 
+// Not gltf::import_buffers: it zero-pads buffers to four bytes (a view overrunning by up to 3 then reads zeros) and gives the BIN chunk to one buffer only.
 fn load_buffers(
     doc: &gltf::Document,
     base: Option<&Path>,
@@ -1222,6 +1227,7 @@ impl Loader<'_> {
         result
     }
 
+    // Not gltf::image::Data::from_source: it slices buffer views without bounds checks and refuses data URIs when loading from memory.
     fn decode_image(&self, image: &gltf::Image) -> Result<TextureData, String> {
         let (bytes, what) = match image.source() {
             gltf::image::Source::View { view, .. } => (
