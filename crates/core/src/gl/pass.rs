@@ -61,6 +61,11 @@ impl FullscreenPass {
         draw_fullscreen_triangle(gl, vao);
     }
 
+    /// The program alone, for a caller that keeps its own draw code.
+    pub fn into_program(self) -> Program {
+        self.program
+    }
+
     /// Free the program.
     pub fn destroy(self, gl: &glow::Context) {
         self.program.destroy(gl);

@@ -2,12 +2,12 @@
 //! lets a driver's message be traced back to the part's file and line.
 //!
 //! The header (`#version`, extensions, defines, or a verbatim preamble) is
-//! source string 0; part `k` (counting from 0) is source string `k + 1`,
-//! introduced by `#line F k+1` where `F` makes its first line line 1: GLSL
-//! before 3.30 numbers the line after `#line N` as N + 1, later versions
-//! as N. Drivers print the string number before the line (Mesa `1:12(5)`,
-//! NVIDIA `1(12)`, AMD `ERROR: 1:12:`), which [`ShaderSource::locate`]
-//! turns back into the part.
+//! numbered as it stands; part `k` (counting from 1) is source string `k`
+//! and its line `n` is numbered `k × 10000 + n`, by a `#line` before it
+//! (GLSL before 3.30 numbers the line after `#line N` as N + 1, later
+//! versions as N). The line alone identifies the part, because Mesa prints
+//! source string 0 whatever `#line` says; [`ShaderSource::locate`] turns a
+//! driver's `string:line` back into the part's file and line.
 
 /// One part: a file's name (for messages) and its text, with optional lines
 /// around it that belong to no file (they take the part's numbering).
@@ -39,8 +39,8 @@ enum Header {
 ///     .define("SAMPLES", "4")
 ///     .part("common.glsl", "float f() { return 1.0; }\n")
 ///     .part("pass.frag", "out vec4 o;\nvoid main() { o = vec4(f()); }\n");
-/// assert!(source.text().contains("#line 0 2\nout vec4 o;"));
-/// assert_eq!(source.locate(2, 2), Some(("pass.frag", 2)));
+/// assert!(source.text().contains("#line 20000 2\nout vec4 o;"));
+/// assert_eq!(source.locate(0, 20002), Some(("pass.frag", 2)));
 /// assert_eq!(source.name(), "common.glsl + pass.frag");
 /// ```
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -77,11 +77,16 @@ impl ShaderSource {
     }
 
     /// A header given whole, e.g. a [`preamble`](super::preamble); its
-    /// `#version` decides the `#line` rule.
+    /// `#version` decides the `#line` rule. A `#line` ending it is dropped:
+    /// the parts bring their own, and Mesa keeps the first of two in a row.
     pub fn with_header(text: &str) -> Self {
+        let trimmed = match text.trim_end().rsplit_once('\n') {
+            Some((head, last)) if last.trim_start().starts_with("#line") => format!("{head}\n"),
+            _ => text.to_string(),
+        };
         ShaderSource {
             header: Header::Verbatim {
-                text: text.to_string(),
+                text: trimmed,
                 version: parse_version(text).unwrap_or(150),
             },
             parts: Vec::new(),
@@ -181,9 +186,9 @@ impl ShaderSource {
         }
     }
 
-    /// The `#line` that makes the next line line 1 of source string `string`.
+    /// The `#line` that makes the next line part `string`'s line 1.
     fn line_directive(&self, string: usize) -> String {
-        let first = if self.version() >= 330 { 1 } else { 0 };
+        let first = string * LINES_PER_PART + usize::from(self.version() >= 330);
         format!("#line {first} {string}\n")
     }
 
@@ -208,6 +213,7 @@ impl ShaderSource {
     /// The file and line a driver's `string:line` location refers to:
     /// string 0 is the header ([`HEADER_NAME`]), string `k` part `k - 1`.
     pub fn locate(&self, string: usize, line: usize) -> Option<(&str, usize)> {
+        let (string, line) = split_line(string, line);
         match string {
             0 => Some((HEADER_NAME, line)),
             k => self.parts.get(k - 1).map(|p| (p.name.as_str(), line)),
@@ -229,22 +235,35 @@ impl ShaderSource {
         let mut out = String::new();
         let mut seen = Vec::new();
         for entry in log_entries(log) {
-            let Some((file, line)) = self.locate(entry.string, entry.line) else {
+            let (part, line) = split_line(entry.string, entry.line);
+            let Some((file, _)) = self.locate(part, line) else {
                 continue;
             };
             out.push_str(&format!("{file}:{line}: {}\n", entry.message));
-            if seen.contains(&(entry.string, entry.line)) {
+            if seen.contains(&(part, line)) {
                 continue;
             }
-            seen.push((entry.string, entry.line));
+            seen.push((part, line));
             for k in line.saturating_sub(1).max(1)..=line + 1 {
-                if let Some(text) = self.line_text(entry.string, k) {
+                if let Some(text) = self.line_text(part, k) {
                     let marker = if k == line { ">" } else { " " };
                     out.push_str(&format!("{marker} {file}:{k:>4} | {text}\n"));
                 }
             }
         }
         out
+    }
+}
+
+/// How far apart the parts' line numbers are.
+const LINES_PER_PART: usize = 10_000;
+
+/// A driver's `string:line` as (part, line within it).
+fn split_line(string: usize, line: usize) -> (usize, usize) {
+    if line > LINES_PER_PART {
+        (line / LINES_PER_PART, line % LINES_PER_PART)
+    } else {
+        (string, line)
     }
 }
 
@@ -335,16 +354,17 @@ mod tests {
         assert_eq!(
             s.text(),
             "#version 150 core\n#extension GL_ARB_x : enable\n#define A 1\n\
-             #define main model_main\n#line 0 1\nvoid main() {}\n#undef main\n\
-             #line 0 2\nvoid main() { model_main(); }\n"
+             #define main model_main\n#line 10000 1\nvoid main() {}\n#undef main\n\
+             #line 20000 2\nvoid main() { model_main(); }\n"
         );
         assert!(
             ShaderSource::with_version(330)
                 .part("a", "x")
                 .text()
-                .contains("#line 1 1\n")
+                .contains("#line 10001 1\n")
         );
         assert_eq!(s.locate(1, 1), Some(("model.frag", 1)));
+        assert_eq!(s.locate(0, 20003), Some(("wrap.frag", 3)));
         assert_eq!(s.locate(0, 2), Some((HEADER_NAME, 2)));
         assert_eq!(s.locate(3, 1), None);
     }
@@ -354,7 +374,7 @@ mod tests {
         let s = ShaderSource::new()
             .part("a.frag", "float f() {\n  return 1.0;\n}\n")
             .part("b.frag", "void main() {\n  x = 1;\n}\n");
-        let text = s.explain("0:2(3): error: `x' undeclared\n2:2(3): error: `x' undeclared");
+        let text = s.explain("0:2(3): error: `x' undeclared\n0:20002(3): error: `x' undeclared");
         assert!(text.contains("b.frag:2: error: `x' undeclared\n"), "{text}");
         assert!(text.contains("> b.frag:   2 |   x = 1;"), "{text}");
         assert!(text.contains("  b.frag:   1 | void main() {"), "{text}");
