@@ -118,7 +118,7 @@ impl<T: GlObject> GlObject for Vec<T> {
     }
 }
 
-/// The objects a constructor has made so far; see the [module docs](self).
+/// The objects a constructor has made so far; see [`Made::build`].
 ///
 /// ```no_run
 /// # fn f(gl: &glow::Context) -> deferred_msaa::Result<()> {
