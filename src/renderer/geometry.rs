@@ -9,7 +9,7 @@ use super::mesh::{
 };
 use super::pass::bind_target;
 use crate::Result;
-use crate::gl::{Program, ShaderStage, check_error, preamble};
+use crate::gl::{Program, ShaderSource, ShaderStage, check_error};
 use glam::{DMat4, Mat4};
 use glow::HasContext;
 
@@ -70,15 +70,36 @@ impl GeometryPass {
         (frag_name, frag_body): (&str, &str),
         extra_outputs: &[(&str, u32)],
     ) -> Result<Self> {
+        let fragment = Self::header(slots, extensions).part(frag_name, frag_body);
+        Self::with_fragment_source(gl, label, slots, &fragment, extra_outputs)
+    }
+
+    /// The header of the model program's stages for `slots`: its defines
+    /// after `extensions`.
+    pub(crate) fn header(slots: GBufferSlots, extensions: &[&str]) -> ShaderSource {
+        ShaderSource::new()
+            .extensions(extensions)
+            .defines(&slots.defines())
+    }
+
+    /// [`GeometryPass::with_fragment`] from a composed fragment source; the
+    /// vertex stage gets its header and `geometry.vert`.
+    pub(crate) fn with_fragment_source(
+        gl: &glow::Context,
+        label: &str,
+        slots: GBufferSlots,
+        fragment: &ShaderSource,
+        extra_outputs: &[(&str, u32)],
+    ) -> Result<Self> {
         let mut outputs = slots.outputs();
         outputs.extend_from_slice(extra_outputs);
-        let program = Program::build(
+        let vertex = fragment.header_only().part("geometry.vert", GEOMETRY_VERT);
+        let program = Program::from_sources(
             gl,
             label,
-            &preamble(extensions, &slots.defines()),
             &[
-                (ShaderStage::Vertex, "geometry.vert", GEOMETRY_VERT),
-                (ShaderStage::Fragment, frag_name, frag_body),
+                (ShaderStage::Vertex, &vertex),
+                (ShaderStage::Fragment, fragment),
             ],
             &outputs,
         )?;
@@ -97,7 +118,9 @@ impl GeometryPass {
 
     /// The fragment shader's full source as compiled for `slots`.
     pub(crate) fn fragment_source(slots: GBufferSlots) -> String {
-        format!("{}{GEOMETRY_FRAG}", preamble(&[], &slots.defines()))
+        Self::header(slots, &[])
+            .part("geometry.frag", GEOMETRY_FRAG)
+            .text()
     }
 
     /// The attachment numbers the outputs are bound to.

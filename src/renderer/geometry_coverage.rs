@@ -7,7 +7,8 @@
 //! GLSL 1.50 through `GL_ARB_gpu_shader5` (or `GL_ARB_sample_shading`).
 
 use super::GBufferSlots;
-use super::geometry::{GEOMETRY_FRAG, GeometryPass};
+use super::geometry::GeometryPass;
+use super::pass::model_wrapped;
 use crate::gl::Capabilities;
 use glow::HasContext;
 
@@ -61,12 +62,15 @@ impl CoverageGeometryPass {
                 EXTENSIONS.join(" or ")
             ));
         }
-        GeometryPass::with_fragment(
+        let fragment = model_wrapped(
+            GeometryPass::header(slots, &extensions),
+            &[("geometry_coverage.frag", GEOMETRY_COVERAGE_FRAG)],
+        );
+        GeometryPass::with_fragment_source(
             gl,
             "geometry + coverage",
             slots,
-            &extensions,
-            ("geometry.frag + geometry_coverage.frag", &Self::body()),
+            &fragment,
             &[("o_coverage", coverage_slot)],
         )
         .map(|pass| CoverageGeometryPass {
@@ -79,14 +83,6 @@ impl CoverageGeometryPass {
                 e.to_string().replace('\n', " ")
             )
         })
-    }
-
-    /// `geometry.frag` with `main` renamed to `model_main`, then the wrapper.
-    /// `#line 0` keeps the driver's line numbers on each file's own.
-    fn body() -> String {
-        format!(
-            "#define main model_main\n#line 0\n{GEOMETRY_FRAG}\n#undef main\n#line 0 1\n{GEOMETRY_COVERAGE_FRAG}"
-        )
     }
 
     /// The wrapped model program, with `u_full_mask` set for `samples` per

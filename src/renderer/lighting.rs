@@ -7,7 +7,7 @@ use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_s
 use super::targets::ColorTarget;
 use crate::Result;
 use crate::gbuffer::GBuffer;
-use crate::gl::{Program, Texture2d, VertexArray, check_error, preamble};
+use crate::gl::{Program, ShaderSource, Texture2d, VertexArray, check_error};
 use crate::scene::{Light, LightKind};
 use glam::DMat4;
 use glow::HasContext;
@@ -194,7 +194,10 @@ impl LightingPass {
     /// The fragment shader's full source as compiled for `slots`: preamble,
     /// defines, body.
     pub(crate) fn source(slots: GBufferSlots) -> String {
-        format!("{}{LIGHTING_FRAG}", preamble(&[], &Self::defines(slots)))
+        ShaderSource::new()
+            .defines(&Self::defines(slots))
+            .part("lighting.frag", LIGHTING_FRAG)
+            .text()
     }
 
     /// Light the resolved `gbuffer` into `target`, one draw per light batch;

@@ -11,10 +11,9 @@ use super::GBufferSlots;
 use super::lighting::{AMBIENT, LIGHTING_FRAG, LightBatch, StandIns, set_batch_blend};
 use super::pass::{LightTarget, draw_fullscreen};
 use super::tonemap::{EXPOSURE, TONEMAP_FRAG, WHITE};
-use crate::gl::FULLSCREEN_VERT;
 use crate::gl::{
-    Buffer, Program, SamplesPassedQuery, ShaderStage, TextureRef, VertexArray, check_error,
-    preamble,
+    Buffer, FullscreenPass, Made, Program, SamplesPassedQuery, ShaderSource, TextureRef,
+    VertexArray, check_error,
 };
 use crate::retrofit::MsaaRetrofit;
 use crate::{Error, Result};
@@ -157,33 +156,24 @@ impl PerSampleLightingPass {
     /// Build the program and the light block's buffer (and the
     /// `GL_SAMPLES_PASSED` query; without one the pass still runs, uncounted).
     pub(crate) fn new(gl: &glow::Context, slots: GBufferSlots) -> Result<Self> {
-        let program = Program::build(
-            gl,
-            "per-sample lighting",
-            &preamble(&[], &Self::defines(slots)),
-            &[
-                (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
-                (
-                    ShaderStage::Fragment,
-                    "lighting.frag + tonemap.frag + lighting_per_sample.frag",
-                    &Self::body(),
-                ),
-            ],
-            &[("o_color", 0)],
-        )?;
-        let lights = match LightBlock::new(gl, &program, "per-sample lighting") {
-            Ok(b) => b,
-            Err(e) => {
-                program.destroy(gl);
-                return Err(e);
-            }
-        };
-        let query = SamplesPassedQuery::new(gl).ok();
-        Ok(PerSampleLightingPass {
-            program,
-            slots,
-            lights,
-            query,
+        Made::build(gl, |made| {
+            let program = made.keep(
+                FullscreenPass::new(
+                    gl,
+                    "per-sample lighting",
+                    &Self::fragment(slots),
+                    &[("o_color", 0)],
+                )?
+                .into_program(),
+            );
+            let lights = LightBlock::new(gl, &program, "per-sample lighting")?;
+            let query = SamplesPassedQuery::new(gl).ok();
+            Ok(PerSampleLightingPass {
+                program,
+                slots,
+                lights,
+                query,
+            })
         })
     }
 
@@ -204,14 +194,18 @@ impl PerSampleLightingPass {
     }
 
     /// `lighting.frag`'s shared part, `tonemap.frag`'s, then this pass's
-    /// `main()`; `#line 0 k`: driver messages name source string k.
-    fn body() -> String {
-        format!("{LIGHTING_FRAG}\n#line 0 1\n{TONEMAP_FRAG}\n#line 0 2\n{LIGHTING_PER_SAMPLE_FRAG}")
+    /// `main()`, each numbered as its own file.
+    fn fragment(slots: GBufferSlots) -> ShaderSource {
+        ShaderSource::new()
+            .defines(&Self::defines(slots))
+            .part("lighting.frag", LIGHTING_FRAG)
+            .part("tonemap.frag", TONEMAP_FRAG)
+            .part("lighting_per_sample.frag", LIGHTING_PER_SAMPLE_FRAG)
     }
 
-    /// The fragment shader's full source as compiled: preamble, defines, body.
+    /// The fragment shader's full source as compiled: header, defines, parts.
     pub(crate) fn source(slots: GBufferSlots) -> String {
-        format!("{}{}", preamble(&[], &Self::defines(slots)), Self::body())
+        Self::fragment(slots).text()
     }
 
     /// Light samples `0..samples` of `inputs` (every sample: `inputs.samples`;

@@ -1,9 +1,9 @@
 //! What the full-screen passes share: program building, the full-screen
 //! state, and binding a target.
 
+use super::geometry::GEOMETRY_FRAG;
 use crate::Result;
-use crate::gl::FULLSCREEN_VERT;
-use crate::gl::{Program, ShaderStage, VertexArray, preamble};
+use crate::gl::{FullscreenPass, Program, ShaderSource, VertexArray, draw_fullscreen_triangle};
 use glow::HasContext;
 
 /// Build a full-screen program: `fullscreen.vert` and `frag_body`, with
@@ -16,16 +16,21 @@ pub(crate) fn fullscreen_program(
     defines: &[(String, String)],
     output: &str,
 ) -> Result<Program> {
-    Ok(Program::build(
-        gl,
-        label,
-        &preamble(&[], defines),
-        &[
-            (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
-            (ShaderStage::Fragment, frag_name, frag_body),
-        ],
-        &[(output, 0)],
-    )?)
+    let fragment = ShaderSource::new()
+        .defines(defines)
+        .part(frag_name, frag_body);
+    Ok(FullscreenPass::new(gl, label, &fragment, &[(output, 0)])?.into_program())
+}
+
+/// The model shader `geometry.frag` with its `main()` renamed `model_main`
+/// (every wrapper that records more per fragment calls it), then `wrapper`
+/// parts, after `header`'s version, extensions and defines. Each part keeps
+/// its own line numbers ([`ShaderSource`]).
+pub(crate) fn model_wrapped(header: ShaderSource, wrapper: &[(&str, &str)]) -> ShaderSource {
+    let model = header.part_renaming_main("geometry.frag", GEOMETRY_FRAG, "model_main");
+    wrapper
+        .iter()
+        .fold(model, |source, (name, text)| source.part(name, text))
 }
 
 /// Bind `fbo` to `GL_FRAMEBUFFER` with a `width`×`height` viewport.
@@ -55,8 +60,7 @@ pub(crate) fn fullscreen_state(gl: &glow::Context) {
 
 /// Draw the full-screen triangle (an empty vertex array; positions come from `gl_VertexID`).
 pub(crate) fn draw_fullscreen(gl: &glow::Context, vao: &VertexArray) {
-    vao.bind(gl);
-    unsafe { gl.draw_arrays(glow::TRIANGLES, 0, 3) };
+    draw_fullscreen_triangle(gl, vao);
 }
 
 /// Which pixels a full-screen pass may write, by their stencil value (the

@@ -5,7 +5,10 @@
 //! with a stencil mask, and the coverage flags.
 
 use crate::Result;
-use crate::gl::{Attachment, Format, Framebuffer, Texture2d, Texture2dMultisample, TextureRef};
+use crate::gl::{
+    Attachment, Format, Framebuffer, GlObject, Handle, Made, Texture2d, Texture2dMultisample,
+    TextureRef,
+};
 use crate::retrofit::MsaaRetrofit;
 
 /// A texture and a framebuffer with it as colour attachment 0.
@@ -35,19 +38,16 @@ impl ColorTarget {
         width: u32,
         height: u32,
     ) -> Result<Self> {
-        let texture = Texture2d::new(gl, label, format, width, height)?;
-        match Framebuffer::new(
-            gl,
-            label,
-            &[(Attachment::Color(0), TextureRef::from(&texture))],
-            &[Some(0)],
-        ) {
-            Ok(fbo) => Ok(ColorTarget { texture, fbo }),
-            Err(e) => {
-                texture.destroy(gl);
-                Err(e.into())
-            }
-        }
+        Made::build(gl, |made| {
+            let texture = made.keep(Texture2d::new(gl, label, format, width, height)?);
+            let fbo = Framebuffer::new(
+                gl,
+                label,
+                &[(Attachment::Color(0), TextureRef::from(&texture))],
+                &[Some(0)],
+            )?;
+            Ok(ColorTarget { texture, fbo })
+        })
     }
 
     /// Free the framebuffer and the texture.
@@ -77,60 +77,32 @@ impl Targets {
     /// (their size is its size; the HDR target gets it attached).
     pub(crate) fn new(gl: &glow::Context, depth: &Texture2d, fxaa: bool) -> Result<Self> {
         let (w, h) = (depth.width, depth.height);
-        let background = ColorTarget::new(gl, "background", Format::Rgba16f, w, h)?;
-        let hdr = match ColorTarget::new(gl, "hdr", Format::Rgba16f, w, h) {
-            Ok(t) => t,
-            Err(e) => {
-                background.destroy(gl);
-                return Err(e);
-            }
-        };
-        let depth = TextureRef::from(depth);
-        let hdr_with_depth = match Framebuffer::new(
-            gl,
-            "hdr with resolved depth",
-            &[
-                (Attachment::Color(0), TextureRef::from(&hdr.texture)),
-                (Attachment::for_depth_format(depth.format), depth),
-            ],
-            &[Some(0)],
-        ) {
-            Ok(f) => f,
-            Err(e) => {
-                background.destroy(gl);
-                hdr.destroy(gl);
-                return Err(e.into());
-            }
-        };
-        let ldr = match Self::ldr_target(gl, "ldr", w, h) {
-            Ok(t) => t,
-            Err(e) => {
-                background.destroy(gl);
-                hdr.destroy(gl);
-                hdr_with_depth.destroy(gl);
-                return Err(e);
-            }
-        };
-        let fxaa = if fxaa {
-            match Self::ldr_target(gl, "fxaa", w, h) {
-                Ok(t) => Some(t),
-                Err(e) => {
-                    background.destroy(gl);
-                    hdr.destroy(gl);
-                    hdr_with_depth.destroy(gl);
-                    ldr.destroy(gl);
-                    return Err(e);
-                }
-            }
-        } else {
-            None
-        };
-        Ok(Targets {
-            background,
-            hdr,
-            hdr_with_depth,
-            ldr,
-            fxaa,
+        Made::build(gl, |made| {
+            let background = made.keep(ColorTarget::new(gl, "background", Format::Rgba16f, w, h)?);
+            let hdr = made.keep(ColorTarget::new(gl, "hdr", Format::Rgba16f, w, h)?);
+            let depth = TextureRef::from(depth);
+            let hdr_with_depth = made.keep(Framebuffer::new(
+                gl,
+                "hdr with resolved depth",
+                &[
+                    (Attachment::Color(0), TextureRef::from(&hdr.texture)),
+                    (Attachment::for_depth_format(depth.format), depth),
+                ],
+                &[Some(0)],
+            )?);
+            let ldr = made.keep(Self::ldr_target(gl, "ldr", w, h)?);
+            let fxaa = if fxaa {
+                Some(Self::ldr_target(gl, "fxaa", w, h)?)
+            } else {
+                None
+            };
+            Ok(Targets {
+                background,
+                hdr,
+                hdr_with_depth,
+                ldr,
+                fxaa,
+            })
         })
     }
 
@@ -200,37 +172,32 @@ impl ComplexTargets {
         coverage: Option<(&MsaaRetrofit, u32)>,
     ) -> Result<Self> {
         let (w, h) = (hdr.width, hdr.height);
-        let stencil = Texture2d::new(gl, "complex-pixel stencil", Format::Depth24Stencil8, w, h)?;
-        let hdr_with_stencil = match Framebuffer::new(
-            gl,
-            "hdr with complex-pixel stencil",
-            &[
-                (Attachment::Color(0), TextureRef::from(hdr)),
-                (Attachment::DepthStencil, TextureRef::from(&stencil)),
-            ],
-            &[Some(0)],
-        ) {
-            Ok(f) => f,
-            Err(e) => {
-                stencil.destroy(gl);
-                return Err(e.into());
-            }
-        };
-        let coverage = match coverage {
-            None => None,
-            Some((retrofit, slot)) => match CoverageTarget::new(gl, retrofit, slot) {
-                Ok(c) => Some(c),
-                Err(e) => {
-                    hdr_with_stencil.destroy(gl);
-                    stencil.destroy(gl);
-                    return Err(e);
-                }
-            },
-        };
-        Ok(ComplexTargets {
-            stencil,
-            hdr_with_stencil,
-            coverage,
+        Made::build(gl, |made| {
+            let stencil = made.keep(Texture2d::new(
+                gl,
+                "complex-pixel stencil",
+                Format::Depth24Stencil8,
+                w,
+                h,
+            )?);
+            let hdr_with_stencil = made.keep(Framebuffer::new(
+                gl,
+                "hdr with complex-pixel stencil",
+                &[
+                    (Attachment::Color(0), TextureRef::from(hdr)),
+                    (Attachment::DepthStencil, TextureRef::from(&stencil)),
+                ],
+                &[Some(0)],
+            )?);
+            let coverage = match coverage {
+                None => None,
+                Some((retrofit, slot)) => Some(CoverageTarget::new(gl, retrofit, slot)?),
+            };
+            Ok(ComplexTargets {
+                stencil,
+                hdr_with_stencil,
+                coverage,
+            })
         })
     }
 
@@ -260,41 +227,45 @@ impl ComplexTargets {
 impl CoverageTarget {
     fn new(gl: &glow::Context, retrofit: &MsaaRetrofit, slot: u32) -> Result<Self> {
         let twin = retrofit.twin();
-        let texture = Texture2dMultisample::new(
-            gl,
-            "coverage flags",
-            Format::R8,
-            twin.width,
-            twin.height,
-            twin.samples,
-        )?;
-        let mut attachments = twin.fbo.attachments.clone();
-        attachments.push((Attachment::Color(slot), TextureRef::from(&texture)));
-        let mut draw_buffers = retrofit.host().draw_buffers.clone();
-        if draw_buffers.len() <= slot as usize {
-            draw_buffers.resize(slot as usize + 1, None);
-        }
-        draw_buffers[slot as usize] = Some(slot);
-        match Framebuffer::new(
-            gl,
-            "multisampled G-buffer with coverage flags",
-            &attachments,
-            &draw_buffers,
-        ) {
-            Ok(fbo) => Ok(CoverageTarget {
+        Made::build(gl, |made| {
+            let texture = made.keep(Texture2dMultisample::new(
+                gl,
+                "coverage flags",
+                Format::R8,
+                twin.width,
+                twin.height,
+                twin.samples,
+            )?);
+            let mut attachments = twin.fbo.attachments.clone();
+            attachments.push((Attachment::Color(slot), TextureRef::from(&texture)));
+            let mut draw_buffers = retrofit.host().draw_buffers.clone();
+            if draw_buffers.len() <= slot as usize {
+                draw_buffers.resize(slot as usize + 1, None);
+            }
+            draw_buffers[slot as usize] = Some(slot);
+            let fbo = Framebuffer::new(
+                gl,
+                "multisampled G-buffer with coverage flags",
+                &attachments,
+                &draw_buffers,
+            )?;
+            Ok(CoverageTarget {
                 texture,
                 fbo,
                 draw_buffers,
-            }),
-            Err(e) => {
-                texture.destroy(gl);
-                Err(e.into())
-            }
-        }
+            })
+        })
     }
 
     fn destroy(self, gl: &glow::Context) {
         self.fbo.destroy(gl);
         self.texture.destroy(gl);
+    }
+}
+
+impl GlObject for ColorTarget {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.texture.handles(out);
+        self.fbo.handles(out);
     }
 }

@@ -5,10 +5,9 @@
 use crate::Result;
 use crate::gl::format::SampleKind;
 use crate::gl::{
-    Attachment, Format, Framebuffer, Program, ShaderStage, Texture2d, TextureRef, VertexArray,
-    check_error, preamble,
+    Attachment, Format, Framebuffer, FullscreenPass, RenderTarget, SavedState, ShaderSource,
+    TextureRef, VertexArray, check_error,
 };
-use crate::gl::{FULLSCREEN_VERT, SavedState};
 use glow::HasContext;
 use std::collections::HashMap;
 
@@ -49,7 +48,7 @@ impl SampleImage {
 /// The readback pass, with its programs cached by sampler type.
 #[derive(Debug)]
 pub struct Readback {
-    programs: HashMap<(u32, SampleKind), Program>,
+    programs: HashMap<(u32, SampleKind), FullscreenPass>,
     vao: VertexArray,
 }
 
@@ -62,7 +61,12 @@ impl Readback {
         })
     }
 
-    fn program(&mut self, gl: &glow::Context, target: u32, kind: SampleKind) -> Result<&Program> {
+    fn program(
+        &mut self,
+        gl: &glow::Context,
+        target: u32,
+        kind: SampleKind,
+    ) -> Result<&FullscreenPass> {
         let entry = match self.programs.entry((target, kind)) {
             std::collections::hash_map::Entry::Occupied(e) => return Ok(e.into_mut()),
             std::collections::hash_map::Entry::Vacant(v) => v,
@@ -77,18 +81,14 @@ impl Readback {
             glow::TEXTURE_2D_ARRAY => ("sampler2DArray", Some("SRC_ARRAY")),
             _ => ("sampler2D", None),
         };
-        let mut defines = vec![("SRC_SAMPLER".to_string(), format!("{prefix}{sampler}"))];
+        let mut source = ShaderSource::new().define("SRC_SAMPLER", &format!("{prefix}{sampler}"));
         if let Some(f) = flavour {
-            defines.push((f.to_string(), "1".to_string()));
+            source = source.define(f, "1");
         }
-        let program = Program::build(
+        let program = FullscreenPass::new(
             gl,
             &format!("readback {prefix}{sampler}"),
-            &preamble(&[], &defines),
-            &[
-                (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
-                (ShaderStage::Fragment, "readback.frag", READBACK_FRAG),
-            ],
+            &source.part("readback.frag", READBACK_FRAG),
             &[("o_value", 0)],
         )?;
         Ok(entry.insert(program))
@@ -107,21 +107,15 @@ impl Readback {
             _ => 1,
         };
         let (w, h) = (texture.width, texture.height);
-        let scratch = Texture2d::new(gl, "readback scratch", Format::Rgba32f, w, h)?;
-        let fbo = match Framebuffer::new(
+        let scratch = RenderTarget::new(
             gl,
             "readback",
-            &[(Attachment::Color(0), TextureRef::from(&scratch))],
+            w,
+            h,
+            &[(Attachment::Color(0), Format::Rgba32f)],
             &[Some(0)],
-        ) {
-            Ok(f) => f,
-            Err(e) => {
-                scratch.destroy(gl);
-                return Err(e);
-            }
-        };
-        let result = self.read_into(gl, texture, count, &fbo);
-        fbo.destroy(gl);
+        )?;
+        let result = self.read_into(gl, texture, count, scratch.fbo());
         scratch.destroy(gl);
         result
     }
@@ -134,25 +128,21 @@ impl Readback {
         fbo: &Framebuffer,
     ) -> Result<SampleImage> {
         let (w, h) = (texture.width as usize, texture.height as usize);
-        let vao = self.vao.raw;
         let state = SavedState::capture(gl, 1);
-        let program = self.program(gl, texture.target, texture.format.sample_kind())?;
+        self.program(gl, texture.target, texture.format.sample_kind())?;
+        let pass = &self.programs[&(texture.target, texture.format.sample_kind())];
         let mut data = vec![0.0f32; count as usize * w * h * 4];
         let mut plane = vec![0.0f32; w * h * 4];
+        let program = pass.begin(gl, fbo);
         unsafe {
-            fbo.bind(gl);
-            SavedState::prepare_fullscreen_pass(gl);
-            gl.disable(glow::DEPTH_TEST);
-            program.bind(gl);
             texture.bind(gl, 0);
             program.set_i32(gl, "u_src", 0);
-            gl.bind_vertex_array(Some(vao));
             gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(fbo.raw));
             gl.read_buffer(glow::COLOR_ATTACHMENT0);
             gl.pixel_store_i32(glow::PACK_ALIGNMENT, 4);
             for s in 0..count {
                 program.set_i32(gl, "u_sample", s as i32);
-                gl.draw_arrays(glow::TRIANGLES, 0, 3);
+                pass.draw(gl, &self.vao);
                 gl.read_pixels(
                     0,
                     0,

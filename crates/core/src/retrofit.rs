@@ -13,8 +13,8 @@ use crate::gbuffer::{MemoryBudget, MultisampleTwin, TwinSpec, budget_twins};
 use crate::gl::Texture2d;
 use crate::gl::format::{ComponentType, FormatProperties, internal_format_name};
 use crate::gl::{
-    Attachment, ColorAttachment, Format, Framebuffer, HostImage, SetupState, TextureRef,
-    check_error,
+    Attachment, ColorAttachment, Format, Framebuffer, GlObject, Handle, HostImage, Made,
+    SetupState, TextureRef, check_error,
 };
 use crate::resolve::{
     ExtraOutputs, KeySource, ResolveInputs, ResolveParams, ResolveRule, ResolveSettings,
@@ -517,42 +517,46 @@ struct StencilCopyTargets {
     pass: StencilPass,
 }
 
+impl GlObject for StencilCopyTargets {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.reference.handles(out);
+        self.target.handles(out);
+        self.pass.handles(out);
+    }
+}
+
 impl StencilCopyTargets {
     fn new(gl: &glow::Context, host: &HostFramebuffer, method: StencilCopy) -> Result<Self> {
         let method = method.on(gl)?;
         let (w, h) = host.size();
-        let reference = Texture2d::new(gl, "resolve reference sample", Format::R8ui, w, h)?;
-        let depth = &host.depth;
-        let images: Vec<(Attachment, HostImage)> = depth
-            .host_image()
-            .map(|i| (depth.point, i))
-            .into_iter()
-            .collect();
-        let target = match Framebuffer::with_host_images(
-            gl,
-            "stencil copy target (host depth-stencil)",
-            &[(depth.point, depth.texture_ref())],
-            &images,
-            &[],
-        ) {
-            Ok(f) => f,
-            Err(e) => {
-                reference.destroy(gl);
-                return Err(e);
-            }
-        };
-        match StencilPass::new(gl, method) {
-            Ok(pass) => Ok(StencilCopyTargets {
+        Made::build(gl, |made| {
+            let reference = made.keep(Texture2d::new(
+                gl,
+                "resolve reference sample",
+                Format::R8ui,
+                w,
+                h,
+            )?);
+            let depth = &host.depth;
+            let images: Vec<(Attachment, HostImage)> = depth
+                .host_image()
+                .map(|i| (depth.point, i))
+                .into_iter()
+                .collect();
+            let target = made.keep(Framebuffer::with_host_images(
+                gl,
+                "stencil copy target (host depth-stencil)",
+                &[(depth.point, depth.texture_ref())],
+                &images,
+                &[],
+            )?);
+            let pass = StencilPass::new(gl, method)?;
+            Ok(StencilCopyTargets {
                 reference,
                 target,
                 pass,
-            }),
-            Err(e) => {
-                target.destroy(gl);
-                reference.destroy(gl);
-                Err(e)
-            }
-        }
+            })
+        })
     }
 
     fn destroy(self, gl: &glow::Context) {
@@ -657,14 +661,10 @@ impl MsaaRetrofit {
         host_fbo: glow::Framebuffer,
         options: &RetrofitOptions,
     ) -> Result<Self> {
-        let resolver = Resolver::new(gl)?;
-        let built = match Self::build(gl, host_fbo, options) {
-            Ok(b) => b,
-            Err(e) => {
-                resolver.destroy(gl);
-                return Err(e);
-            }
-        };
+        let (resolver, built) = Made::build(gl, |made| {
+            let resolver = made.keep(Resolver::new(gl)?);
+            Ok::<_, Error>((resolver, Self::build(gl, host_fbo, options)?))
+        })?;
         let mut retrofit = MsaaRetrofit {
             host: built.host,
             options: options.clone(),
@@ -792,54 +792,49 @@ impl MsaaRetrofit {
             name: host.depth.point.name(),
         });
         let (w, h) = host.size();
-        let twin = MultisampleTwin::new(gl, &specs, &host.draw_buffers, w, h, samples)?;
-        // The resolve writes output k into the host's k-th colour texture.
-        let mut attachments: Vec<(Attachment, TextureRef)> = Vec::new();
-        let mut images: Vec<(Attachment, HostImage)> = Vec::new();
-        for (point, a) in host
-            .colors
-            .iter()
-            .enumerate()
-            .map(|(k, a)| (Attachment::Color(k as u32), a))
-            .chain([(host.depth.point, &host.depth)])
-        {
-            attachments.push((point, a.texture_ref()));
-            images.extend(a.host_image().map(|image| (point, image)));
-        }
-        let mut draw: Vec<Option<u32>> = (0..host.colors.len() as u32).map(Some).collect();
-        let stencil = if host.depth.format.has_stencil() {
-            match StencilCopyTargets::new(gl, &host, options.stencil) {
-                Ok(s) => Some(s),
-                Err(e) => {
-                    twin.destroy(gl);
-                    return Err(e);
-                }
+        let (twin, stencil, target) = Made::build(gl, |made| {
+            let twin = made.keep(MultisampleTwin::new(
+                gl,
+                &specs,
+                &host.draw_buffers,
+                w,
+                h,
+                samples,
+            )?);
+            // The resolve writes output k into the host's k-th colour texture.
+            let mut attachments: Vec<(Attachment, TextureRef)> = Vec::new();
+            let mut images: Vec<(Attachment, HostImage)> = Vec::new();
+            for (point, a) in host
+                .colors
+                .iter()
+                .enumerate()
+                .map(|(k, a)| (Attachment::Color(k as u32), a))
+                .chain([(host.depth.point, &host.depth)])
+            {
+                attachments.push((point, a.texture_ref()));
+                images.extend(a.host_image().map(|image| (point, image)));
             }
-        } else {
-            None
-        };
-        if let Some(s) = &stencil {
-            // The resolve's reference index goes to the draw buffer after the colours.
-            let n = host.colors.len() as u32;
-            attachments.push((Attachment::Color(n), TextureRef::from(&s.reference)));
-            draw.push(Some(n));
-        }
-        let target = match Framebuffer::with_host_images(
-            gl,
-            "resolve target (host images)",
-            &attachments,
-            &images,
-            &draw,
-        ) {
-            Ok(f) => f,
-            Err(e) => {
-                twin.destroy(gl);
-                if let Some(s) = stencil {
-                    s.destroy(gl);
-                }
-                return Err(e);
+            let mut draw: Vec<Option<u32>> = (0..host.colors.len() as u32).map(Some).collect();
+            let stencil = if host.depth.format.has_stencil() {
+                Some(made.keep(StencilCopyTargets::new(gl, &host, options.stencil)?))
+            } else {
+                None
+            };
+            if let Some(s) = &stencil {
+                // The resolve's reference index goes to the draw buffer after the colours.
+                let n = host.colors.len() as u32;
+                attachments.push((Attachment::Color(n), TextureRef::from(&s.reference)));
+                draw.push(Some(n));
             }
-        };
+            let target = Framebuffer::with_host_images(
+                gl,
+                "resolve target (host images)",
+                &attachments,
+                &images,
+                &draw,
+            )?;
+            Ok::<_, Error>((twin, stencil, target))
+        })?;
         Ok(Built {
             stencil,
             host,

@@ -1,7 +1,10 @@
 //! Owned G-buffer textures: the single-sample G-buffer and multisampled twins.
 
 use super::GBufferLayout;
-use crate::gl::{Attachment, Format, Framebuffer, Texture2d, Texture2dMultisample, TextureRef};
+use crate::gl::{
+    Attachment, Format, Framebuffer, GlObject, Handle, Made, Texture2d, Texture2dMultisample,
+    TextureRef,
+};
 use crate::{Error, Result};
 
 /// A single-sample G-buffer built from a layout: what a host engine owns, and
@@ -29,52 +32,38 @@ impl GBuffer {
         height: u32,
     ) -> Result<Self> {
         layout.validate()?;
-        let mut colors: Vec<Texture2d> = Vec::new();
-        let cleanup = |gl: &glow::Context, colors: Vec<Texture2d>| {
-            for t in colors {
-                t.destroy(gl);
+        Made::build(gl, |made| {
+            let mut colors: Vec<Texture2d> = Vec::new();
+            for a in &layout.colors {
+                let label = format!("gbuffer {}", a.name);
+                colors.push(made.keep(Texture2d::new(gl, &label, a.format, width, height)?));
             }
-        };
-        for a in &layout.colors {
-            match Texture2d::new(gl, &format!("gbuffer {}", a.name), a.format, width, height) {
-                Ok(t) => colors.push(t),
-                Err(e) => {
-                    cleanup(gl, colors);
-                    return Err(e);
-                }
-            }
-        }
-        let depth = match Texture2d::new(gl, "gbuffer depth", layout.depth, width, height) {
-            Ok(t) => t,
-            Err(e) => {
-                cleanup(gl, colors);
-                return Err(e);
-            }
-        };
-        let mut attachments: Vec<(Attachment, TextureRef)> = colors
-            .iter()
-            .enumerate()
-            .map(|(k, t)| (Attachment::Color(k as u32), TextureRef::from(t)))
-            .collect();
-        attachments.push((
-            Attachment::for_depth_format(layout.depth),
-            TextureRef::from(&depth),
-        ));
-        let draw: Vec<Option<u32>> = (0..colors.len() as u32).map(Some).collect();
-        match Framebuffer::new(gl, "gbuffer", &attachments, &draw) {
-            Ok(fbo) => Ok(GBuffer {
+            let depth = made.keep(Texture2d::new(
+                gl,
+                "gbuffer depth",
+                layout.depth,
+                width,
+                height,
+            )?);
+            let mut attachments: Vec<(Attachment, TextureRef)> = colors
+                .iter()
+                .enumerate()
+                .map(|(k, t)| (Attachment::Color(k as u32), TextureRef::from(t)))
+                .collect();
+            attachments.push((
+                Attachment::for_depth_format(layout.depth),
+                TextureRef::from(&depth),
+            ));
+            let draw: Vec<Option<u32>> = (0..colors.len() as u32).map(Some).collect();
+            let fbo = Framebuffer::new(gl, "gbuffer", &attachments, &draw)?;
+            Ok(GBuffer {
                 colors,
                 depth,
                 fbo,
                 width,
                 height,
-            }),
-            Err(e) => {
-                cleanup(gl, colors);
-                depth.destroy(gl);
-                Err(e)
-            }
-        }
+            })
+        })
     }
 
     /// Free the framebuffer and its textures.
@@ -128,53 +117,50 @@ impl MultisampleTwin {
         height: u32,
         samples: u32,
     ) -> Result<Self> {
-        let mut textures: Vec<Texture2dMultisample> = Vec::with_capacity(specs.len());
-        let fail = |gl: &glow::Context, textures: Vec<Texture2dMultisample>, e: Error| {
-            for t in textures {
-                t.destroy(gl);
+        Made::build(gl, |made| {
+            let mut textures: Vec<Texture2dMultisample> = Vec::with_capacity(specs.len());
+            for spec in specs {
+                let label = format!("msaa {}", spec.name);
+                textures.push(made.keep(Texture2dMultisample::new(
+                    gl,
+                    &label,
+                    spec.format,
+                    width,
+                    height,
+                    samples,
+                )?));
             }
-            Err(e)
-        };
-        for spec in specs {
-            let label = format!("msaa {}", spec.name);
-            match Texture2dMultisample::new(gl, &label, spec.format, width, height, samples) {
-                Ok(t) => textures.push(t),
-                Err(e) => return fail(gl, textures, e),
+            let real = textures.first().map_or(samples, |t| t.samples);
+            if let Some(t) = textures.iter().find(|t| t.samples != real) {
+                return Err(Error::UnsupportedSampleCount {
+                    requested: samples,
+                    format: format!(
+                        "{} (the driver gave {} samples to it but {real} to the others)",
+                        t.format, t.samples
+                    ),
+                    supported: vec![real],
+                });
             }
-        }
-        let real = textures.first().map_or(samples, |t| t.samples);
-        if let Some(t) = textures.iter().find(|t| t.samples != real) {
-            let e = Error::UnsupportedSampleCount {
-                requested: samples,
-                format: format!(
-                    "{} (the driver gave {} samples to it but {real} to the others)",
-                    t.format, t.samples
-                ),
-                supported: vec![real],
-            };
-            return fail(gl, textures, e);
-        }
-        let attachments: Vec<(Attachment, TextureRef)> = specs
-            .iter()
-            .zip(&textures)
-            .map(|(s, t)| (s.point, TextureRef::from(t)))
-            .collect();
-        match Framebuffer::new(
-            gl,
-            &format!("msaa gbuffer {real}x"),
-            &attachments,
-            draw_buffers,
-        ) {
-            Ok(fbo) => Ok(MultisampleTwin {
+            let attachments: Vec<(Attachment, TextureRef)> = specs
+                .iter()
+                .zip(&textures)
+                .map(|(s, t)| (s.point, TextureRef::from(t)))
+                .collect();
+            let fbo = Framebuffer::new(
+                gl,
+                &format!("msaa gbuffer {real}x"),
+                &attachments,
+                draw_buffers,
+            )?;
+            Ok(MultisampleTwin {
                 textures,
                 specs: specs.to_vec(),
                 fbo,
                 samples: real,
                 width,
                 height,
-            }),
-            Err(e) => fail(gl, textures, e),
-        }
+            })
+        })
     }
 
     /// Twins of a layout's attachments (colour `k` at `GL_COLOR_ATTACHMENTk`, then depth).
@@ -232,5 +218,20 @@ impl MultisampleTwin {
         for t in self.textures {
             t.destroy(gl);
         }
+    }
+}
+
+impl GlObject for GBuffer {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.colors.handles(out);
+        self.depth.handles(out);
+        self.fbo.handles(out);
+    }
+}
+
+impl GlObject for MultisampleTwin {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.textures.handles(out);
+        self.fbo.handles(out);
     }
 }

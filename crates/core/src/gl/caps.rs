@@ -1,6 +1,6 @@
 //! What the context can do: versions, limits, real sample counts and positions.
 
-use super::{Attachment, Format, Framebuffer, Texture2dMultisample, TextureRef, check_error};
+use super::{Attachment, Format, RenderTarget, check_error};
 use crate::Result;
 use glow::HasContext;
 use std::ffi::c_void;
@@ -241,24 +241,19 @@ pub fn sample_positions(
     extra: &ExtraFns,
     samples: u32,
 ) -> Result<(u32, Vec<[f32; 2]>)> {
-    let texture =
-        Texture2dMultisample::new(gl, "sample-position probe", Format::Rgba8, 1, 1, samples)?;
-    let real = texture.samples;
-    let fbo = match Framebuffer::new(
+    let probe = RenderTarget::multisample(
         gl,
         "sample-position probe",
-        &[(Attachment::Color(0), TextureRef::from(&texture))],
+        1,
+        1,
+        samples,
+        &[(Attachment::Color(0), Format::Rgba8)],
         &[Some(0)],
-    ) {
-        Ok(f) => f,
-        Err(e) => {
-            texture.destroy(gl);
-            return Err(e);
-        }
-    };
+    )?;
+    let real = probe.samples();
     let mut positions = Vec::new();
     if let Some(f) = extra.get_multisamplefv {
-        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo.raw)) };
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(probe.fbo().raw)) };
         let n = get_u32(gl, glow::SAMPLES);
         for i in 0..n {
             let mut xy = [0.0f32; 2];
@@ -268,8 +263,7 @@ pub fn sample_positions(
         }
         unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, None) };
     }
-    fbo.destroy(gl);
-    texture.destroy(gl);
+    probe.destroy(gl);
     check_error(gl, "reading sample positions")?;
     Ok((real, positions))
 }

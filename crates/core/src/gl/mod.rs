@@ -5,6 +5,11 @@
 //! runs inside the host's context and cannot know whether that context is
 //! current when a value goes out of scope. Live-object counters
 //! ([`live_objects`]) let tests prove that nothing leaks.
+//!
+//! The chores every pass repeats live here once: [`RenderTarget`] (textures
+//! and their framebuffer), [`Made`] (what a failed constructor made is
+//! destroyed), [`FullscreenPass`] and [`ShaderSource`] (parts with `#line`
+//! numbering, so compile errors name a part's file and line).
 
 mod buffer;
 mod caps;
@@ -12,9 +17,13 @@ mod counters;
 mod debug;
 pub mod format;
 mod framebuffer;
+mod made;
+mod pass;
 mod program;
 mod query;
+mod source;
 mod state;
+mod target;
 mod texture;
 
 pub use buffer::{Buffer, VertexArray};
@@ -25,9 +34,13 @@ pub use format::Format;
 pub use framebuffer::{
     Attachment, ColorAttachment, Framebuffer, HostImage, framebuffer_status_name,
 };
+pub use made::{GlObject, Handle, Made};
+pub use pass::{FullscreenPass, draw_fullscreen_triangle};
 pub use program::{Program, ShaderStage, preamble};
 pub use query::{GpuTimer, SamplesPassedQuery, TimerKind};
+pub use source::{HEADER_NAME, ShaderSource};
 pub use state::{SavedState, SetupState};
+pub use target::{RenderTarget, TargetTexture};
 pub use texture::{Texture2d, Texture2dArray, Texture2dMultisample, TextureRef};
 
 use crate::{Error, Result};

@@ -1,7 +1,7 @@
 //! Shader programs: compiled from a file body with a generated preamble.
 
 use super::counters::{self, Kind};
-use super::{check_error, label_object};
+use super::{ShaderSource, check_error, label_object};
 use crate::{Error, Result};
 use glow::HasContext;
 use std::cell::RefCell;
@@ -37,61 +37,17 @@ impl ShaderStage {
     }
 }
 
-/// The text prepended to every shader body: `#version 150 core` (the floor),
-/// the requested extensions, then one `#define` per entry, then a `#line` so
-/// the driver's line numbers refer to the body file. (GLSL before 3.30 numbers
-/// the line after `#line N` as N + 1, hence `#line 0`.)
+/// The header [`ShaderSource`] writes: `#version 150 core` (the floor), the
+/// requested extensions, one `#define` per entry, then `#line 0`, so that a
+/// body appended by hand is numbered from its own line 1 (GLSL before 3.30
+/// numbers the line after `#line N` as N + 1). [`Program::build`] takes it
+/// as the verbatim header of a [`ShaderSource`].
 pub fn preamble(extensions: &[&str], defines: &[(String, String)]) -> String {
-    let mut text = String::from("#version 150 core\n");
-    for ext in extensions {
-        text.push_str(&format!("#extension {ext} : enable\n"));
-    }
-    for (name, value) in defines {
-        text.push_str(&format!("#define {name} {value}\n"));
-    }
-    text.push_str("#line 0\n");
-    text
-}
-
-/// Pull the line numbers a driver log points at: Mesa writes `0:12(5): error`,
-/// NVIDIA `0(12) : error`, AMD `ERROR: 0:12:`.
-fn log_line_numbers(log: &str) -> Vec<usize> {
-    let mut lines = Vec::new();
-    for entry in log.lines() {
-        let rest = entry
-            .trim_start_matches("ERROR: ")
-            .trim_start_matches("WARNING: ");
-        let Some(after_file) = rest.strip_prefix("0:").or_else(|| rest.strip_prefix("0(")) else {
-            continue;
-        };
-        let digits: String = after_file
-            .chars()
-            .take_while(|c| c.is_ascii_digit())
-            .collect();
-        if let Ok(n) = digits.parse::<usize>() {
-            if !lines.contains(&n) {
-                lines.push(n);
-            }
-        }
-    }
-    lines
-}
-
-/// The body's lines that a log points at, one line of context either side, numbered.
-fn excerpt(name: &str, body: &str, log: &str) -> String {
-    let source: Vec<&str> = body.lines().collect();
-    let mut out = String::new();
-    for n in log_line_numbers(log) {
-        let first = n.saturating_sub(1).max(1);
-        let last = (n + 1).min(source.len());
-        for k in first..=last {
-            let marker = if k == n { ">" } else { " " };
-            if let Some(text) = source.get(k - 1) {
-                out.push_str(&format!("{marker} {name}:{k:>4} | {text}\n"));
-            }
-        }
-    }
-    out
+    let header = ShaderSource::new()
+        .extensions(extensions)
+        .defines(defines)
+        .header_text();
+    format!("{header}#line 0\n")
 }
 
 /// A linked program with a uniform-location cache.
@@ -114,14 +70,36 @@ impl Program {
         self.raw
     }
 
-    /// Compile every stage as `preamble + body`, bind fragment outputs to their
-    /// colour numbers before linking, and link. Errors carry the stage, the
-    /// driver log and the offending body lines.
+    /// Compile every stage as `preamble + body` (the preamble as the
+    /// verbatim header of a one-part [`ShaderSource`]), bind fragment outputs
+    /// to their colour numbers before linking, and link. Errors carry the
+    /// stage, the driver log and the offending body lines.
     pub fn build(
         gl: &glow::Context,
         label: &str,
         preamble: &str,
         stages: &[StageSource<'_>],
+        frag_outputs: &[(&str, u32)],
+    ) -> Result<Self> {
+        let sources: Vec<(ShaderStage, ShaderSource)> = stages
+            .iter()
+            .map(|&(stage, name, body)| {
+                (stage, ShaderSource::with_header(preamble).part(name, body))
+            })
+            .collect();
+        let refs: Vec<(ShaderStage, &ShaderSource)> =
+            sources.iter().map(|(stage, s)| (*stage, s)).collect();
+        Self::from_sources(gl, label, &refs, frag_outputs)
+    }
+
+    /// Compile every stage from its [`ShaderSource`], bind fragment outputs
+    /// to their colour numbers before linking, and link. A compile error
+    /// names the stage, carries the driver log, and maps each location the
+    /// log names to its part's file and line ([`ShaderSource::explain`]).
+    pub fn from_sources(
+        gl: &glow::Context,
+        label: &str,
+        stages: &[(ShaderStage, &ShaderSource)],
         frag_outputs: &[(&str, u32)],
     ) -> Result<Self> {
         let raw = unsafe { gl.create_program() }.map_err(|reason| Error::Create {
@@ -136,8 +114,8 @@ impl Program {
         };
         let mut shaders = Vec::new();
         let mut result = Ok(());
-        for &(stage, name, body) in stages {
-            match compile(gl, stage, name, preamble, body) {
+        for &(stage, source) in stages {
+            match compile(gl, stage, source) {
                 Ok(shader) => {
                     unsafe { gl.attach_shader(raw, shader) };
                     shaders.push(shader);
@@ -249,21 +227,15 @@ impl Program {
     }
 }
 
-fn compile(
-    gl: &glow::Context,
-    stage: ShaderStage,
-    name: &str,
-    preamble: &str,
-    body: &str,
-) -> Result<glow::Shader> {
+fn compile(gl: &glow::Context, stage: ShaderStage, source: &ShaderSource) -> Result<glow::Shader> {
+    let name = source.name();
     let shader = unsafe { gl.create_shader(stage.gl_enum()) }.map_err(|reason| Error::Create {
         what: format!("{} shader `{name}`", stage.name()),
         reason,
     })?;
     counters::created(Kind::Shader);
-    let source = format!("{preamble}{body}");
     unsafe {
-        gl.shader_source(shader, &source);
+        gl.shader_source(shader, &source.text());
         gl.compile_shader(shader);
         if !gl.get_shader_compile_status(shader) {
             let log = gl.get_shader_info_log(shader);
@@ -271,8 +243,8 @@ fn compile(
             counters::destroyed(Kind::Shader);
             return Err(Error::ShaderCompile {
                 stage: stage.name(),
-                name: name.to_string(),
-                excerpt: excerpt(name, body, &log),
+                excerpt: source.explain(&log),
+                name,
                 log: log.trim_end().to_string(),
             });
         }
@@ -285,21 +257,10 @@ mod tests {
     use super::*;
 
     #[test]
-    fn parses_driver_line_numbers() {
-        assert_eq!(log_line_numbers("0:12(5): error: `x' undeclared"), vec![12]);
+    fn preamble_is_the_builders_header_then_line_zero() {
         assert_eq!(
-            log_line_numbers("0(7) : error C1008: undefined variable"),
-            vec![7]
+            preamble(&["GL_ARB_x"], &[("A".into(), "1".into())]),
+            "#version 150 core\n#extension GL_ARB_x : enable\n#define A 1\n#line 0\n"
         );
-        assert_eq!(log_line_numbers("ERROR: 0:3: 'y' : undeclared"), vec![3]);
-        assert!(log_line_numbers("link failed").is_empty());
-    }
-
-    #[test]
-    fn excerpt_marks_the_line() {
-        let body = "void main() {\n  x = 1;\n}\n";
-        let text = excerpt("t.frag", body, "0:2(3): error: `x' undeclared");
-        assert!(text.contains("> t.frag:   2 |   x = 1;"), "{text}");
-        assert!(text.contains("t.frag:   1 | void main() {"));
     }
 }

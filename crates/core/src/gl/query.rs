@@ -30,7 +30,7 @@ impl TimerKind {
 /// Measures one stretch of GL work at a time.
 #[derive(Debug)]
 pub struct GpuTimer {
-    query: Option<glow::Query>,
+    pub(crate) query: Option<glow::Query>,
     started: Option<Instant>,
     kind: TimerKind,
 }
@@ -115,7 +115,7 @@ impl GpuTimer {
 /// drawing lets through.
 #[derive(Debug)]
 pub struct SamplesPassedQuery {
-    raw: glow::Query,
+    pub(crate) raw: glow::Query,
 }
 
 impl SamplesPassedQuery {

@@ -573,6 +573,15 @@ impl Resolver {
     }
 }
 
+impl crate::gl::GlObject for Resolver {
+    fn handles(&self, out: &mut Vec<crate::gl::Handle>) {
+        for program in self.programs.values() {
+            program.handles(out);
+        }
+        self.vao.handles(out);
+    }
+}
+
 fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program> {
     let mut frag_outputs: Vec<(String, u32)> = Vec::new();
     for k in 0..key.attachments.len() {

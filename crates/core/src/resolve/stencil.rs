@@ -16,10 +16,9 @@
 //!   driver chooses (sample 0 on Mesa): exact on uniform pixels, one of the
 //!   pixel's samples elsewhere.
 
-use super::FULLSCREEN_VERT;
 use crate::gl::{
-    Framebuffer, Program, SavedState, ShaderStage, Texture2d, Texture2dMultisample, TextureRef,
-    VertexArray, check_error, preamble,
+    Framebuffer, FullscreenPass, Made, SavedState, ShaderSource, Texture2d, Texture2dMultisample,
+    TextureRef, VertexArray, check_error,
 };
 use crate::{Error, Result};
 use glow::HasContext;
@@ -78,57 +77,45 @@ impl StencilCopy {
 #[derive(Debug)]
 pub(crate) struct StencilPass {
     method: StencilCopy,
-    program: Option<Program>,
+    program: Option<FullscreenPass>,
     vao: VertexArray,
 }
 
 impl StencilPass {
     /// Build the pass for `method` (already resolved by [`StencilCopy::on`]).
     pub(crate) fn new(gl: &glow::Context, method: StencilCopy) -> Result<Self> {
-        let program = match method {
-            StencilCopy::Export | StencilCopy::BitPasses => {
-                let export = method == StencilCopy::Export;
-                let defines: Vec<(String, String)> = if export {
-                    vec![("STENCIL_EXPORT".into(), "1".into())]
-                } else {
-                    Vec::new()
-                };
-                let extensions: &[&str] = if export {
-                    &["GL_ARB_shader_stencil_export"]
-                } else {
-                    &[]
-                };
-                Some(Program::build(
-                    gl,
-                    "stencil copy from the reference sample",
-                    &preamble(extensions, &defines),
-                    &[
-                        (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
-                        (
-                            ShaderStage::Fragment,
-                            "stencil_copy.frag",
-                            STENCIL_COPY_FRAG,
-                        ),
-                    ],
-                    &[],
-                )?)
-            }
-            _ => None,
-        };
-        let vao = match VertexArray::new(gl, "stencil copy full-screen triangle") {
-            Ok(v) => v,
-            Err(e) => {
-                if let Some(p) = program {
-                    p.destroy(gl);
+        Made::build(gl, |made| {
+            let program = match method {
+                StencilCopy::Export | StencilCopy::BitPasses => {
+                    let mut source = ShaderSource::new();
+                    if method == StencilCopy::Export {
+                        source = source
+                            .extension("GL_ARB_shader_stencil_export")
+                            .define("STENCIL_EXPORT", "1");
+                    }
+                    Some(made.keep(FullscreenPass::new(
+                        gl,
+                        "stencil copy from the reference sample",
+                        &source.part("stencil_copy.frag", STENCIL_COPY_FRAG),
+                        &[],
+                    )?))
                 }
-                return Err(e);
-            }
-        };
-        Ok(StencilPass {
-            method,
-            program,
-            vao,
+                _ => None,
+            };
+            let vao = VertexArray::new(gl, "stencil copy full-screen triangle")?;
+            Ok(StencilPass {
+                method,
+                program,
+                vao,
+            })
         })
+    }
+
+    /// The objects it owns, for a constructor's [`Made`].
+    pub(crate) fn handles(&self, out: &mut Vec<crate::gl::Handle>) {
+        use crate::gl::GlObject;
+        self.program.handles(out);
+        self.vao.handles(out);
     }
 
     /// The method in use.
@@ -170,16 +157,13 @@ impl StencilPass {
                 );
                 Ok(())
             },
-            Some(program) => unsafe {
-                target.bind(gl);
-                SavedState::prepare_fullscreen_pass(gl);
-                gl.disable(glow::DEPTH_TEST);
+            Some(pass) => unsafe {
+                let program = pass.begin(gl, target);
                 gl.depth_mask(false);
                 gl.color_mask(false, false, false, false);
                 gl.enable(glow::STENCIL_TEST);
                 gl.stencil_func(glow::ALWAYS, 0xFF, 0xFF);
                 gl.stencil_op(glow::KEEP, glow::KEEP, glow::REPLACE);
-                program.bind(gl);
                 gl.active_texture(glow::TEXTURE0);
                 gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, Some(twin.raw()));
                 gl.tex_parameter_i32(
@@ -190,10 +174,9 @@ impl StencilPass {
                 program.set_i32(gl, "u_stencil", 0);
                 TextureRef::from(reference).bind(gl, 1);
                 program.set_i32(gl, "u_reference", 1);
-                gl.bind_vertex_array(Some(self.vao.raw()));
                 if self.method == StencilCopy::Export {
                     gl.stencil_mask(0xFF);
-                    gl.draw_arrays(glow::TRIANGLES, 0, 3);
+                    pass.draw(gl, &self.vao);
                 } else {
                     // Clear, then set each bit where the reference's value has it.
                     gl.stencil_mask(0xFF);
@@ -202,7 +185,7 @@ impl StencilPass {
                     for bit in 0..8u32 {
                         gl.stencil_mask(1 << bit);
                         program.set_u32(gl, "u_bit", 1 << bit);
-                        gl.draw_arrays(glow::TRIANGLES, 0, 3);
+                        pass.draw(gl, &self.vao);
                     }
                 }
                 gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, Some(twin.raw()));
