@@ -37,6 +37,7 @@ use crate::gbuffer::{
 };
 use crate::gl::{Capabilities, Format};
 use crate::renderer::shaders::lighting_defines;
+use crate::renderer::technique;
 use crate::renderer::{AaMode, RenderOptions};
 use crate::resolve::{KeySource, ResolveMethod, ResolveSlot, Window};
 use crate::scene::{AlphaMode, Background, Scene};
@@ -646,18 +647,11 @@ impl Plan {
         }
 
         // What a method allocates beside the layout's textures and twins.
-        let extra_bytes = match aa {
-            AaMode::Gbaa => crate::renderer::gbaa::edge_bytes(width, height),
-            AaMode::Sparse(sparse) => crate::renderer::SparseMemory::planned(
-                &sparse,
-                width,
-                height,
-                options.samples.max(1),
-                layout.depth,
-            )
-            .total(),
-            _ => 0,
-        };
+        let extra_bytes = technique::planned_memory(&RenderOptions {
+            aa,
+            layout: layout.clone(),
+            ..options.clone()
+        });
         let permutations = permutations(&layout, aa, samples);
         Ok(Plan {
             scene: needs.name.clone(),
