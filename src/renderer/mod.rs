@@ -195,7 +195,8 @@ pub enum AaMode {
 
 impl AaMode {
     /// `none`, the resolve method's name (`average`, `front`, `median`,
-    /// `back`), `per-sample`, `complex` or `gbaa`.
+    /// `back`), `per-sample`, `complex`, `gbaa` or `sparse`: the name a
+    /// bench method entry starts with.
     pub fn name(&self) -> &'static str {
         match self {
             AaMode::None => "none",
@@ -217,6 +218,23 @@ impl AaMode {
             AaMode::Resolve(s) => Some(*s),
             AaMode::PerSample | AaMode::Complex => Some(ResolveSettings::default()),
         }
+    }
+
+    /// The technique that renders the method: its name, or `resolve` for
+    /// the four resolve methods. Methods of one technique can share a
+    /// renderer: switching between them changes nothing on the GPU.
+    pub fn technique_name(&self) -> &'static str {
+        match self {
+            AaMode::Resolve(_) => "resolve",
+            other => other.name(),
+        }
+    }
+
+    /// Whether the method renders more than one sample per pixel, so that
+    /// [`RenderOptions::samples`] applies: into the multisampled twins, or
+    /// into [`AaMode::Sparse`]'s pre-pass.
+    pub fn takes_samples(&self) -> bool {
+        self.is_multisampled() || matches!(self, AaMode::Sparse(_))
     }
 
     /// Whether the G-buffer pass draws into the multisampled twins.
