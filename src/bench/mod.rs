@@ -42,6 +42,7 @@ use crate::compare;
 use crate::context::{Backend, GlVersion, HeadlessContext};
 use crate::gbuffer::GBufferLayout;
 use crate::gl::TimerKind;
+use crate::renderer::technique::Sparse;
 use crate::renderer::{AaMode, FrameTimings, RenderOptions, Renderer};
 use crate::scene::{Aabb, Light, Scene};
 use crate::{Error, Result};
@@ -653,7 +654,7 @@ fn time_scene(
             // The planned G-buffer: single-sample textures plus the twins
             // (and `gbaa`'s edge buffers); `sparse`: what it really
             // allocates (heads, blocks, pool, MS depth).
-            let gbuffer_bytes = match renderer.sparse_memory() {
+            let gbuffer_bytes = match renderer.technique::<Sparse>().and_then(Sparse::allocated) {
                 Some(m) => m.total(),
                 None => renderer.plan().gbuffer_bytes,
             };
@@ -696,7 +697,8 @@ fn time_scene(
                 job.image = Some(renderer.read_final(gl)?);
                 job.complex_fraction = renderer.complex_pixel_fraction(gl)?;
                 job.sparse_overflow_pixels = renderer
-                    .sparse_stats(gl)?
+                    .technique::<Sparse>()
+                    .map_or(Ok(None), |s| s.stats(gl))?
                     .map(|s| u64::from(s.overflow_pixels));
             }
             pb.inc(1);

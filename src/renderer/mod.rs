@@ -82,7 +82,7 @@ pub mod plan;
 mod slow_path;
 mod sparse;
 mod targets;
-mod technique;
+pub mod technique;
 mod tonemap;
 mod transparent;
 
@@ -115,9 +115,7 @@ pub use sparse::{
 };
 use std::ffi::c_void;
 use targets::Targets;
-use technique::{
-    ComplexPixelsInput, FrameParts, GeometryStep, LightingStep, Setup, Technique, Techniques,
-};
+use technique::{ComplexPixelsInput, FrameParts, GeometryStep, LightingStep, Setup, Techniques};
 use tonemap::TonemapPass;
 use transparent::TransparentPass;
 
@@ -165,7 +163,7 @@ pub enum AaMode {
     /// sample exactly as [`AaMode::PerSample`] does, so the image matches
     /// it wherever the detection is right. The G-buffer is resolved as with
     /// [`AaMode::PerSample`] (decals are not lit either). See
-    /// [`Renderer::complex_fraction`] and [`Renderer::read_complex_mask`].
+    /// [`technique::Complex::fraction`] and [`technique::Complex::read_mask`].
     Complex,
     /// Geometry-buffer anti-aliasing (method `gbaa`, after Persson's GBAA,
     /// with fixes for converging edges): no multisampling. The G-buffer
@@ -177,8 +175,8 @@ pub enum AaMode {
     /// one bilinear fetch (two where a triangle thinner than a pixel puts
     /// both of its sides in the pixel), and leaves two pixels their own
     /// colours when their edges point at each other across a gap (a thin
-    /// triangle between their centres). See [`Renderer::gbaa_edge_textures`]
-    /// and [`Renderer::read_gbaa_edges`].
+    /// triangle between their centres). See [`technique::Gbaa::edge_textures`]
+    /// and [`technique::Gbaa::read_edges`].
     Gbaa,
     /// The multisampled G-buffer without its redundancy (method `sparse`):
     /// a multisampled depth pre-pass, then one G-buffer block per pixel and
@@ -189,7 +187,7 @@ pub enum AaMode {
     /// atomic counters and post-depth coverage; selective anti-aliasing by
     /// screen region, depth and object flag comes with it; no multisampled
     /// twins. See [`SparseOptions`] for how it works and what it needs,
-    /// [`Renderer::sparse_memory`] and [`Renderer::sparse_stats`].
+    /// [`technique::Sparse::allocated`] and [`technique::Sparse::stats`].
     Sparse(SparseOptions),
 }
 
@@ -1126,8 +1124,11 @@ impl Renderer {
             .prepare(gl, &setup, None)
     }
 
-    /// The technique of type `T` when it renders the current method.
-    pub(crate) fn technique<T: Technique + 'static>(&self) -> Option<&T> {
+    /// The state of the technique that renders the current method, when it
+    /// is a `T` ([`technique::Gbaa`], [`technique::Complex`],
+    /// [`technique::Sparse`]); `None` with other methods. For example
+    /// `renderer.technique::<Gbaa>().and_then(Gbaa::edge_textures)`.
+    pub fn technique<T: technique::TechniqueState>(&self) -> Option<&T> {
         self.techniques.get::<T>(&self.options.aa)
     }
 
@@ -1137,10 +1138,14 @@ impl Renderer {
     /// `None` with other modes, before the first frame after
     /// [`Renderer::set_options`], or without a query object.
     pub fn per_sample_pixels(&self) -> Option<u64> {
-        match self.technique::<technique::PerSample>() {
+        match self
+            .techniques
+            .get::<technique::PerSample>(&self.options.aa)
+        {
             Some(p) => p.lit_pixels(),
             None => self
-                .technique::<technique::Complex>()
+                .techniques
+                .get::<technique::Complex>(&self.options.aa)
                 .and_then(technique::Complex::lit_pixels),
         }
     }
@@ -1151,7 +1156,7 @@ impl Renderer {
     ///   (samples whose depth keys differ; every pixel with the fast path
     ///   off), found by running the last frame's resolve again with its
     ///   complex-pixel output into a scratch mask (the G-buffer is untouched);
-    /// - [`AaMode::Complex`]: its stencil mask ([`Renderer::read_complex_mask`]);
+    /// - [`AaMode::Complex`]: its stencil mask ([`technique::Complex::read_mask`]);
     /// - [`AaMode::PerSample`]: every pixel (each is lit per sample).
     ///
     /// `None` without multisampling or before the first frame after

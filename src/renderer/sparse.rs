@@ -162,7 +162,7 @@ pub struct SparseOptions {
     /// Blocks in the pool, shared by all pixels, for the fragments beyond
     /// each pixel's first. `None`: [`DEFAULT_POOL_BLOCKS_PER_PIXEL`] per
     /// pixel. When the pool runs out, the pixels that asked for more fall
-    /// back to one sample ([`Renderer::sparse_stats`] counts them).
+    /// back to one sample ([`super::technique::Sparse::stats`] counts them).
     pub pool_blocks: Option<u32>,
     /// Where to anti-alias (the resolve's selective-AA region; `None`:
     /// everywhere). Pixel centres inside are anti-aliased, the others show
@@ -279,10 +279,10 @@ impl SparseStats {
     }
 }
 
-/// The value [`Renderer::read_sparse_mask`] gives a pixel that fell back
+/// The value [`super::technique::Sparse::read_mask`] gives a pixel that fell back
 /// to one sample because the pool ran out.
 pub const MASK_OVERFLOW: u8 = 255;
-/// The value [`Renderer::read_sparse_mask`] gives a pixel that shows one
+/// The value [`super::technique::Sparse::read_mask`] gives a pixel that shows one
 /// sample because a visible fragment is not to be anti-aliased (its
 /// object's flag, or beyond the depth limit).
 pub const MASK_SINGLE: u8 = 128;
@@ -473,7 +473,7 @@ impl SparseState {
     }
 
     /// The last frame's one-sample pixels, read back from the heads (see
-    /// [`Renderer::read_sparse_mask`]); `None` before the first frame.
+    /// [`super::technique::Sparse::read_mask`]); `None` before the first frame.
     pub(crate) fn read_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
         if !self.rendered.get() {
             return Ok(None);

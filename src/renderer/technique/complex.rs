@@ -8,7 +8,7 @@
 use super::per_sample::{per_sample_inputs, prepare_lighting};
 use super::{
     ComplexPixelsInput, FrameParts, GBufferTarget, GeometryStep, LightingStep, Setup, Technique,
-    resolve_twins,
+    TechniqueState, resolve_twins,
 };
 use crate::frame::Frame as ResolveFrame;
 use crate::gl::{GpuTimer, TextureRef};
@@ -23,10 +23,11 @@ use crate::{Error, Result};
 use glow::HasContext;
 use std::any::Any;
 
-/// Per-sample lighting on the pixels a triangle edge crosses or whose
-/// samples differ.
+/// Per-sample lighting on complex pixels only ([`AaMode::Complex`]), as
+/// [`Renderer::technique`](crate::renderer::Renderer::technique) lends it:
+/// the last frame's complex pixels.
 #[derive(Debug, Default)]
-pub(crate) struct Complex {
+pub struct Complex {
     /// The programs, built when the method is first used and kept.
     lighting: Option<PerSampleLightingPass>,
     mask: Option<ComplexMaskPass>,
@@ -38,7 +39,11 @@ pub(crate) struct Complex {
     targets: Option<ComplexTargets>,
     /// Pixels the last frame's per-sample pass lit (`GL_SAMPLES_PASSED`).
     lit_pixels: Option<u64>,
+    /// The last frame's image size.
+    size: (u32, u32),
 }
+
+impl TechniqueState for Complex {}
 
 /// [`Complex::coverage`]: built for these slots and coverage slot.
 #[derive(Debug)]
@@ -61,15 +66,22 @@ impl Complex {
         self.lit_pixels
     }
 
-    /// [`Complex::lit_pixels`] as a fraction of a `width`×`height` image.
-    pub(crate) fn fraction(&self, width: u32, height: u32) -> Option<f32> {
-        let pixels = f64::from(width) * f64::from(height);
+    /// The fraction of pixels marked complex (and lit per sample) in the
+    /// last frame, counted with a `GL_SAMPLES_PASSED` query around the
+    /// per-sample lighting pass, which the stencil mask limits to those
+    /// pixels. `None` before the first frame after
+    /// [`Renderer::set_options`](crate::renderer::Renderer::set_options), or
+    /// where the context gave no query object.
+    pub fn fraction(&self) -> Option<f32> {
+        let pixels = f64::from(self.size.0) * f64::from(self.size.1);
         self.lit_pixels.map(|n| (n as f64 / pixels.max(1.0)) as f32)
     }
 
-    /// The last frame's stencil mask (row 0 at the top; 255 = complex);
-    /// `None` before the first frame after a change of options.
-    pub(crate) fn read_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
+    /// The last frame's complex-pixel mask, read back from its stencil
+    /// buffer (row 0 at the top; 255 = complex, lit per sample; 0 = simple,
+    /// lit once). `None` before the first frame after
+    /// [`Renderer::set_options`](crate::renderer::Renderer::set_options).
+    pub fn read_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
         self.targets.as_ref().map(|c| c.read_mask(gl)).transpose()
     }
 
@@ -217,6 +229,7 @@ impl Technique for Complex {
             ));
         };
         let (width, height) = step.size();
+        self.size = (width, height);
         let mask_target = MaskTarget {
             fbo: c.hdr_with_stencil.raw(),
             width,
@@ -291,30 +304,6 @@ impl Technique for Complex {
         }
         if let Some(CoverageState { pass: Ok(p), .. }) = self.coverage {
             p.destroy(gl);
-        }
-    }
-}
-
-impl crate::renderer::Renderer {
-    /// The fraction of pixels [`AaMode::Complex`] marked complex (and lit
-    /// per sample) in the last frame, counted with a `GL_SAMPLES_PASSED`
-    /// query around the per-sample lighting pass, which the stencil mask
-    /// limits to those pixels. `None` with other modes, before the first
-    /// frame after [`Renderer::set_options`](crate::renderer::Renderer::set_options), or where the context gave no
-    /// query object.
-    pub fn complex_fraction(&self) -> Option<f32> {
-        let (w, h) = (self.options.width, self.options.height);
-        self.technique::<Complex>().and_then(|c| c.fraction(w, h))
-    }
-
-    /// The last frame's complex-pixel mask of [`AaMode::Complex`], read back
-    /// from its stencil buffer (row 0 at the top; 255 = complex, lit per
-    /// sample; 0 = simple, lit once). `None` with other modes or before the
-    /// first frame after [`Renderer::set_options`](crate::renderer::Renderer::set_options).
-    pub fn read_complex_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
-        match self.technique::<Complex>() {
-            Some(c) => c.read_mask(gl),
-            None => Ok(None),
         }
     }
 }

@@ -4,7 +4,7 @@
 //! texture, and a post pass (`gbaa.frag`) blends across the edges into the
 //! LDR image before FXAA.
 
-use super::{FrameParts, GBufferTarget, GeometryStep, Setup, Technique};
+use super::{FrameParts, GBufferTarget, GeometryStep, Setup, Technique, TechniqueState};
 use crate::Result;
 use crate::gl::{GpuTimer, TextureRef, VertexArray};
 use crate::renderer::gbaa::{GbaaPasses, GbaaTargets, edge_bytes};
@@ -12,15 +12,23 @@ use crate::renderer::targets::{ColorTarget, Targets};
 use crate::renderer::{AaMode, RenderOptions, timed};
 use std::any::Any;
 
-/// Geometry-buffer anti-aliasing.
+/// Geometry-buffer anti-aliasing ([`AaMode::Gbaa`]), as
+/// [`Renderer::technique`](crate::renderer::Renderer::technique) lends it:
+/// its edge buffers and what they add.
 #[derive(Debug, Default)]
-pub(crate) struct Gbaa {
+pub struct Gbaa {
     /// The programs, built when the method is first used and kept.
     passes: Option<GbaaPasses>,
     /// The edge buffers and the sRGB image, allocated by the first frame
     /// after a change of options (they refer to the G-buffer's textures).
     targets: Option<GbaaTargets>,
+    /// The full-screen triangle of the edges view, made with the targets.
+    fullscreen: Option<VertexArray>,
+    /// The image size of the options last prepared for.
+    size: (u32, u32),
 }
+
+impl TechniqueState for Gbaa {}
 
 impl Gbaa {
     /// The programs and targets, once a frame has prepared them.
@@ -28,26 +36,36 @@ impl Gbaa {
         Some((self.passes.as_ref()?, self.targets.as_ref()?))
     }
 
-    /// The edge buffers as the last frame wrote them (`RG16F` nearest edge,
-    /// `R16F` far side); `None` before the first frame after a change of
-    /// options.
-    pub(crate) fn edge_textures(&self) -> Option<(TextureRef, TextureRef)> {
+    /// The edge buffers as the last frame wrote them: `RG16F`, the signed
+    /// distance in pixels from each pixel centre to its triangle's nearest
+    /// edge along x (`.r`) or y (`.g`), the other channel (and both where
+    /// nothing was drawn) 4.0, meaning no edge; and `R16F`, the distance to
+    /// the triangle's boundary the opposite way along the same axis.
+    /// Distances are capped at 2 pixels. `None` before the first frame
+    /// after [`Renderer::set_options`](crate::renderer::Renderer::set_options).
+    pub fn edge_textures(&self) -> Option<(TextureRef, TextureRef)> {
         self.targets
             .as_ref()
             .map(|g| (TextureRef::from(&g.edge), TextureRef::from(&g.far)))
     }
 
-    /// The last frame's edges as the post pass sees them, row 0 at the top;
-    /// `None` before the first frame after a change of options.
-    pub(crate) fn read_edges(
-        &self,
-        gl: &glow::Context,
-        fullscreen: &VertexArray,
-    ) -> Result<Option<image::RgbaImage>> {
-        match self.parts() {
-            Some((p, g)) => g.read_edges_view(gl, p, fullscreen).map(Some),
-            None => Ok(None),
+    /// The last frame's edges as the post pass sees them (`render --view
+    /// edges`), row 0 at the top: red is the share of the pixel taken from
+    /// its left or right neighbour, green from the one above or below, blue
+    /// from the second neighbour of a pixel that a triangle thinner than a
+    /// pixel crosses (each doubled: a full half pixel shows as 255); black
+    /// pixels are left as they are. `None` before the first frame after
+    /// [`Renderer::set_options`](crate::renderer::Renderer::set_options).
+    pub fn read_edges(&self, gl: &glow::Context) -> Result<Option<image::RgbaImage>> {
+        match (self.parts(), &self.fullscreen) {
+            (Some((p, g)), Some(vao)) => g.read_edges_view(gl, p, vao).map(Some),
+            _ => Ok(None),
         }
+    }
+
+    /// The bytes the edge buffers add to the G-buffer at the current size.
+    pub fn edge_bytes(&self) -> u64 {
+        edge_bytes(self.size.0, self.size.1)
     }
 }
 
@@ -64,10 +82,14 @@ impl Technique for Gbaa {
         setup: &Setup<'_>,
         frame: Option<FrameParts<'_>>,
     ) -> Result<()> {
+        self.size = (setup.options.width, setup.options.height);
         let Some(frame) = frame else {
             return Ok(());
         };
         GbaaPasses::prepare(&mut self.passes, gl, setup.slots, setup.colors)?;
+        if self.fullscreen.is_none() {
+            self.fullscreen = Some(VertexArray::new(gl, "gbaa edges view triangle")?);
+        }
         if self.targets.is_none() {
             self.targets = Some(GbaaTargets::new(gl, frame.gbuffer)?);
         }
@@ -150,39 +172,8 @@ impl Technique for Gbaa {
         if let Some(p) = self.passes {
             p.destroy(gl);
         }
-    }
-}
-
-impl crate::renderer::Renderer {
-    /// The edge buffers of [`AaMode::Gbaa`] as the last frame wrote them:
-    /// `RG16F`, the signed distance in pixels from each pixel centre to its
-    /// triangle's nearest edge along x (`.r`) or y (`.g`), the other channel
-    /// (and both where nothing was drawn) 4.0, meaning no edge; and `R16F`,
-    /// the distance to the triangle's boundary the opposite way along the
-    /// same axis. Distances are capped at 2 pixels. `None` with other modes
-    /// or before the first frame after [`Renderer::set_options`](crate::renderer::Renderer::set_options).
-    pub fn gbaa_edge_textures(&self) -> Option<(TextureRef, TextureRef)> {
-        self.technique::<Gbaa>().and_then(Gbaa::edge_textures)
-    }
-
-    /// The last frame's edges as [`AaMode::Gbaa`]'s post pass sees them
-    /// (`render --view edges`), row 0 at the top: red is the share of the
-    /// pixel taken from its left or right neighbour, green from the one
-    /// above or below, blue from the second neighbour of a pixel that a
-    /// triangle thinner than a pixel crosses (each doubled: a full half
-    /// pixel shows as 255); black pixels are left as they are. `None` with
-    /// other modes or before the first frame after [`Renderer::set_options`](crate::renderer::Renderer::set_options).
-    pub fn read_gbaa_edges(&self, gl: &glow::Context) -> Result<Option<image::RgbaImage>> {
-        match self.technique::<Gbaa>() {
-            Some(g) => g.read_edges(gl, &self.passes.fullscreen),
-            None => Ok(None),
+        if let Some(v) = self.fullscreen {
+            v.destroy(gl);
         }
-    }
-
-    /// The bytes [`AaMode::Gbaa`]'s edge buffers add to the G-buffer at
-    /// the current size (0 with other modes).
-    pub fn gbaa_edge_bytes(&self) -> u64 {
-        self.technique::<Gbaa>()
-            .map_or(0, |g| g.memory(&self.options))
     }
 }

@@ -14,6 +14,9 @@
 //!
 //! Adding a technique: a module here with a type implementing
 //! [`Technique`], and its line in [`registry`].
+//!
+//! The public types here are the techniques whose own state a renderer
+//! lends out, through [`Renderer::technique`](super::Renderer::technique).
 
 mod complex;
 mod gbaa;
@@ -33,11 +36,11 @@ use crate::frame::Frame as ResolveFrame;
 use crate::gbuffer::GBuffer;
 use crate::gl::{GpuTimer, Texture2d, VertexArray};
 use crate::retrofit::MsaaRetrofit;
-pub(crate) use complex::Complex;
-pub(crate) use gbaa::Gbaa;
+pub use complex::Complex;
+pub use gbaa::Gbaa;
 use glam::{DMat4, Mat4};
 pub(crate) use per_sample::PerSample;
-pub(crate) use sparse::Sparse;
+pub use sparse::Sparse;
 use std::any::Any;
 
 /// Every technique, once, in an empty state (nothing is built before a
@@ -51,6 +54,18 @@ pub(crate) fn registry() -> Vec<Box<dyn Technique>> {
         Box::new(Gbaa::default()),
         Box::new(Sparse::default()),
     ]
+}
+
+/// A technique whose state [`Renderer::technique`](super::Renderer::technique)
+/// lends out: [`Gbaa`], [`Complex`] or [`Sparse`].
+pub trait TechniqueState: std::any::Any + sealed::Sealed {}
+
+mod sealed {
+    /// Only this crate's techniques are [`TechniqueState`](super::TechniqueState)s.
+    pub trait Sealed {}
+    impl Sealed for super::Gbaa {}
+    impl Sealed for super::Complex {}
+    impl Sealed for super::Sparse {}
 }
 
 /// What a technique builds against.
@@ -378,7 +393,7 @@ impl Techniques {
     }
 
     /// The technique of type `T` when it is the one that renders `aa`.
-    pub(crate) fn get<T: Technique + 'static>(&self, aa: &AaMode) -> Option<&T> {
+    pub(crate) fn get<T: Any>(&self, aa: &AaMode) -> Option<&T> {
         self.active(aa).as_any().downcast_ref::<T>()
     }
 

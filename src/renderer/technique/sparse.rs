@@ -4,34 +4,52 @@
 //! (`sparse*.frag`; the passes are in the renderer's `sparse` module, see
 //! [`SparseOptions`](crate::renderer::SparseOptions)).
 
-use super::{FrameParts, GeometryStep, LightingStep, Setup, Technique};
+use super::{FrameParts, GeometryStep, LightingStep, Setup, Technique, TechniqueState};
 use crate::Result;
 use crate::renderer::pass::{LightTarget, StencilSelect};
 use crate::renderer::sparse::{BuildParams, LightParams, SparseState};
 use crate::renderer::{AaMode, RenderOptions, SparseMemory, SparseStats};
 use std::any::Any;
 
-/// The multisampled G-buffer as per-pixel linked lists of blocks.
+/// The multisampled G-buffer as per-pixel linked lists of blocks
+/// ([`AaMode::Sparse`]), as
+/// [`Renderer::technique`](crate::renderer::Renderer::technique) lends it:
+/// its memory, counters and one-sample pixels.
 #[derive(Debug, Default)]
-pub(crate) struct Sparse {
+pub struct Sparse {
     /// The programs (kept once built) and the targets (they follow the
     /// options, and go when another method is chosen).
     state: SparseState,
 }
 
+impl TechniqueState for Sparse {}
+
 impl Sparse {
-    /// What its targets take, once allocated.
-    pub(crate) fn allocated(&self) -> Option<SparseMemory> {
+    /// The GPU memory it has allocated, by part, once allocated.
+    /// [`SparseMemory::total`] is what the bench reports as its G-buffer bytes.
+    pub fn allocated(&self) -> Option<SparseMemory> {
         self.state.memory()
     }
 
-    /// What the last frame's G-buffer pass counted; `None` before the first frame.
-    pub(crate) fn stats(&self, gl: &glow::Context) -> Result<Option<SparseStats>> {
+    /// What the last frame's G-buffer pass counted: the pool's use and the
+    /// pixels that fell back to one sample because it ran out, read back
+    /// from the atomic counters (this waits for the frame). `None` before
+    /// the first frame.
+    pub fn stats(&self, gl: &glow::Context) -> Result<Option<SparseStats>> {
         self.state.stats(gl)
     }
 
-    /// The last frame's one-sample pixels; `None` before the first frame.
-    pub(crate) fn read_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
+    /// The last frame's one-sample pixels, read back from the heads (row 0
+    /// at the top): [`MASK_OVERFLOW`] where the pool ran out,
+    /// [`MASK_SINGLE`] where a visible fragment is not anti-aliased (object
+    /// flag or depth limit), 0 elsewhere (pixels outside
+    /// [`SparseOptions::region`] are not marked: the region alone decides
+    /// them). `None` before the first frame.
+    ///
+    /// [`MASK_OVERFLOW`]: crate::renderer::MASK_OVERFLOW
+    /// [`MASK_SINGLE`]: crate::renderer::MASK_SINGLE
+    /// [`SparseOptions::region`]: crate::renderer::SparseOptions::region
+    pub fn read_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
         self.state.read_mask(gl)
     }
 }
@@ -126,42 +144,5 @@ impl Technique for Sparse {
 
     fn destroy(self: Box<Self>, gl: &glow::Context) {
         self.state.destroy(gl);
-    }
-}
-
-impl crate::renderer::Renderer {
-    /// The GPU memory [`AaMode::Sparse`] has allocated, by part (`None`
-    /// with other methods). [`SparseMemory::total`] is what the bench
-    /// reports as its G-buffer bytes.
-    pub fn sparse_memory(&self) -> Option<SparseMemory> {
-        self.technique::<Sparse>().and_then(Sparse::allocated)
-    }
-
-    /// What the last [`AaMode::Sparse`] frame's G-buffer pass counted: the
-    /// pool's use and the pixels that fell back to one sample because it ran
-    /// out, read back from the atomic counters (this waits for the frame).
-    /// `None` with other methods or before the first frame.
-    pub fn sparse_stats(&self, gl: &glow::Context) -> Result<Option<SparseStats>> {
-        match self.technique::<Sparse>() {
-            Some(s) => s.stats(gl),
-            None => Ok(None),
-        }
-    }
-
-    /// The last [`AaMode::Sparse`] frame's one-sample pixels, read back from
-    /// the heads (row 0 at the top): [`MASK_OVERFLOW`] where the pool ran
-    /// out, [`MASK_SINGLE`] where a visible fragment is not anti-aliased
-    /// (object flag or depth limit), 0 elsewhere (pixels outside
-    /// [`SparseOptions::region`] are not marked: the region alone decides
-    /// them). `None` with other methods or before the first frame.
-    ///
-    /// [`MASK_OVERFLOW`]: crate::renderer::MASK_OVERFLOW
-    /// [`MASK_SINGLE`]: crate::renderer::MASK_SINGLE
-    /// [`SparseOptions::region`]: crate::renderer::SparseOptions::region
-    pub fn read_sparse_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
-        match self.technique::<Sparse>() {
-            Some(s) => s.read_mask(gl),
-            None => Ok(None),
-        }
     }
 }
