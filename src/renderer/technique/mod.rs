@@ -1,19 +1,20 @@
-//! The anti-aliasing techniques of the frame, one type per [`AaMode`]
-//! method, each in its own module beside the passes it adds.
+//! The anti-aliasing techniques of the frame: one type per technique (the
+//! four resolve methods of [`AaMode::Resolve`] share one), each in its own
+//! module beside the passes it adds.
 //!
 //! The renderer runs one frame for every technique (see the
 //! [renderer's documentation](super)) and asks the technique for the steps
 //! that differ: where the G-buffer pass draws and what it draws
-//! ([`Technique::geometry_target`], [`Technique::draw_gbuffer`]), what runs
-//! after it ([`Technique::after_geometry`]: the resolve, for the methods
+//! (`Technique::geometry_target`, `Technique::draw_gbuffer`), what runs
+//! after it (`Technique::after_geometry`: the resolve, for the methods
 //! with multisampled twins), how the HDR target is lit
-//! ([`Technique::light`]) and what follows the tonemap
-//! ([`Technique::tonemap_target`], [`Technique::post`]). Everything a
+//! (`Technique::light`) and what follows the tonemap
+//! (`Technique::tonemap_target`, `Technique::post`). Everything a
 //! technique builds or allocates it owns and frees in
-//! [`Technique::destroy`].
+//! `Technique::destroy`.
 //!
 //! Adding a technique: a module here with a type implementing
-//! [`Technique`], and its line in [`registry`].
+//! `Technique`, and its line in `registry`.
 //!
 //! The public types here are the techniques whose own state a renderer
 //! lends out, through [`Renderer::technique`](super::Renderer::technique).
