@@ -990,12 +990,6 @@ impl Renderer {
             timer: timer.kind(),
         };
 
-        let frame = FrameParts {
-            aa,
-            gbuffer: &self.frame.gbuffer,
-            retrofit: self.frame.retrofit.as_ref(),
-            targets: &self.frame.targets,
-        };
         let gbuffer_target = technique.geometry_target(&frame);
         let target = GeometryTarget {
             fbo: gbuffer_target.fbo,
