@@ -118,7 +118,7 @@ fn base_name(method: &str) -> &'static str {
         .parse::<MethodEntry>()
         .unwrap_or_else(|e| panic!("`{method}` in the report does not parse: {e}"))
         .method
-        .base_name()
+        .name()
 }
 
 /// The methods of a scene's runs that resolve the multisampled G-buffer
@@ -194,7 +194,7 @@ fn the_report_has_every_key_and_one_run_per_scene_method_and_count() {
         let entry: MethodEntry = method.parse().expect("the report's entries parse");
         if method == "none" {
             assert_eq!((r["samples"].as_u64(), aa), (Some(1), 0.0), "{r}");
-        } else if entry.method.is_multisampled() {
+        } else if entry.method.takes_samples() {
             assert!(r["samples"].as_u64().unwrap() >= 2, "{r}");
         } else {
             assert_eq!(r["samples"].as_u64(), Some(1), "{r}");
@@ -505,18 +505,6 @@ fn bad_input_is_refused_in_one_line() {
             "{args:?}: `{err}` does not mention {needle}"
         );
         assert!(!err.contains("panicked"), "{args:?}: {err}");
-    }
-    // Methods the renderer does not offer yet say so rather than run something else.
-    for m in ["per-sample", "complex"] {
-        let entry: deferred_msaa_lab::bench::MethodEntry = m.parse().expect("a known method");
-        if !entry.method.available() {
-            let o = cli(&["bench", "--methods", m, "--report", d]);
-            assert!(!o.status.success());
-            assert_eq!(
-                stderr(&o).trim_end(),
-                format!("error: method `{m}` is not available yet")
-            );
-        }
     }
     assert!(!Path::new(&dir).join("report.json").exists());
     let _ = std::fs::remove_dir_all(&dir);

@@ -10,12 +10,13 @@ use deferred_msaa_lab::bench::{self, BenchConfig};
 use deferred_msaa_lab::gl::TextureRef;
 use deferred_msaa_lab::gl::{Format, live_objects};
 use deferred_msaa_lab::readback::{Readback, SampleImage};
+use deferred_msaa_lab::renderer::technique::Gbaa;
 use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
 use deferred_msaa_lab::scene::{Aabb, Background, Camera, Material, Object, Scene};
 use glam::{DMat4, DVec3, DVec4, Mat4, Vec3};
 use std::process::Command;
 
-/// What the edge buffer holds where no edge is (`gbaa_edge_textures`).
+/// What the edge buffer holds where no edge is (`Gbaa::edge_textures`).
 const NO_EDGE: f32 = 4.0;
 /// Edge distances are capped at this many pixels.
 const REACH: f64 = 2.0;
@@ -206,9 +207,18 @@ fn edge_buffers_hold_the_distances_to_the_projected_triangle_edges() {
         &options(w, h, AaMode::Gbaa),
     )
     .expect("gbaa renderer");
-    assert!(renderer.gbaa_edge_textures().is_none(), "no frame yet");
+    assert!(
+        renderer
+            .technique::<Gbaa>()
+            .and_then(Gbaa::edge_textures)
+            .is_none(),
+        "no frame yet"
+    );
     renderer.render(gl).expect("render");
-    let (edge_tex, far_tex) = renderer.gbaa_edge_textures().expect("edge textures");
+    let (edge_tex, far_tex) = renderer
+        .technique::<Gbaa>()
+        .and_then(Gbaa::edge_textures)
+        .expect("edge textures");
     let edge = read(gl, edge_tex);
     let far = read(gl, far_tex);
     let projection = renderer.projection().as_dmat4();
@@ -328,7 +338,10 @@ fn gbaa_keeps_none_s_gbuffer_and_changes_only_edge_pixels() {
                 .chain([&r.gbuffer().depth])
                 .map(|t| (t.format, read(gl, TextureRef::from(t))))
                 .collect();
-            let edges = r.read_gbaa_edges(gl).expect("edges view");
+            let edges = r
+                .technique::<Gbaa>()
+                .map_or(Ok(None), |g| g.read_edges(gl))
+                .expect("edges view");
             r.destroy(gl);
             (image, gbuffer, edges)
         };
@@ -504,7 +517,10 @@ fn render_pair(
     .expect("gbaa renderer");
     gbaa.render(gl).expect("render gbaa");
     let gbaa_img = gbaa.read_final(gl).expect("gbaa image");
-    let (e, f) = gbaa.gbaa_edge_textures().expect("edge textures");
+    let (e, f) = gbaa
+        .technique::<Gbaa>()
+        .and_then(Gbaa::edge_textures)
+        .expect("edge textures");
     let (edge, far) = (read(gl, e), read(gl, f));
     gbaa.destroy(gl);
     (none_img, gbaa_img, edge, far)
@@ -667,21 +683,35 @@ fn gbaa_objects_are_freed_through_option_changes() {
     ];
     for opts in &steps {
         renderer.set_options(gl, opts).expect("set_options");
-        assert!(renderer.gbaa_edge_textures().is_none());
+        assert!(
+            renderer
+                .technique::<Gbaa>()
+                .and_then(Gbaa::edge_textures)
+                .is_none()
+        );
         renderer.render(gl).expect("render");
         let img = renderer.read_final(gl).expect("final image");
         assert_eq!(img.dimensions(), (opts.width, opts.height));
         let is_gbaa = opts.aa == AaMode::Gbaa;
-        assert_eq!(renderer.gbaa_edge_textures().is_some(), is_gbaa);
         assert_eq!(
-            renderer.gbaa_edge_bytes(),
+            renderer
+                .technique::<Gbaa>()
+                .and_then(Gbaa::edge_textures)
+                .is_some(),
+            is_gbaa
+        );
+        assert_eq!(
+            renderer.technique::<Gbaa>().map_or(0, Gbaa::edge_bytes),
             if is_gbaa {
                 6 * u64::from(opts.width * opts.height)
             } else {
                 0
             }
         );
-        let view = renderer.read_gbaa_edges(gl).expect("edges view");
+        let view = renderer
+            .technique::<Gbaa>()
+            .map_or(Ok(None), |g| g.read_edges(gl))
+            .expect("edges view");
         assert_eq!(
             view.map(|v| v.dimensions()),
             is_gbaa.then_some((opts.width, opts.height))

@@ -10,6 +10,7 @@ use deferred_msaa_lab::gbuffer::GBufferLayout;
 use deferred_msaa_lab::gl::{TextureRef, live_objects};
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::renderer::plan::{Pass, Plan, PlanContext, SceneNeeds, SpecularResponse};
+use deferred_msaa_lab::renderer::technique::Complex;
 use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
 use deferred_msaa_lab::resolve::{KeySource, ResolveSettings, ResolveSlot};
 use deferred_msaa_lab::scene::Scene;
@@ -405,7 +406,12 @@ fn the_complex_view_shows_the_resolves_slow_path() {
     // `complex` shows its own stencil mask; per-sample lights every pixel; none has none.
     r.set_options(gl, &options(AaMode::Complex, true)).unwrap();
     r.render(gl).unwrap();
-    let own = r.read_complex_mask(gl).unwrap().expect("complex mask");
+    let own = r
+        .technique::<Complex>()
+        .expect("complex")
+        .read_mask(gl)
+        .unwrap()
+        .expect("complex mask");
     assert_eq!(r.read_complex_pixels(gl).unwrap(), Some(own));
     r.set_options(gl, &options(AaMode::PerSample, true))
         .unwrap();

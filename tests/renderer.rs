@@ -14,6 +14,7 @@ use deferred_msaa_lab::gbuffer::{GBuffer, GBufferLayout};
 use deferred_msaa_lab::gl::TextureRef;
 use deferred_msaa_lab::gl::{Capabilities, ExtraFns, live_objects};
 use deferred_msaa_lab::readback::Readback;
+use deferred_msaa_lab::renderer::technique::Complex;
 use deferred_msaa_lab::renderer::{AaMode, DepthMode, RenderOptions, Renderer};
 use deferred_msaa_lab::resolve::{ResolveMethod, ResolveRule, ResolveSettings};
 use deferred_msaa_lab::scene::Scene;
@@ -945,19 +946,32 @@ fn per_sample_and_complex_render_every_builtin_scene() {
         let per_sample = render_checked(gl, &mut renderer, &format!("{name} per-sample"));
         let pixels = u64::from(W * H);
         assert_eq!(renderer.per_sample_pixels(), Some(pixels), "{name}");
-        assert_eq!(renderer.complex_fraction(), None, "{name}");
-        assert!(renderer.read_complex_mask(gl).expect("mask").is_none());
+        assert_eq!(
+            renderer.technique::<Complex>().and_then(Complex::fraction),
+            None,
+            "{name}"
+        );
+        assert!(renderer.technique::<Complex>().is_none());
 
         renderer
             .set_options(gl, &options(AaMode::Complex))
             .expect("switching to complex");
-        assert_eq!(renderer.complex_fraction(), None, "no frame yet");
+        assert_eq!(
+            renderer.technique::<Complex>().and_then(Complex::fraction),
+            None,
+            "no frame yet"
+        );
         let complex = render_checked(gl, &mut renderer, &format!("{name} complex"));
-        let fraction = renderer.complex_fraction().expect("a complex fraction");
+        let fraction = renderer
+            .technique::<Complex>()
+            .and_then(Complex::fraction)
+            .expect("a complex fraction");
         assert!((0.0..=1.0).contains(&fraction), "{name}: {fraction}");
         // The query counts exactly the pixels the stencil marks.
         let mask = renderer
-            .read_complex_mask(gl)
+            .technique::<Complex>()
+            .expect("complex")
+            .read_mask(gl)
             .expect("reading the mask")
             .expect("a mask");
         let marked = mask.pixels().filter(|p| p[0] != 0).count() as u64;
@@ -1054,10 +1068,15 @@ fn complex_marks_a_minority_of_pixels_and_the_stencil_limits_per_sample_lighting
         .set_options(gl, &options(AaMode::Complex))
         .expect("complex");
     let img = render_checked(gl, &mut renderer, "greebles complex");
-    let fraction = renderer.complex_fraction().expect("a fraction");
+    let fraction = renderer
+        .technique::<Complex>()
+        .and_then(Complex::fraction)
+        .expect("a fraction");
     let some = renderer.per_sample_pixels().expect("a count");
     let mask = renderer
-        .read_complex_mask(gl)
+        .technique::<Complex>()
+        .expect("complex")
+        .read_mask(gl)
         .expect("reading the mask")
         .expect("a mask");
     save(&img, "greebles-complex");
@@ -1200,7 +1219,10 @@ fn complex_without_sample_mask_in_child() {
     )
     .expect("complex renderer without gl_SampleMaskIn");
     let complex = render_checked(gl, &mut renderer, "complex, GL 3.2");
-    let fraction = renderer.complex_fraction().expect("a fraction");
+    let fraction = renderer
+        .technique::<Complex>()
+        .and_then(Complex::fraction)
+        .expect("a fraction");
     let flip = deferred_msaa_lab::compare::flip(&per_sample, &complex).expect("same size");
     eprintln!(
         "child: complex fraction {fraction:.3} from discontinuities alone; complex vs per-sample FLIP mean {:.5}",

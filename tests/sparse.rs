@@ -19,6 +19,7 @@ use deferred_msaa_lab::compare;
 use deferred_msaa_lab::context::HeadlessContext;
 use deferred_msaa_lab::gbuffer::GBufferLayout;
 use deferred_msaa_lab::gl::live_objects;
+use deferred_msaa_lab::renderer::technique::Sparse;
 use deferred_msaa_lab::renderer::{
     AaMode, MASK_OVERFLOW, MASK_SINGLE, RenderOptions, Renderer, SparseOptions,
 };
@@ -166,8 +167,16 @@ fn error_is_per_samples_and_memory_is_below_the_full_gbuffer() {
             &scene,
             &options(sparse(SparseOptions::default()), W, H),
         );
-        let memory = sp.sparse_memory().expect("sparse memory");
-        let stats = sp.sparse_stats(ctx.gl()).unwrap().expect("sparse stats");
+        let memory = sp
+            .technique::<Sparse>()
+            .and_then(Sparse::allocated)
+            .expect("sparse memory");
+        let stats = sp
+            .technique::<Sparse>()
+            .expect("sparse")
+            .stats(ctx.gl())
+            .unwrap()
+            .expect("sparse stats");
         assert_eq!(sp.samples(), samples, "{name}");
         sp.destroy(ctx.gl());
 
@@ -286,9 +295,25 @@ fn pool_overflow_falls_back_to_sample_zero_and_is_counted() {
         );
         let (img, r) = frame(&ctx, &scene, &opts);
         let gl = ctx.gl();
-        let stats = r.sparse_stats(gl).unwrap().expect("stats");
-        let mask = r.read_sparse_mask(gl).unwrap().expect("mask");
-        assert_eq!(r.sparse_memory().unwrap().pool, 32 * u64::from(cap.max(1)));
+        let stats = r
+            .technique::<Sparse>()
+            .expect("sparse")
+            .stats(gl)
+            .unwrap()
+            .expect("stats");
+        let mask = r
+            .technique::<Sparse>()
+            .expect("sparse")
+            .read_mask(gl)
+            .unwrap()
+            .expect("mask");
+        assert_eq!(
+            r.technique::<Sparse>()
+                .and_then(Sparse::allocated)
+                .unwrap()
+                .pool,
+            32 * u64::from(cap.max(1))
+        );
         r.destroy(gl);
         assert_eq!(stats.pool_capacity, cap);
         assert!(stats.pool_requested > cap, "{stats:?}");
@@ -339,7 +364,12 @@ fn selective_antialiasing_keeps_sample_zero_where_asked() {
     }
     let with = |o: SparseOptions, scene: &Scene| {
         let (img, r) = frame(&ctx, scene, &options(sparse(o), W, H));
-        let mask = r.read_sparse_mask(ctx.gl()).unwrap().expect("mask");
+        let mask = r
+            .technique::<Sparse>()
+            .expect("sparse")
+            .read_mask(ctx.gl())
+            .unwrap()
+            .expect("mask");
         r.destroy(ctx.gl());
         (img, mask)
     };
@@ -477,7 +507,9 @@ fn live_objects_return_to_zero() {
         r.set_options(gl, opts).unwrap();
         r.render(gl).unwrap();
         assert_eq!(
-            r.sparse_memory().is_some(),
+            r.technique::<Sparse>()
+                .and_then(Sparse::allocated)
+                .is_some(),
             matches!(opts.aa, AaMode::Sparse(_)),
             "{opts:?}"
         );

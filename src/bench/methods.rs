@@ -46,7 +46,7 @@ pub const BASE_DEFAULT_METHODS: &[&str] = &[
     "gbaa",
 ];
 
-/// Default entries that join the default list once the renderer has them.
+/// Default entries that need more than the others.
 ///
 /// `sparse` needs shader storage buffers and post-depth coverage: on a
 /// context without them [`run`](super::run) leaves it out of the default
@@ -71,90 +71,16 @@ const ACCEPTED: &str = "accepted: none, average, front, median, back, per-sample
 resolve options after colons (:hard, :smooth, :c=F, :c_in=F, :nofast, :position-uniformity, :plane-uniformity); sparse's :pool=N; :full (the full G-buffer layout) \
 and +fxaa after any entry";
 
-/// How a method anti-aliases, before FXAA.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum AaMethod {
-    /// A single-sample G-buffer.
-    None,
-    /// The multisampled G-buffer resolved by [`crate::retrofit::MsaaRetrofit::resolve`]
-    /// (`average`, `front`, `median`, `back`).
-    Resolve(ResolveSettings),
-    /// Lighting for every sample of the multisampled G-buffer, then averaged.
-    PerSample,
-    /// Per-sample lighting on complex pixels only, per-pixel lighting elsewhere.
-    Complex,
-    /// Geometry-buffer anti-aliasing: a single-sample G-buffer with edge
-    /// distances, blended across triangle edges after the tonemap.
-    Gbaa,
-    /// The multisampled G-buffer as per-pixel linked lists of blocks, lit
-    /// once per block ([`AaMode::Sparse`]).
-    Sparse(SparseOptions),
+/// Whether the method's G-buffer pass does more than `none`'s (its
+/// `ms_aa` then includes its G-buffer time minus `none`'s).
+pub(crate) fn adds_geometry(aa: &AaMode) -> bool {
+    matches!(aa, AaMode::Gbaa | AaMode::Sparse(_))
 }
 
-impl AaMethod {
-    /// The method's name without options: `none`, `average`, …, `per-sample`, `complex`.
-    pub fn base_name(&self) -> &'static str {
-        match self {
-            AaMethod::None => "none",
-            AaMethod::Resolve(s) => s.method.name(),
-            AaMethod::PerSample => "per-sample",
-            AaMethod::Complex => "complex",
-            AaMethod::Gbaa => "gbaa",
-            AaMethod::Sparse(_) => "sparse",
-        }
-    }
-
-    /// Whether the method renders into a multisampled G-buffer.
-    pub fn is_multisampled(&self) -> bool {
-        !matches!(self, AaMethod::None | AaMethod::Gbaa)
-    }
-
-    /// Whether the method's G-buffer pass does more than `none`'s (its
-    /// `ms_aa` then includes its G-buffer time minus `none`'s).
-    pub fn adds_geometry(&self) -> bool {
-        matches!(self, AaMethod::Gbaa | AaMethod::Sparse(_))
-    }
-
-    /// Whether the method does lighting work beyond the per-pixel pass of
-    /// `none` (its `ms_aa` then includes its lighting time minus `none`'s).
-    pub fn adds_lighting(&self) -> bool {
-        matches!(
-            self,
-            AaMethod::PerSample | AaMethod::Complex | AaMethod::Sparse(_)
-        )
-    }
-
-    /// The renderer mode this method runs with. (A method whose renderer
-    /// mode is missing returns the one-line error "method `NAME` is not
-    /// available yet" here, and [`AaMethod::available`] is then false.)
-    pub fn aa_mode(&self) -> Result<AaMode> {
-        match self {
-            AaMethod::None => Ok(AaMode::None),
-            AaMethod::Resolve(s) => Ok(AaMode::Resolve(*s)),
-            AaMethod::PerSample => Ok(AaMode::PerSample),
-            AaMethod::Complex => Ok(AaMode::Complex),
-            AaMethod::Gbaa => Ok(AaMode::Gbaa),
-            AaMethod::Sparse(o) => Ok(AaMode::Sparse(*o)),
-        }
-    }
-
-    /// Whether the renderer offers this method.
-    pub fn available(&self) -> bool {
-        self.aa_mode().is_ok()
-    }
-
-    /// Which methods can share one renderer (and so one set of GPU targets):
-    /// changing between methods of the same class changes nothing on the GPU.
-    pub(crate) fn class(&self) -> &'static str {
-        match self {
-            AaMethod::None => "single-sample",
-            AaMethod::Resolve(_) => "resolve",
-            AaMethod::PerSample => "per-sample",
-            AaMethod::Complex => "complex",
-            AaMethod::Gbaa => "gbaa",
-            AaMethod::Sparse(_) => "sparse",
-        }
-    }
+/// Whether the method does lighting work beyond the per-pixel pass of
+/// `none` (its `ms_aa` then includes its lighting time minus `none`'s).
+pub(crate) fn adds_lighting(aa: &AaMode) -> bool {
+    matches!(aa, AaMode::PerSample | AaMode::Complex | AaMode::Sparse(_))
 }
 
 /// One entry of a method list: the method, FXAA, and the entry as written.
@@ -162,8 +88,8 @@ impl AaMethod {
 pub struct MethodEntry {
     /// The entry exactly as written (the report's `method` field).
     pub label: String,
-    /// The anti-aliasing method with its options.
-    pub method: AaMethod,
+    /// The anti-aliasing method with its options, as the renderer takes it.
+    pub method: AaMode,
     /// Whether FXAA runs after tonemapping.
     pub fxaa: bool,
 }
@@ -230,10 +156,10 @@ impl FromStr for MethodEntry {
                     )));
                 }
                 match name {
-                    "none" => AaMethod::None,
-                    "per-sample" => AaMethod::PerSample,
-                    "gbaa" => AaMethod::Gbaa,
-                    _ => AaMethod::Complex,
+                    "none" => AaMode::None,
+                    "per-sample" => AaMode::PerSample,
+                    "gbaa" => AaMode::Gbaa,
+                    _ => AaMode::Complex,
                 }
             }
             "sparse" => {
@@ -255,7 +181,7 @@ impl FromStr for MethodEntry {
                         }
                     }
                 }
-                AaMethod::Sparse(sparse)
+                AaMode::Sparse(sparse)
             }
             _ => {
                 let method: ResolveMethod = name.parse().map_err(|_| unknown())?;
@@ -297,7 +223,7 @@ impl FromStr for MethodEntry {
                 settings
                     .validate()
                     .map_err(|e| Error::invalid(format!("method `{label}`: {e}")))?;
-                AaMethod::Resolve(settings)
+                AaMode::Resolve(settings)
             }
         };
         Ok(MethodEntry {
@@ -308,13 +234,12 @@ impl FromStr for MethodEntry {
     }
 }
 
-/// Parse a comma-separated method list. Every entry must parse, be offered
-/// by the renderer ([`AaMethod::available`]) and appear once.
+/// Parse a comma-separated method list. Every entry must parse and appear
+/// once.
 pub fn parse_methods(list: &str) -> Result<Vec<MethodEntry>> {
     let mut entries: Vec<MethodEntry> = Vec::new();
     for item in list.split(',') {
         let entry: MethodEntry = item.parse()?;
-        entry.method.aa_mode()?;
         if entries.iter().any(|e| e.label == entry.label) {
             return Err(Error::invalid(format!(
                 "method `{}` is listed twice in --methods",
@@ -326,14 +251,13 @@ pub fn parse_methods(list: &str) -> Result<Vec<MethodEntry>> {
     Ok(entries)
 }
 
-/// The default method list: [`BASE_DEFAULT_METHODS`], then those of
-/// [`OPTIONAL_DEFAULT_METHODS`] the renderer offers.
+/// The default method list: [`BASE_DEFAULT_METHODS`], then
+/// [`OPTIONAL_DEFAULT_METHODS`].
 pub fn default_methods() -> Vec<MethodEntry> {
     BASE_DEFAULT_METHODS
         .iter()
         .chain(OPTIONAL_DEFAULT_METHODS)
         .filter_map(|s| s.parse::<MethodEntry>().ok())
-        .filter(|e| e.method.available())
         .collect()
 }
 
@@ -343,7 +267,7 @@ mod tests {
 
     fn settings(e: &MethodEntry) -> ResolveSettings {
         match e.method {
-            AaMethod::Resolve(s) => s,
+            AaMode::Resolve(s) => s,
             other => panic!("{other:?} is not a resolve"),
         }
     }
@@ -365,23 +289,23 @@ mod tests {
         assert_eq!((settings(&e).c, settings(&e).c_in), (5.0, 1.0));
 
         let e: MethodEntry = "none+fxaa".parse().unwrap();
-        assert_eq!((e.method, e.fxaa), (AaMethod::None, true));
+        assert_eq!((e.method, e.fxaa), (AaMode::None, true));
         let e: MethodEntry = "gbaa+fxaa".parse().unwrap();
-        assert_eq!((e.method, e.fxaa), (AaMethod::Gbaa, true));
-        assert!(!e.method.is_multisampled() && e.method.adds_geometry());
+        assert_eq!((e.method, e.fxaa), (AaMode::Gbaa, true));
+        assert!(!e.method.takes_samples() && adds_geometry(&e.method));
         assert!("gbaa:hard".parse::<MethodEntry>().is_err());
         let e: MethodEntry = "sparse:pool=16".parse().unwrap();
         match e.method {
-            AaMethod::Sparse(o) => assert_eq!(o.pool_blocks, Some(16)),
+            AaMode::Sparse(o) => assert_eq!(o.pool_blocks, Some(16)),
             other => panic!("{other:?} is not sparse"),
         }
-        assert!(e.method.is_multisampled() && e.method.adds_geometry() && e.method.adds_lighting());
+        assert!(e.method.takes_samples() && adds_geometry(&e.method) && adds_lighting(&e.method));
         for bad in ["sparse:pool=x", "sparse:hard", "sparse:pool=-1"] {
             let err = bad.parse::<MethodEntry>().unwrap_err().to_string();
             assert_eq!(err.lines().count(), 1, "{bad}: {err}");
         }
         assert_eq!(
-            "average".parse::<MethodEntry>().unwrap().method.base_name(),
+            "average".parse::<MethodEntry>().unwrap().method.name(),
             "average"
         );
     }
@@ -408,21 +332,9 @@ mod tests {
     }
 
     #[test]
-    fn unavailable_methods_say_so() {
-        for m in ["per-sample", "complex"] {
-            let entry: MethodEntry = m.parse().unwrap();
-            if !entry.method.available() {
-                let e = parse_methods(m).unwrap_err().to_string();
-                assert_eq!(e, format!("method `{m}` is not available yet"));
-            }
-        }
-    }
-
-    #[test]
     fn the_default_list_parses() {
         let d = default_methods();
         assert!(d.len() >= BASE_DEFAULT_METHODS.len());
         assert_eq!(d[0].label, "none");
-        assert!(d.iter().all(|e| e.method.available()));
     }
 }

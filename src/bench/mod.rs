@@ -34,13 +34,15 @@ pub mod methods;
 mod plot;
 pub mod report;
 
-pub use methods::{AaMethod, MethodEntry, default_methods, parse_methods};
+pub use methods::{MethodEntry, default_methods, parse_methods};
+use methods::{adds_geometry, adds_lighting};
 pub use report::{Reference, Report, Run, pareto_front};
 
 use crate::compare;
 use crate::context::{Backend, GlVersion, HeadlessContext};
 use crate::gbuffer::GBufferLayout;
 use crate::gl::TimerKind;
+use crate::renderer::technique::Sparse;
 use crate::renderer::{AaMode, FrameTimings, RenderOptions, Renderer};
 use crate::scene::{Aabb, Light, Scene};
 use crate::{Error, Result};
@@ -133,9 +135,6 @@ impl BenchConfig {
         }
         if self.frames == 0 {
             return Err(Error::invalid("--frames must be at least 1"));
-        }
-        for entry in &self.methods {
-            entry.method.aa_mode()?;
         }
         for spec in &self.scenes {
             check_scene_spec(spec)?;
@@ -363,18 +362,12 @@ pub fn run(config: &BenchConfig) -> Result<BenchOutput> {
     // when its renderer is made.
     let trimmed;
     let config = if config.methods == default_methods() {
-        let (kept, dropped): (Vec<&MethodEntry>, Vec<&MethodEntry>) =
-            config.methods.iter().partition(|e| {
-                e.method
-                    .aa_mode()
-                    .is_ok_and(|aa| Renderer::check_support(gl, &aa).is_ok())
-            });
+        let (kept, dropped): (Vec<&MethodEntry>, Vec<&MethodEntry>) = config
+            .methods
+            .iter()
+            .partition(|e| Renderer::check_support(gl, &e.method).is_ok());
         for e in dropped {
-            if let Err(why) = e
-                .method
-                .aa_mode()
-                .and_then(|aa| Renderer::check_support(gl, &aa))
-            {
+            if let Err(why) = Renderer::check_support(gl, &e.method) {
                 log::warn!(
                     "bench: `{}` left out of the default methods: {why}",
                     e.label
@@ -393,7 +386,7 @@ pub fn run(config: &BenchConfig) -> Result<BenchOutput> {
     let ms_entries = config
         .methods
         .iter()
-        .filter(|e| e.method.is_multisampled())
+        .filter(|e| e.method.takes_samples())
         .count() as u64;
     let ss_entries = config.methods.len() as u64 - ms_entries;
     let jobs_per_scene = ms_entries * config.samples.len() as u64 + ss_entries;
@@ -612,11 +605,11 @@ fn time_scene(
     let hidden_none: Option<MethodEntry> = (config
         .methods
         .iter()
-        .any(|e| e.method.adds_lighting() || e.method.adds_geometry())
-        && !config.methods.iter().any(|e| e.method == AaMethod::None))
+        .any(|e| adds_lighting(&e.method) || adds_geometry(&e.method))
+        && !config.methods.iter().any(|e| e.method == AaMode::None))
     .then(|| MethodEntry {
         label: "none".into(),
-        method: AaMethod::None,
+        method: AaMode::None,
         fxaa: false,
     });
     let mut jobs: Vec<Job> = Vec::new();
@@ -626,18 +619,17 @@ fn time_scene(
         .map(|e| (e, true))
         .chain(hidden_none.iter().map(|e| (e, false)));
     for (entry, reported) in entries {
-        let counts: Vec<u32> = if entry.method.is_multisampled() {
+        let counts: Vec<u32> = if entry.method.takes_samples() {
             config.samples.clone()
         } else {
             vec![1]
         };
         for requested in counts {
-            let mut options =
-                render_options(config, entry.method.aa_mode()?, entry.fxaa, requested);
+            let mut options = render_options(config, entry.method, entry.fxaa, requested);
             // `:full`: every attachment of the layout, not the plan's.
             options.adaptive = !entry.full_layout();
             let key = (
-                entry.method.class(),
+                entry.method.technique_name(),
                 entry.fxaa,
                 requested,
                 options.adaptive,
@@ -662,7 +654,7 @@ fn time_scene(
             // The planned G-buffer: single-sample textures plus the twins
             // (and `gbaa`'s edge buffers); `sparse`: what it really
             // allocates (heads, blocks, pool, MS depth).
-            let gbuffer_bytes = match renderer.sparse_memory() {
+            let gbuffer_bytes = match renderer.technique::<Sparse>().and_then(Sparse::allocated) {
                 Some(m) => m.total(),
                 None => renderer.plan().gbuffer_bytes,
             };
@@ -705,7 +697,8 @@ fn time_scene(
                 job.image = Some(renderer.read_final(gl)?);
                 job.complex_fraction = renderer.complex_pixel_fraction(gl)?;
                 job.sparse_overflow_pixels = renderer
-                    .sparse_stats(gl)?
+                    .technique::<Sparse>()
+                    .map_or(Ok(None), |s| s.stats(gl))?
                     .map(|s| u64::from(s.overflow_pixels));
             }
             pb.inc(1);
@@ -715,14 +708,14 @@ fn time_scene(
     // The lighting baseline: `none`'s median lighting time.
     let base_lighting = median(
         jobs.iter()
-            .filter(|j| j.entry.method == AaMethod::None)
+            .filter(|j| j.entry.method == AaMode::None)
             .flat_map(|j| j.frames.iter().map(|t| t.lighting_ms))
             .collect(),
     );
     // The G-buffer pass baseline: `none`'s median G-buffer time.
     let base_geometry = median(
         jobs.iter()
-            .filter(|j| j.entry.method == AaMethod::None)
+            .filter(|j| j.entry.method == AaMode::None)
             .flat_map(|j| j.frames.iter().map(|t| t.geometry_ms))
             .collect(),
     );
@@ -735,7 +728,7 @@ fn time_scene(
         let flip = compare::flip(reference, &image)
             .ok_or_else(|| Error::invalid("bench: the reference and the run differ in size"))?;
         let psnr = compare::psnr(reference, &image);
-        let adds = job.entry.method.adds_lighting();
+        let adds = adds_lighting(&job.entry.method);
         let ms_aa = median(
             job.frames
                 .iter()
@@ -745,7 +738,7 @@ fn time_scene(
                     } else {
                         0.0
                     };
-                    let extra_geometry = if job.entry.method.adds_geometry() {
+                    let extra_geometry = if adds_geometry(&job.entry.method) {
                         (t.geometry_ms - base_geometry).max(0.0)
                     } else {
                         0.0
@@ -778,7 +771,7 @@ fn time_scene(
             flip_p95: flip.p95 as f64,
             complex_fraction: job.complex_fraction,
             sparse_overflow_pixels: job.sparse_overflow_pixels,
-            full_ms_gbuffer_bytes: matches!(job.entry.method, AaMethod::Sparse(_)).then(|| {
+            full_ms_gbuffer_bytes: matches!(job.entry.method, AaMode::Sparse(_)).then(|| {
                 config
                     .layout
                     .bytes(config.width, config.height, job.samples)

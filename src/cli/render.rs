@@ -6,6 +6,7 @@ use crate::gbuffer::{GBufferLayout, MemoryBudget};
 use crate::gl::TextureRef;
 use crate::readback::{Readback, SampleImage};
 use crate::renderer::plan::{Plan, PlanContext};
+use crate::renderer::technique::Gbaa;
 use crate::renderer::{AaMode, DepthMode, RenderOptions, Renderer, SparseOptions};
 use crate::resolve::{Region, ResolveMethod, ResolveSettings, Selection, Window};
 use crate::scene::Scene;
@@ -325,7 +326,10 @@ fn resolved_view(session: &Session, view: &str) -> Result<image::RgbaImage> {
         return renderer.read_final(gl);
     }
     if view == "edges" {
-        return renderer.read_gbaa_edges(gl)?.ok_or_else(|| {
+        let edges = renderer
+            .technique::<Gbaa>()
+            .map_or(Ok(None), |g| g.read_edges(gl));
+        return edges?.ok_or_else(|| {
             Error::invalid("the `edges` view shows gbaa's edge buffers; use it with --method gbaa")
         });
     }

@@ -82,6 +82,7 @@ pub mod plan;
 mod slow_path;
 mod sparse;
 mod targets;
+pub mod technique;
 mod tonemap;
 mod transparent;
 
@@ -97,27 +98,24 @@ use crate::retrofit::{MsaaRetrofit, PositionSpace, RetrofitOptions};
 use crate::scene::{Background, Camera, Light, Scene};
 use crate::{Error, Result};
 use background::BackgroundPass;
-use background_copy::{BackgroundCopyPass, CopyTarget};
-use complex_mask::{ComplexMaskPass, MaskTarget};
+use background_copy::BackgroundCopyPass;
 pub use depth::DepthMode;
 use depth::{ClipControl, SceneExtent};
 use fxaa::FxaaPass;
-use gbaa::{GbaaPasses, GbaaTargets};
 use geometry::{GeometryPass, GeometryTarget};
-use geometry_coverage::CoverageGeometryPass;
 use glam::Mat4;
 use glow::HasContext;
 use lighting::{LightingPass, StandIns, light_batches};
-use lighting_per_sample::{PerSampleLightingPass, SampleInputs};
+use lighting_per_sample::PerSampleLightingPass;
 use mesh::GpuScene;
-use pass::{LightTarget, StencilSelect};
 use plan::{Pass, Plan, PlanContext, SceneNeeds};
 pub use sparse::{
     DEFAULT_POOL_BLOCKS_PER_PIXEL, MASK_OVERFLOW, MASK_SINGLE, MAX_SPARSE_SAMPLES, SparseMemory,
     SparseOptions, SparseStats,
 };
 use std::ffi::c_void;
-use targets::{ComplexTargets, Targets};
+use targets::Targets;
+use technique::{ComplexPixelsInput, FrameParts, GeometryStep, LightingStep, Setup, Techniques};
 use tonemap::TonemapPass;
 use transparent::TransparentPass;
 
@@ -165,7 +163,7 @@ pub enum AaMode {
     /// sample exactly as [`AaMode::PerSample`] does, so the image matches
     /// it wherever the detection is right. The G-buffer is resolved as with
     /// [`AaMode::PerSample`] (decals are not lit either). See
-    /// [`Renderer::complex_fraction`] and [`Renderer::read_complex_mask`].
+    /// [`technique::Complex::fraction`] and [`technique::Complex::read_mask`].
     Complex,
     /// Geometry-buffer anti-aliasing (method `gbaa`, after Persson's GBAA,
     /// with fixes for converging edges): no multisampling. The G-buffer
@@ -177,8 +175,8 @@ pub enum AaMode {
     /// one bilinear fetch (two where a triangle thinner than a pixel puts
     /// both of its sides in the pixel), and leaves two pixels their own
     /// colours when their edges point at each other across a gap (a thin
-    /// triangle between their centres). See [`Renderer::gbaa_edge_textures`]
-    /// and [`Renderer::read_gbaa_edges`].
+    /// triangle between their centres). See [`technique::Gbaa::edge_textures`]
+    /// and [`technique::Gbaa::read_edges`].
     Gbaa,
     /// The multisampled G-buffer without its redundancy (method `sparse`):
     /// a multisampled depth pre-pass, then one G-buffer block per pixel and
@@ -189,13 +187,14 @@ pub enum AaMode {
     /// atomic counters and post-depth coverage; selective anti-aliasing by
     /// screen region, depth and object flag comes with it; no multisampled
     /// twins. See [`SparseOptions`] for how it works and what it needs,
-    /// [`Renderer::sparse_memory`] and [`Renderer::sparse_stats`].
+    /// [`technique::Sparse::allocated`] and [`technique::Sparse::stats`].
     Sparse(SparseOptions),
 }
 
 impl AaMode {
     /// `none`, the resolve method's name (`average`, `front`, `median`,
-    /// `back`), `per-sample`, `complex` or `gbaa`.
+    /// `back`), `per-sample`, `complex`, `gbaa` or `sparse`: the name a
+    /// bench method entry starts with.
     pub fn name(&self) -> &'static str {
         match self {
             AaMode::None => "none",
@@ -217,6 +216,23 @@ impl AaMode {
             AaMode::Resolve(s) => Some(*s),
             AaMode::PerSample | AaMode::Complex => Some(ResolveSettings::default()),
         }
+    }
+
+    /// The technique that renders the method: its name, or `resolve` for
+    /// the four resolve methods. Methods of one technique can share a
+    /// renderer: switching between them changes nothing on the GPU.
+    pub fn technique_name(&self) -> &'static str {
+        match self {
+            AaMode::Resolve(_) => "resolve",
+            other => other.name(),
+        }
+    }
+
+    /// Whether the method renders more than one sample per pixel, so that
+    /// [`RenderOptions::samples`] applies: into the multisampled twins, or
+    /// into [`AaMode::Sparse`]'s pre-pass.
+    pub fn takes_samples(&self) -> bool {
+        self.is_multisampled() || matches!(self, AaMode::Sparse(_))
     }
 
     /// Whether the G-buffer pass draws into the multisampled twins.
@@ -458,9 +474,6 @@ struct Passes {
     fxaa: FxaaPass,
     fullscreen: VertexArray,
     timer: GpuTimer,
-    sample: SampleLightingPasses,
-    /// The programs of [`AaMode::Gbaa`], built when first needed.
-    gbaa: Option<GbaaPasses>,
 }
 
 impl Passes {
@@ -541,8 +554,6 @@ impl Passes {
             fxaa,
             fullscreen,
             timer,
-            sample: SampleLightingPasses::default(),
-            gbaa: None,
         })
     }
 
@@ -556,101 +567,6 @@ impl Passes {
         self.fxaa.destroy(gl);
         self.fullscreen.destroy(gl);
         self.timer.destroy(gl);
-        self.sample.destroy(gl);
-        if let Some(p) = self.gbaa {
-            p.destroy(gl);
-        }
-    }
-}
-
-/// The programs of [`AaMode::PerSample`] and [`AaMode::Complex`], built when
-/// a mode first needs them and kept.
-#[derive(Debug, Default)]
-struct SampleLightingPasses {
-    lighting: Option<PerSampleLightingPass>,
-    mask: Option<ComplexMaskPass>,
-    /// The coverage-recording model program, or why the context cannot
-    /// record coverage, for the layout's slots and coverage slot.
-    coverage: Option<CoverageState>,
-}
-
-/// [`SampleLightingPasses::coverage`]: built for these slots and coverage slot.
-#[derive(Debug)]
-struct CoverageState {
-    slots: GBufferSlots,
-    coverage_slot: u32,
-    pass: std::result::Result<CoverageGeometryPass, String>,
-}
-
-impl SampleLightingPasses {
-    /// Build what `aa` needs for a G-buffer with `slots` and `colors`
-    /// colour attachments (the coverage flags go to the next one). Without
-    /// `gl_SampleMaskIn`, `complex` falls back to the discontinuity test
-    /// alone and says so in a `log::warn!` line.
-    fn prepare(
-        &mut self,
-        gl: &glow::Context,
-        aa: &AaMode,
-        slots: GBufferSlots,
-        colors: u32,
-    ) -> Result<()> {
-        if !aa.lights_per_sample() {
-            return Ok(());
-        }
-        if self.lighting.as_ref().map(PerSampleLightingPass::slots) != Some(slots) {
-            let pass = PerSampleLightingPass::new(gl, slots)?;
-            if let Some(old) = self.lighting.replace(pass) {
-                old.destroy(gl);
-            }
-        }
-        if *aa != AaMode::Complex {
-            return Ok(());
-        }
-        let current = self
-            .coverage
-            .as_ref()
-            .is_some_and(|c| c.slots == slots && c.coverage_slot == colors);
-        if !current {
-            let pass = CoverageGeometryPass::new(gl, slots, colors);
-            if let Err(reason) = &pass {
-                log::warn!(
-                    "method `complex`: no coverage mask ({reason}); complex pixels are found by the depth, normal and colour discontinuity test alone"
-                );
-            }
-            let state = CoverageState {
-                slots,
-                coverage_slot: colors,
-                pass,
-            };
-            if let Some(CoverageState { pass: Ok(old), .. }) = self.coverage.replace(state) {
-                old.destroy(gl);
-            }
-        }
-        let with_coverage = self.coverage().is_some();
-        if self.mask.as_ref().map(ComplexMaskPass::uses_coverage) != Some(with_coverage) {
-            let mask = ComplexMaskPass::new(gl, with_coverage)?;
-            if let Some(old) = self.mask.replace(mask) {
-                old.destroy(gl);
-            }
-        }
-        Ok(())
-    }
-
-    /// The coverage-recording model program, when the context has one.
-    fn coverage(&self) -> Option<&CoverageGeometryPass> {
-        self.coverage.as_ref().and_then(|c| c.pass.as_ref().ok())
-    }
-
-    fn destroy(self, gl: &glow::Context) {
-        if let Some(p) = self.lighting {
-            p.destroy(gl);
-        }
-        if let Some(p) = self.mask {
-            p.destroy(gl);
-        }
-        if let Some(CoverageState { pass: Ok(p), .. }) = self.coverage {
-            p.destroy(gl);
-        }
     }
 }
 
@@ -661,12 +577,6 @@ struct Frame {
     gbuffer: GBuffer,
     retrofit: Option<MsaaRetrofit>,
     targets: Targets,
-    /// The targets of [`AaMode::Complex`], allocated by the first such frame
-    /// after a change of options (they refer to the twins and the HDR target).
-    complex: Option<ComplexTargets>,
-    /// The targets of [`AaMode::Gbaa`], allocated by the first such frame
-    /// after a change of options (they refer to the G-buffer's textures).
-    gbaa: Option<GbaaTargets>,
 }
 
 impl Frame {
@@ -696,8 +606,6 @@ impl Frame {
                 gbuffer,
                 retrofit,
                 targets,
-                complex: None,
-                gbaa: None,
             }),
             Err(e) => {
                 if let Some(r) = retrofit {
@@ -710,12 +618,6 @@ impl Frame {
     }
 
     fn destroy(self, gl: &glow::Context) {
-        if let Some(c) = self.complex {
-            c.destroy(gl);
-        }
-        if let Some(g) = self.gbaa {
-            g.destroy(gl);
-        }
         if let Some(r) = self.retrofit {
             r.destroy(gl);
         }
@@ -810,23 +712,12 @@ fn attach_gbuffer_textures(
     Ok(())
 }
 
-/// The per-sample lighting program and the twins it reads.
-fn per_sample_inputs<'a>(
-    sample: &'a SampleLightingPasses,
-    retrofit: Option<&MsaaRetrofit>,
-    slots: GBufferSlots,
-) -> Result<(&'a PerSampleLightingPass, SampleInputs)> {
-    let pass = sample.lighting.as_ref().ok_or_else(|| {
-        Error::invalid("the per-sample lighting program is missing (not prepared)")
-    })?;
-    let retrofit = retrofit.ok_or_else(|| {
-        Error::invalid("per-sample lighting needs the multisampled G-buffer, which is missing")
-    })?;
-    Ok((pass, SampleInputs::of(retrofit, slots)?))
-}
-
 /// Run `f` between a timer's begin and end; the milliseconds it took.
-fn timed(gl: &glow::Context, timer: &mut GpuTimer, f: impl FnOnce() -> Result<()>) -> Result<f64> {
+pub(crate) fn timed(
+    gl: &glow::Context,
+    timer: &mut GpuTimer,
+    f: impl FnOnce() -> Result<()>,
+) -> Result<f64> {
     timer.begin(gl);
     let result = f();
     let ms = timer.end(gl);
@@ -859,11 +750,9 @@ pub struct Renderer {
     passes: Passes,
     frame: Frame,
     decal_hook: Option<DecalHook>,
-    /// The programs and targets of [`AaMode::Sparse`].
-    sparse: sparse::SparseState,
-    /// Pixels the per-sample lighting pass lit in the last frame
-    /// (`GL_SAMPLES_PASSED`), with [`AaMode::PerSample`] and [`AaMode::Complex`].
-    per_sample_pixels: Option<u64>,
+    /// Every anti-aliasing technique with what it has built; the one that
+    /// renders `options.aa` runs the frame's method-specific steps.
+    techniques: Techniques,
 }
 
 impl std::fmt::Debug for Renderer {
@@ -919,12 +808,7 @@ impl Renderer {
         for w in &warnings {
             log::warn!("scene `{}` ({depth_mode} depth): {w}", scene.name);
         }
-        let mut passes = Passes::new(gl, slots)?;
-        let colors = options.layout.colors.len() as u32;
-        if let Err(e) = passes.sample.prepare(gl, &options.aa, slots, colors) {
-            passes.destroy(gl);
-            return Err(e);
-        }
+        let passes = Passes::new(gl, slots)?;
         let gpu_scene = match GpuScene::new(gl, scene) {
             Ok(s) => s,
             Err(e) => {
@@ -970,10 +854,9 @@ impl Renderer {
             passes,
             frame,
             decal_hook: None,
-            per_sample_pixels: None,
-            sparse: sparse::SparseState::default(),
+            techniques: Techniques::new(),
         };
-        if let Err(e) = renderer.sparse.prepare(gl, &renderer.options) {
+        if let Err(e) = renderer.prepare_technique(gl, None) {
             renderer.destroy(gl);
             return Err(e);
         }
@@ -1033,7 +916,7 @@ impl Renderer {
 
     /// The real samples per pixel of the G-buffer pass (1 without multisampling).
     pub fn samples(&self) -> u32 {
-        if let (AaMode::Sparse(_), Some(n)) = (self.options.aa, self.sparse.samples()) {
+        if let Some(n) = self.techniques.active(&self.options.aa).samples() {
             return n;
         }
         self.frame
@@ -1064,23 +947,25 @@ impl Renderer {
         let resolve_frame = self.resolve_frame();
         let batches = light_batches(&self.lights, &view);
         let footprint = (self.camera.fov_y / height as f32).tan();
-        self.per_sample_pixels = None;
         let slots = self.passes.geometry.slots();
-        let colors = self.frame.gbuffer.colors.len() as u32;
-        self.passes.sample.prepare(gl, &aa, slots, colors)?;
         let runs_transparent = self.plan.runs(Pass::Transparent);
         let specular_constant = self
             .plan
             .constant_specular
             .unwrap_or([0.04, 0.04, 0.04, 0.0]);
-        if aa == AaMode::Complex {
-            self.prepare_complex_targets(gl)?;
-        }
-        if aa == AaMode::Gbaa {
-            self.prepare_gbaa(gl)?;
-        }
-        self.sparse.prepare(gl, &self.options)?;
-        let sparse_state = &self.sparse;
+        let frame = FrameParts {
+            aa,
+            gbuffer: &self.frame.gbuffer,
+            retrofit: self.frame.retrofit.as_ref(),
+            targets: &self.frame.targets,
+        };
+        let setup = Setup {
+            options: &self.options,
+            slots,
+            colors: self.frame.gbuffer.colors.len() as u32,
+        };
+        let technique = self.techniques.active_mut(&aa);
+        technique.prepare(gl, &setup, Some(frame))?;
         let Passes {
             background,
             background_copy,
@@ -1091,16 +976,7 @@ impl Renderer {
             fxaa,
             fullscreen,
             timer,
-            sample,
-            gbaa: gbaa_passes,
         } = &mut self.passes;
-        let Frame {
-            gbuffer,
-            retrofit,
-            targets,
-            complex,
-            gbaa: gbaa_targets,
-        } = &mut self.frame;
         let mut t = FrameTimings {
             total_ms: 0.0,
             geometry_ms: 0.0,
@@ -1114,102 +990,48 @@ impl Renderer {
             timer: timer.kind(),
         };
 
-        // The G-buffer pass draws into the retrofit's multisampled twin when
-        // there is one (the first of the two integration lines), else into
-        // the G-buffer itself. `complex` with coverage flags draws the twins
-        // plus the flags, with the model shader wrapped to write them.
-        let coverage = match (aa, sample.coverage(), complex.as_ref()) {
-            (AaMode::Complex, Some(pass), Some(c)) => c.coverage.as_ref().map(|c| (pass, c)),
-            _ => None,
+        let gbuffer_target = technique.geometry_target(&frame);
+        let target = GeometryTarget {
+            fbo: gbuffer_target.fbo,
+            width,
+            height,
         };
-        // `gbaa` draws the G-buffer plus its edge buffers.
-        let gbaa = match (aa, gbaa_passes.as_ref(), gbaa_targets.as_ref()) {
-            (AaMode::Gbaa, Some(p), Some(g)) => Some((p, g)),
-            _ => None,
+        let step = GeometryStep {
+            target,
+            draw_buffers: &gbuffer_target.draw_buffers,
+            frame,
+            model: geometry,
+            background_copy,
+            fullscreen,
+            slots,
+            scene: &self.scene,
+            view: &view,
+            projection: &projection,
+            nearer_func: depth_mode.nearer_func(),
+            clear_depth,
         };
-        let (fbo, draw_buffers) = match (gbaa, coverage, retrofit.as_ref()) {
-            (Some((_, g)), _, _) => (g.fbo.raw(), g.draw_buffers.clone()),
-            (None, Some((_, c)), _) => (c.fbo.raw(), c.draw_buffers.clone()),
-            (None, None, Some(r)) => (r.framebuffer(), r.host().draw_buffers.clone()),
-            (None, None, None) => (
-                gbuffer.fbo.raw(),
-                (0..gbuffer.colors.len() as u32).map(Some).collect(),
-            ),
-        };
-        let model = match (coverage, retrofit.as_ref()) {
-            (Some((pass, _)), Some(r)) => pass.prepare(gl, r.samples()),
-            _ => &*geometry,
-        };
-        let target = GeometryTarget { fbo, width, height };
         t.geometry_ms = timed(gl, timer, || {
             GeometryPass::clear(gl, target, clear_depth);
-            if let Some((_, g)) = gbaa {
-                g.clear_edges(gl);
-            }
+            technique.clear_outputs(gl);
             background.draw(
                 gl,
-                &targets.background,
+                &frame.targets.background,
                 fullscreen,
                 &self.background,
                 &view,
                 &projection,
             )?;
-            // `sparse` builds its lists instead of filling the G-buffer (whose
-            // colours stay cleared; the set-up pass writes its depth).
-            if let AaMode::Sparse(o) = aa {
-                let build = sparse::BuildParams {
-                    view: &view,
-                    projection: &projection,
-                    nearer_func: depth_mode.nearer_func(),
-                    clear_depth,
-                    region: o.region,
-                    max_depth: o.max_depth.unwrap_or(f32::MAX),
-                };
-                return sparse_state.build_lists(
-                    gl,
-                    &self.scene,
-                    gbuffer.fbo.raw(),
-                    fullscreen,
-                    &build,
-                );
-            }
-            // Without an emissive attachment the lighting pass reads the
-            // background texture itself.
-            if let Some(emissive) = slots.emissive {
-                let copy = CopyTarget {
-                    fbo,
-                    width,
-                    height,
-                    emissive,
-                    draw_buffers: &draw_buffers,
-                };
-                background_copy.draw(gl, copy, fullscreen, &targets.background.texture)?;
-            }
-            if let Some((p, _)) = gbaa {
-                return p.geometry().draw(
-                    gl,
-                    target,
-                    &self.scene,
-                    &view,
-                    &projection,
-                    depth_mode.nearer_func(),
-                );
-            }
-            model.draw(
-                gl,
-                target,
-                &self.scene,
-                &view,
-                &projection,
-                depth_mode.nearer_func(),
-            )
+            technique.draw_gbuffer(gl, &step)
         })?;
 
-        // The second integration line: resolve into the G-buffer's own textures.
-        if let Some(r) = retrofit.as_mut() {
-            t.resolve_ms = timed(gl, timer, || Ok(r.resolve(gl, &resolve_frame)?))?;
-        }
+        t.resolve_ms =
+            technique.after_geometry(gl, self.frame.retrofit.as_mut(), &resolve_frame, timer)?;
 
+        let Frame {
+            gbuffer,
+            retrofit,
+            targets,
+        } = &self.frame;
         if let Some(hook) = self.decal_hook.as_mut() {
             t.decal_ms = timed(gl, timer, || {
                 gbuffer.fbo.bind(gl);
@@ -1218,103 +1040,27 @@ impl Renderer {
             })?;
         }
 
-        let hdr = LightTarget {
-            fbo: targets.hdr.fbo.raw(),
-            width,
-            height,
-            stencil: StencilSelect::All,
+        let frame = FrameParts {
+            aa,
+            gbuffer,
+            retrofit: retrofit.as_ref(),
+            targets,
         };
-        let stand_ins = StandIns {
-            background: &targets.background.texture,
-            specular: specular_constant,
+        let step = LightingStep {
+            frame,
+            lighting,
+            fullscreen,
+            slots,
+            batches: &batches,
+            clear_depth,
+            stand_ins: StandIns {
+                background: &targets.background.texture,
+                specular: specular_constant,
+            },
+            projection: &projection,
+            footprint,
         };
-        let mut lit_per_sample = None;
-        t.lighting_ms = timed(gl, timer, || match aa {
-            AaMode::None | AaMode::Resolve(_) | AaMode::Gbaa => lighting.draw(
-                gl,
-                &targets.hdr,
-                fullscreen,
-                gbuffer,
-                slots,
-                &batches,
-                clear_depth,
-                stand_ins,
-            ),
-            AaMode::PerSample => {
-                let (pass, inputs) = per_sample_inputs(sample, retrofit.as_ref(), slots)?;
-                lit_per_sample = pass.draw(
-                    gl,
-                    hdr,
-                    fullscreen,
-                    &inputs,
-                    inputs.samples,
-                    &batches,
-                    clear_depth,
-                    true,
-                    stand_ins,
-                )?;
-                Ok(())
-            }
-            AaMode::Complex => {
-                let (pass, inputs) = per_sample_inputs(sample, retrofit.as_ref(), slots)?;
-                let (Some(mask), Some(c)) = (sample.mask.as_ref(), complex.as_ref()) else {
-                    return Err(Error::invalid(
-                        "method `complex` has no mask pass or stencil target (not prepared)",
-                    ));
-                };
-                let mask_target = MaskTarget {
-                    fbo: c.hdr_with_stencil.raw(),
-                    width,
-                    height,
-                };
-                let flags = c.coverage.as_ref().map(|c| TextureRef::from(&c.texture));
-                mask.draw(gl, mask_target, fullscreen, &inputs, flags, footprint)?;
-                let select = |value| LightTarget {
-                    fbo: c.hdr_with_stencil.raw(),
-                    width,
-                    height,
-                    stencil: StencilSelect::Equal(value),
-                };
-                // Simple pixels: once, from sample 0.
-                pass.draw(
-                    gl,
-                    select(complex_mask::SIMPLE),
-                    fullscreen,
-                    &inputs,
-                    1,
-                    &batches,
-                    clear_depth,
-                    false,
-                    stand_ins,
-                )?;
-                // Complex pixels: every sample, averaged.
-                lit_per_sample = pass.draw(
-                    gl,
-                    select(complex_mask::COMPLEX),
-                    fullscreen,
-                    &inputs,
-                    inputs.samples,
-                    &batches,
-                    clear_depth,
-                    true,
-                    stand_ins,
-                )?;
-                unsafe {
-                    gl.disable(glow::STENCIL_TEST);
-                    gl.stencil_mask(0xFF);
-                }
-                Ok(())
-            }
-            AaMode::Sparse(o) => {
-                let params = sparse::LightParams {
-                    background: &targets.background.texture,
-                    projection: &projection,
-                    region: o.region,
-                };
-                sparse_state.light(gl, hdr, fullscreen, &batches, &params)
-            }
-        })?;
-        self.per_sample_pixels = lit_per_sample;
+        t.lighting_ms = timed(gl, timer, || technique.light(gl, &step))?;
         if runs_transparent {
             t.transparent_ms = timed(gl, timer, || {
                 transparent.draw(
@@ -1328,17 +1074,11 @@ impl Renderer {
                 )
             })?;
         }
-        // `gbaa` tonemaps into its sRGB texture, then blends across the
-        // edges into the LDR image (where FXAA, if on, finds it).
-        let tonemapped = gbaa.map_or(&targets.ldr, |(_, g)| &g.tonemapped);
+        let tonemapped = technique.tonemap_target(targets);
         t.tonemap_ms = timed(gl, timer, || {
             tonemap.draw(gl, tonemapped, fullscreen, &targets.hdr.texture)
         })?;
-        if let Some((p, g)) = gbaa {
-            t.gbaa_ms = timed(gl, timer, || {
-                p.draw_post(gl, &targets.ldr, fullscreen, g, false)
-            })?;
-        }
+        t.gbaa_ms = technique.post(gl, targets, fullscreen, timer)?;
         if let Some(out) = targets.fxaa.as_ref() {
             t.fxaa_ms = timed(gl, timer, || {
                 fxaa.draw(gl, out, fullscreen, &targets.ldr.texture)
@@ -1360,101 +1100,30 @@ impl Renderer {
         Ok(t)
     }
 
-    /// Build `gbaa`'s programs (for the current attachment numbers) and
-    /// allocate its targets unless they are there.
-    fn prepare_gbaa(&mut self, gl: &glow::Context) -> Result<()> {
-        let slots = self.passes.geometry.slots();
-        let colors = self.frame.gbuffer.colors.len() as u32;
-        GbaaPasses::prepare(&mut self.passes.gbaa, gl, slots, colors)?;
-        if self.frame.gbaa.is_none() {
-            self.frame.gbaa = Some(GbaaTargets::new(gl, &self.frame.gbuffer)?);
-        }
-        Ok(())
+    /// Let the technique of `options` (default: the current ones) build its
+    /// programs and the targets that do not refer to the frame's objects.
+    fn prepare_technique(
+        &mut self,
+        gl: &glow::Context,
+        options: Option<&RenderOptions>,
+    ) -> Result<()> {
+        let options = options.unwrap_or(&self.options);
+        let setup = Setup {
+            options,
+            slots: GBufferSlots::of(&options.layout)?,
+            colors: options.layout.colors.len() as u32,
+        };
+        self.techniques
+            .active_mut(&options.aa)
+            .prepare(gl, &setup, None)
     }
 
-    /// The edge buffers of [`AaMode::Gbaa`] as the last frame wrote them:
-    /// `RG16F`, the signed distance in pixels from each pixel centre to its
-    /// triangle's nearest edge along x (`.r`) or y (`.g`), the other channel
-    /// (and both where nothing was drawn) 4.0, meaning no edge; and `R16F`,
-    /// the distance to the triangle's boundary the opposite way along the
-    /// same axis. Distances are capped at 2 pixels. `None` with other modes
-    /// or before the first frame after [`Renderer::set_options`].
-    pub fn gbaa_edge_textures(&self) -> Option<(TextureRef, TextureRef)> {
-        match (&self.options.aa, &self.frame.gbaa) {
-            (AaMode::Gbaa, Some(g)) => Some((TextureRef::from(&g.edge), TextureRef::from(&g.far))),
-            _ => None,
-        }
-    }
-
-    /// The last frame's edges as [`AaMode::Gbaa`]'s post pass sees them
-    /// (`render --view edges`), row 0 at the top: red is the share of the
-    /// pixel taken from its left or right neighbour, green from the one
-    /// above or below, blue from the second neighbour of a pixel that a
-    /// triangle thinner than a pixel crosses (each doubled: a full half
-    /// pixel shows as 255); black pixels are left as they are. `None` with
-    /// other modes or before the first frame after [`Renderer::set_options`].
-    pub fn read_gbaa_edges(&self, gl: &glow::Context) -> Result<Option<image::RgbaImage>> {
-        match (&self.options.aa, &self.passes.gbaa, &self.frame.gbaa) {
-            (AaMode::Gbaa, Some(p), Some(g)) => {
-                g.read_edges_view(gl, p, &self.passes.fullscreen).map(Some)
-            }
-            _ => Ok(None),
-        }
-    }
-
-    /// The bytes [`AaMode::Gbaa`]'s edge buffers add to the G-buffer at
-    /// the current size (0 with other modes).
-    pub fn gbaa_edge_bytes(&self) -> u64 {
-        if self.options.aa == AaMode::Gbaa {
-            gbaa::edge_bytes(self.options.width, self.options.height)
-        } else {
-            0
-        }
-    }
-
-    /// Allocate `complex`'s stencil mask (and coverage flags, when the
-    /// context records coverage) unless they are there and match.
-    fn prepare_complex_targets(&mut self, gl: &glow::Context) -> Result<()> {
-        let coverage_slot = self
-            .passes
-            .sample
-            .coverage()
-            .map(CoverageGeometryPass::coverage_slot);
-        let current = self
-            .frame
-            .complex
-            .as_ref()
-            .is_some_and(|c| c.coverage.is_some() == coverage_slot.is_some());
-        if current {
-            return Ok(());
-        }
-        let retrofit = self.frame.retrofit.as_ref().ok_or_else(|| {
-            Error::invalid("method `complex` needs the multisampled G-buffer, which is missing")
-        })?;
-        let targets = ComplexTargets::new(
-            gl,
-            &self.frame.targets.hdr.texture,
-            coverage_slot.map(|slot| (retrofit, slot)),
-        )?;
-        if let Some(old) = self.frame.complex.replace(targets) {
-            old.destroy(gl);
-        }
-        Ok(())
-    }
-
-    /// The fraction of pixels [`AaMode::Complex`] marked complex (and lit
-    /// per sample) in the last frame, counted with a `GL_SAMPLES_PASSED`
-    /// query around the per-sample lighting pass, which the stencil mask
-    /// limits to those pixels. `None` with other modes, before the first
-    /// frame after [`Renderer::set_options`], or where the context gave no
-    /// query object.
-    pub fn complex_fraction(&self) -> Option<f32> {
-        if self.options.aa != AaMode::Complex {
-            return None;
-        }
-        let pixels = f64::from(self.options.width) * f64::from(self.options.height);
-        self.per_sample_pixels
-            .map(|n| (n as f64 / pixels.max(1.0)) as f32)
+    /// The state of the technique that renders the current method, when it
+    /// is a `T` ([`technique::Gbaa`], [`technique::Complex`],
+    /// [`technique::Sparse`]); `None` with other methods. For example
+    /// `renderer.technique::<Gbaa>().and_then(Gbaa::edge_textures)`.
+    pub fn technique<T: technique::TechniqueState>(&self) -> Option<&T> {
+        self.techniques.get::<T>(&self.options.aa)
     }
 
     /// How many pixels the per-sample lighting pass lit in the last frame
@@ -1463,17 +1132,15 @@ impl Renderer {
     /// `None` with other modes, before the first frame after
     /// [`Renderer::set_options`], or without a query object.
     pub fn per_sample_pixels(&self) -> Option<u64> {
-        self.per_sample_pixels
-    }
-
-    /// The last frame's complex-pixel mask of [`AaMode::Complex`], read back
-    /// from its stencil buffer (row 0 at the top; 255 = complex, lit per
-    /// sample; 0 = simple, lit once). `None` with other modes or before the
-    /// first frame after [`Renderer::set_options`].
-    pub fn read_complex_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
-        match (&self.options.aa, &self.frame.complex) {
-            (AaMode::Complex, Some(c)) => c.read_mask(gl).map(Some),
-            _ => Ok(None),
+        match self
+            .techniques
+            .get::<technique::PerSample>(&self.options.aa)
+        {
+            Some(p) => p.lit_pixels(),
+            None => self
+                .techniques
+                .get::<technique::Complex>(&self.options.aa)
+                .and_then(technique::Complex::lit_pixels),
         }
     }
 
@@ -1483,25 +1150,21 @@ impl Renderer {
     ///   (samples whose depth keys differ; every pixel with the fast path
     ///   off), found by running the last frame's resolve again with its
     ///   complex-pixel output into a scratch mask (the G-buffer is untouched);
-    /// - [`AaMode::Complex`]: its stencil mask ([`Renderer::read_complex_mask`]);
+    /// - [`AaMode::Complex`]: its stencil mask ([`technique::Complex::read_mask`]);
     /// - [`AaMode::PerSample`]: every pixel (each is lit per sample).
     ///
     /// `None` without multisampling or before the first frame after
     /// [`Renderer::set_options`] (`complex`).
     pub fn read_complex_pixels(&mut self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
-        let (w, h) = (self.options.width, self.options.height);
-        match self.options.aa {
-            AaMode::Resolve(_) => {
-                let resolve_frame = self.resolve_frame();
-                let Some(retrofit) = self.frame.retrofit.as_mut() else {
-                    return Ok(None);
-                };
-                slow_path::slow_path_mask(gl, retrofit, &resolve_frame).map(Some)
-            }
-            AaMode::Complex => self.read_complex_mask(gl),
-            AaMode::PerSample => Ok(Some(image::GrayImage::from_pixel(w, h, image::Luma([255])))),
-            _ => Ok(None),
-        }
+        let input = ComplexPixelsInput {
+            resolve_frame: self.resolve_frame(),
+            retrofit: self.frame.retrofit.as_mut(),
+            width: self.options.width,
+            height: self.options.height,
+        };
+        self.techniques
+            .active(&self.options.aa)
+            .complex_pixels(gl, input)
     }
 
     /// The fraction of pixels [`Renderer::read_complex_pixels`] marks.
@@ -1571,11 +1234,8 @@ impl Renderer {
         plan.set_decals(self.decal_hook.is_some());
         let active = plan.apply(requested);
         let options = &active;
-        // The programs a per-sample mode needs, first: they are kept either way.
-        let slots = GBufferSlots::of(&options.layout)?;
-        let colors = options.layout.colors.len() as u32;
-        self.passes.sample.prepare(gl, &options.aa, slots, colors)?;
-        self.sparse.prepare(gl, options)?;
+        // The technique's programs first: they are kept either way.
+        self.prepare_technique(gl, Some(options))?;
         let depth_mode =
             depth::resolve_mode(gl, options.depth_mode, &self.clip, options.layout.depth)?;
         let mut warnings = depth::warnings(&options.layout, &self.camera, depth_mode, self.extent);
@@ -1598,15 +1258,9 @@ impl Renderer {
         self.plan_context = plan_context;
         self.depth_mode = depth_mode;
         self.warnings = warnings;
-        // They refer to the twins and targets that may have changed; the
-        // next `complex` frame allocates them again.
-        if let Some(c) = self.frame.complex.take() {
-            c.destroy(gl);
-        }
-        if let Some(g) = self.frame.gbaa.take() {
-            g.destroy(gl);
-        }
-        self.per_sample_pixels = None;
+        // Technique targets refer to the twins and targets that may have
+        // changed; the next frame allocates them again.
+        self.techniques.options_changed(gl, &self.options.aa);
         Ok(())
     }
 
@@ -1821,6 +1475,6 @@ impl Renderer {
         self.passes.destroy(gl);
         self.scene.destroy(gl);
         self.frame.destroy(gl);
-        self.sparse.destroy(gl);
+        self.techniques.destroy(gl);
     }
 }

@@ -37,6 +37,7 @@ use crate::gbuffer::{
 };
 use crate::gl::{Capabilities, Format};
 use crate::renderer::shaders::lighting_defines;
+use crate::renderer::technique;
 use crate::renderer::{AaMode, RenderOptions};
 use crate::resolve::{KeySource, ResolveMethod, ResolveSlot, Window};
 use crate::scene::{AlphaMode, Background, Scene};
@@ -390,275 +391,44 @@ impl Plan {
         Plan::for_needs(&SceneNeeds::of(scene), context, options)
     }
 
-    /// The plan from what the scene needs (see [`SceneNeeds::of`]).
+    /// The plan from what the scene needs (see [`SceneNeeds::of`]): the
+    /// layout's attachments one decision at a time, then the sample count
+    /// under the budget, the attachments, the passes and the bytes.
     pub fn for_needs(
         needs: &SceneNeeds,
         context: &PlanContext,
         options: &RenderOptions,
     ) -> Result<Plan> {
         options.validate()?;
-        let full = &options.layout;
-        let mut left_out = Vec::new();
-        let mut kept = Vec::new();
-        let mut layout = full.clone();
-        let leave = |list: &mut Vec<LeftOut>, name: &str, why: String| {
-            list.push(LeftOut {
-                name: name.to_string(),
-                why,
-            })
-        };
-
-        // Emission. The depth-aware resolves never blend background samples
-        // into a geometry pixel, so there the emissive attachment only
-        // carries the background to background pixels, which its own texture
-        // does as well; `average` blends them (as a hardware resolve does).
-        let blends_background = matches!(
-            options.aa,
-            AaMode::Resolve(s) if s.method == ResolveMethod::Average
-        );
-        if layout.index_of("emissive").is_some() {
-            if !options.adaptive {
-                leave(
-                    &mut kept,
-                    "emissive",
-                    "the full layout was asked for".into(),
-                );
-            } else if needs.emitters.is_empty() && blends_background && needs.background_visible {
-                leave(
-                    &mut kept,
-                    "emissive",
-                    "method `average` blends background samples into edge pixels: the emissive \
-                     attachment carries the background there"
-                        .into(),
-                );
-            } else if needs.emitters.is_empty() {
-                remove(&mut layout, "emissive");
-                leave(
-                    &mut left_out,
-                    "emissive",
-                    "no material emits; the background it would carry is single-sampled, \
-                     so the lighting pass reads it from the background's own texture"
-                        .into(),
-                );
-            } else {
-                leave(
-                    &mut kept,
-                    "emissive",
-                    format!("material `{}` emits", needs.emitters[0]),
-                );
-            }
-        } else if let Some(m) = needs.emitters.first() {
-            return Err(Error::Layout(format!(
-                "material `{m}` of scene `{}` emits but the layout has no `emissive` attachment",
-                needs.name
-            )));
-        }
-
-        // Specular response.
-        let specular_format = full.attachment("specular").map(|a| a.format);
-        let constant = match &needs.specular {
-            SpecularResponse::Uniform(v) => Some(v.map(|c| match specular_format {
-                Some(f) => stored_as(f, c),
-                None => c,
-            })),
-            SpecularResponse::Varying(_) => None,
-        };
-        let describe = |v: &[f32; 4]| {
-            format!(
-                "F0 ({:.4}, {:.4}, {:.4}), metallic {:.4}",
-                v[0], v[1], v[2], v[3]
-            )
-        };
-        let constant_specular = match (specular_format.is_some(), &needs.specular, constant) {
-            (true, _, Some(v)) if options.adaptive && !blends_background => {
-                remove(&mut layout, "specular");
-                leave(
-                    &mut left_out,
-                    "specular",
-                    format!(
-                        "every material writes the same specular response ({}): a uniform of the lighting pass",
-                        describe(&v)
-                    ),
-                );
-                Some(v)
-            }
-            (true, SpecularResponse::Varying(why), _) => {
-                leave(&mut kept, "specular", why.clone());
-                None
-            }
-            (true, _, _) if options.adaptive => {
-                leave(
-                    &mut kept,
-                    "specular",
-                    "method `average` blends the cleared background samples into edge pixels' \
-                     specular value, which a constant cannot stand for"
-                        .into(),
-                );
-                None
-            }
-            (true, _, _) => {
-                leave(
-                    &mut kept,
-                    "specular",
-                    "the full layout was asked for".into(),
-                );
-                None
-            }
-            (false, _, Some(v)) => Some(v),
-            (false, SpecularResponse::Varying(why), _) => {
-                return Err(Error::Layout(format!(
-                    "scene `{}` needs a `specular` attachment, which the layout lacks: {why}",
-                    needs.name
-                )));
-            }
-            (false, SpecularResponse::Uniform(_), None) => None,
-        };
-
-        // Position precision. Without a resolve the default resolve's window
-        // still decides, so that every method of a scene gets one layout.
-        let settings = Some(options.aa.settings().unwrap_or_default());
-        if let Some(k) = layout.index_of("position") {
-            if layout.colors[k].format == Format::Rgba32f && options.adaptive {
-                match fp16_fits(needs, settings, options.height) {
-                    Ok(why) => {
-                        layout.colors[k].format = Format::Rgba16f;
-                        leave(
-                            &mut left_out,
-                            "position RGBA32F",
-                            format!("FP16 holds this scene: {why}"),
-                        );
-                    }
-                    Err(why) => leave(&mut kept, "position RGBA32F", why),
-                }
-            }
-        }
+        let mut decisions = Decisions::default();
+        let mut layout = options.layout.clone();
+        decide_emissive(needs, options, &mut layout, &mut decisions)?;
+        let constant_specular = decide_specular(needs, options, &mut layout, &mut decisions)?;
+        decide_position(needs, options, &mut layout, &mut decisions);
         layout.validate()?;
 
-        // Method and memory.
         let (budget_bytes, budget_source) = options.memory_budget.resolve(context.driver_memory);
         let (width, height) = (options.width, options.height);
-        let mut warnings = Vec::new();
-        let (aa, samples) = if options.aa.is_multisampled() {
-            let choice = choose_samples(
-                options.samples,
-                &context.sample_counts,
-                budget_bytes,
-                options.memory_budget.strict,
-                true,
-                |n| gbuffer_bytes(&layout, width, height, (n > 1).then_some(n)),
-            )?;
-            warnings.extend(choice.warning(budget_bytes));
-            if choice.samples > 1 {
-                (options.aa, choice.samples)
-            } else {
-                (AaMode::None, 1)
-            }
-        } else {
-            let bytes = gbuffer_bytes(&layout, width, height, None);
-            if bytes > budget_bytes {
-                if options.memory_budget.strict {
-                    return Err(deferred_msaa::Error::MemoryBudget {
-                        needed: bytes,
-                        budget: budget_bytes,
-                        samples: 1,
-                    }
-                    .into());
-                }
-                warnings.push(format!(
-                    "memory budget: the single-sample G-buffer needs {}, over the budget of {}; there is no lower sample count to step down to",
-                    fmt_bytes(bytes),
-                    fmt_bytes(budget_bytes)
-                ));
-            }
-            // Single-sample methods (`none`, `gbaa`) keep their method.
-            (options.aa, 1)
-        };
+        let budgeted = decide_samples(options, context, &layout, budget_bytes)?;
+        let (aa, samples) = (budgeted.aa, budgeted.samples);
         let multisampled = aa.is_multisampled();
         let twin = multisampled.then_some(samples);
-
-        let mut attachments: Vec<PlannedAttachment> = layout
-            .colors
-            .iter()
-            .map(|a| PlannedAttachment {
-                name: a.name.clone(),
-                format: a.format,
-                multisampled,
-            })
-            .collect();
-        attachments.push(PlannedAttachment {
-            name: "depth".into(),
-            format: layout.depth,
-            multisampled,
-        });
-
-        // Passes.
-        let has_emissive = layout.index_of("emissive").is_some();
-        let mut passes = vec![Pass::Clear, Pass::Background];
-        // `sparse` builds block lists instead of filling the G-buffer.
-        let sparse = matches!(aa, AaMode::Sparse(_));
-        if !sparse {
-            if has_emissive {
-                passes.push(Pass::BackgroundCopy);
-            } else {
-                leave(
-                    &mut left_out,
-                    Pass::BackgroundCopy.name(),
-                    "no emissive attachment to copy the background into".into(),
-                );
-            }
-        }
-        if !sparse {
-            passes.push(Pass::Geometry);
-        }
-        if multisampled {
-            passes.push(Pass::Resolve);
-        }
-        leave(
-            &mut left_out,
-            Pass::Decals.name(),
-            "no decal hook is installed".into(),
-        );
-        match aa {
-            AaMode::PerSample => passes.push(Pass::PerSampleLighting),
-            AaMode::Complex => passes.extend([Pass::ComplexMask, Pass::PerSampleLighting]),
-            AaMode::Sparse(_) => {
-                passes.extend([Pass::SparseDepth, Pass::SparseLists, Pass::SparseLighting]);
-            }
-            _ => passes.push(Pass::Lighting),
-        }
-        if needs.transparent_objects > 0 {
-            passes.push(Pass::Transparent);
-        } else {
-            leave(
-                &mut left_out,
-                Pass::Transparent.name(),
-                "no alpha-blended object".into(),
-            );
-        }
-        passes.push(Pass::Tonemap);
-        if aa == AaMode::Gbaa {
-            passes.push(Pass::GbaaPost);
-        }
-        if options.fxaa {
-            passes.push(Pass::Fxaa);
-        } else {
-            leave(&mut left_out, Pass::Fxaa.name(), "not asked for".into());
-        }
+        let attachments = planned_attachments(&layout, multisampled);
+        let passes = decide_passes(needs, options, &layout, aa, &mut decisions);
 
         // What a method allocates beside the layout's textures and twins.
-        let extra_bytes = match aa {
-            AaMode::Gbaa => crate::renderer::gbaa::edge_bytes(width, height),
-            AaMode::Sparse(sparse) => crate::renderer::SparseMemory::planned(
-                &sparse,
-                width,
-                height,
-                options.samples.max(1),
-                layout.depth,
-            )
-            .total(),
-            _ => 0,
-        };
+        let extra_bytes = technique::planned_memory(&RenderOptions {
+            aa,
+            layout: layout.clone(),
+            ..options.clone()
+        });
         let permutations = permutations(&layout, aa, samples);
+        // `sparse` stands in for the multisampled layout at its count.
+        let full_twin = if matches!(aa, AaMode::Sparse(_)) {
+            Some(options.samples)
+        } else {
+            twin
+        };
         Ok(Plan {
             scene: needs.name.clone(),
             width,
@@ -669,23 +439,22 @@ impl Plan {
             samples,
             adaptive: options.adaptive,
             gbuffer_bytes: gbuffer_bytes(&layout, width, height, twin) + extra_bytes,
-            // `sparse` stands in for the multisampled layout at its count.
             full_gbuffer_bytes: gbuffer_bytes(
                 &GBufferLayout::freespace_open(),
                 width,
                 height,
-                if sparse { Some(options.samples) } else { twin },
+                full_twin,
             ),
             layout,
             attachments,
             passes,
-            left_out,
-            kept,
+            left_out: decisions.left_out,
+            kept: decisions.kept,
             constant_specular,
             permutations,
             budget_bytes,
             budget_source,
-            warnings,
+            warnings: budgeted.warnings,
         })
     }
 
@@ -836,6 +605,290 @@ impl Plan {
         }
         t
     }
+}
+
+/// What the plan left out and kept, with why, in the order decided.
+#[derive(Default)]
+struct Decisions {
+    left_out: Vec<LeftOut>,
+    kept: Vec<LeftOut>,
+}
+
+impl Decisions {
+    fn leave_out(&mut self, name: &str, why: impl Into<String>) {
+        self.left_out.push(LeftOut {
+            name: name.to_string(),
+            why: why.into(),
+        });
+    }
+
+    fn keep(&mut self, name: &str, why: impl Into<String>) {
+        self.kept.push(LeftOut {
+            name: name.to_string(),
+            why: why.into(),
+        });
+    }
+}
+
+/// Whether `aa` blends background samples into edge pixels (`average`, as
+/// a hardware resolve does). The depth-aware resolves never do, so there
+/// the emissive attachment only carries the background to background
+/// pixels, which its own texture does as well.
+fn blends_background(aa: AaMode) -> bool {
+    matches!(aa, AaMode::Resolve(s) if s.method == ResolveMethod::Average)
+}
+
+/// Emission: the `emissive` attachment goes when no material emits (and
+/// `average` does not need it for the background).
+fn decide_emissive(
+    needs: &SceneNeeds,
+    options: &RenderOptions,
+    layout: &mut GBufferLayout,
+    decisions: &mut Decisions,
+) -> Result<()> {
+    if layout.index_of("emissive").is_none() {
+        return match needs.emitters.first() {
+            Some(m) => Err(Error::Layout(format!(
+                "material `{m}` of scene `{}` emits but the layout has no `emissive` attachment",
+                needs.name
+            ))),
+            None => Ok(()),
+        };
+    }
+    if !options.adaptive {
+        decisions.keep("emissive", "the full layout was asked for");
+    } else if let Some(m) = needs.emitters.first() {
+        decisions.keep("emissive", format!("material `{m}` emits"));
+    } else if blends_background(options.aa) && needs.background_visible {
+        decisions.keep(
+            "emissive",
+            "method `average` blends background samples into edge pixels: the emissive \
+             attachment carries the background there",
+        );
+    } else {
+        remove(layout, "emissive");
+        decisions.leave_out(
+            "emissive",
+            "no material emits; the background it would carry is single-sampled, \
+             so the lighting pass reads it from the background's own texture",
+        );
+    }
+    Ok(())
+}
+
+/// Specular response: the `specular` attachment becomes a uniform of the
+/// lighting pass when every material writes one value. The value the
+/// lighting passes then use, as the attachment would have stored it.
+fn decide_specular(
+    needs: &SceneNeeds,
+    options: &RenderOptions,
+    layout: &mut GBufferLayout,
+    decisions: &mut Decisions,
+) -> Result<Option<[f32; 4]>> {
+    let specular_format = options.layout.attachment("specular").map(|a| a.format);
+    let constant = match &needs.specular {
+        SpecularResponse::Uniform(v) => Some(v.map(|c| match specular_format {
+            Some(f) => stored_as(f, c),
+            None => c,
+        })),
+        SpecularResponse::Varying(_) => None,
+    };
+    let Some(_) = specular_format else {
+        // No attachment: the constant, or the scene cannot be drawn.
+        return match (&needs.specular, constant) {
+            (_, Some(v)) => Ok(Some(v)),
+            (SpecularResponse::Varying(why), _) => Err(Error::Layout(format!(
+                "scene `{}` needs a `specular` attachment, which the layout lacks: {why}",
+                needs.name
+            ))),
+            (SpecularResponse::Uniform(_), None) => Ok(None),
+        };
+    };
+    match (&needs.specular, constant) {
+        (_, Some(v)) if options.adaptive && !blends_background(options.aa) => {
+            remove(layout, "specular");
+            decisions.leave_out(
+                "specular",
+                format!(
+                    "every material writes the same specular response (F0 ({:.4}, {:.4}, {:.4}), metallic {:.4}): a uniform of the lighting pass",
+                    v[0], v[1], v[2], v[3]
+                ),
+            );
+            Ok(Some(v))
+        }
+        (SpecularResponse::Varying(why), _) => {
+            decisions.keep("specular", why.clone());
+            Ok(None)
+        }
+        _ if options.adaptive => {
+            decisions.keep(
+                "specular",
+                "method `average` blends the cleared background samples into edge pixels' \
+                 specular value, which a constant cannot stand for",
+            );
+            Ok(None)
+        }
+        _ => {
+            decisions.keep("specular", "the full layout was asked for");
+            Ok(None)
+        }
+    }
+}
+
+/// Position precision: an FP32 `position` narrows to FP16 when the scene
+/// fits it. Without a resolve the default resolve's window still decides,
+/// so that every method of a scene gets one layout.
+fn decide_position(
+    needs: &SceneNeeds,
+    options: &RenderOptions,
+    layout: &mut GBufferLayout,
+    decisions: &mut Decisions,
+) {
+    let Some(k) = layout.index_of("position") else {
+        return;
+    };
+    if layout.colors[k].format != Format::Rgba32f || !options.adaptive {
+        return;
+    }
+    let settings = Some(options.aa.settings().unwrap_or_default());
+    match fp16_fits(needs, settings, options.height) {
+        Ok(why) => {
+            layout.colors[k].format = Format::Rgba16f;
+            decisions.leave_out("position RGBA32F", format!("FP16 holds this scene: {why}"));
+        }
+        Err(why) => decisions.keep("position RGBA32F", why),
+    }
+}
+
+/// The method and sample count under the memory budget.
+struct Budgeted {
+    /// The method asked for, or `none` when no multisampled count fits.
+    aa: AaMode,
+    /// The real samples per pixel of the G-buffer.
+    samples: u32,
+    /// A stepped-down sample count, or a single-sample G-buffer over budget.
+    warnings: Vec<String>,
+}
+
+/// Apply the memory budget: a multisampled method steps its count down to
+/// the highest offered count that fits (or to `none`); a single-sample one
+/// keeps its method and warns when over.
+fn decide_samples(
+    options: &RenderOptions,
+    context: &PlanContext,
+    layout: &GBufferLayout,
+    budget_bytes: u64,
+) -> Result<Budgeted> {
+    let (width, height) = (options.width, options.height);
+    let mut warnings = Vec::new();
+    if options.aa.is_multisampled() {
+        let choice = choose_samples(
+            options.samples,
+            &context.sample_counts,
+            budget_bytes,
+            options.memory_budget.strict,
+            true,
+            |n| gbuffer_bytes(layout, width, height, (n > 1).then_some(n)),
+        )?;
+        warnings.extend(choice.warning(budget_bytes));
+        let (aa, samples) = if choice.samples > 1 {
+            (options.aa, choice.samples)
+        } else {
+            (AaMode::None, 1)
+        };
+        return Ok(Budgeted {
+            aa,
+            samples,
+            warnings,
+        });
+    }
+    let bytes = gbuffer_bytes(layout, width, height, None);
+    if bytes > budget_bytes {
+        if options.memory_budget.strict {
+            return Err(deferred_msaa::Error::MemoryBudget {
+                needed: bytes,
+                budget: budget_bytes,
+                samples: 1,
+            }
+            .into());
+        }
+        warnings.push(format!(
+            "memory budget: the single-sample G-buffer needs {}, over the budget of {}; there is no lower sample count to step down to",
+            fmt_bytes(bytes),
+            fmt_bytes(budget_bytes)
+        ));
+    }
+    // Single-sample methods (`none`, `gbaa`, `sparse`) keep their method.
+    Ok(Budgeted {
+        aa: options.aa,
+        samples: 1,
+        warnings,
+    })
+}
+
+/// The layout's attachments, depth last, each multisampled or not.
+fn planned_attachments(layout: &GBufferLayout, multisampled: bool) -> Vec<PlannedAttachment> {
+    let colors = layout.colors.iter().map(|a| (a.name.clone(), a.format));
+    colors
+        .chain(std::iter::once(("depth".to_string(), layout.depth)))
+        .map(|(name, format)| PlannedAttachment {
+            name,
+            format,
+            multisampled,
+        })
+        .collect()
+}
+
+/// The passes that run for `aa`, in frame order; those that do not are
+/// left out with why.
+fn decide_passes(
+    needs: &SceneNeeds,
+    options: &RenderOptions,
+    layout: &GBufferLayout,
+    aa: AaMode,
+    decisions: &mut Decisions,
+) -> Vec<Pass> {
+    let mut passes = vec![Pass::Clear, Pass::Background];
+    // `sparse` builds block lists instead of filling the G-buffer.
+    let sparse = matches!(aa, AaMode::Sparse(_));
+    if !sparse {
+        if layout.index_of("emissive").is_some() {
+            passes.push(Pass::BackgroundCopy);
+        } else {
+            decisions.leave_out(
+                Pass::BackgroundCopy.name(),
+                "no emissive attachment to copy the background into",
+            );
+        }
+        passes.push(Pass::Geometry);
+    }
+    if aa.is_multisampled() {
+        passes.push(Pass::Resolve);
+    }
+    decisions.leave_out(Pass::Decals.name(), "no decal hook is installed");
+    match aa {
+        AaMode::PerSample => passes.push(Pass::PerSampleLighting),
+        AaMode::Complex => passes.extend([Pass::ComplexMask, Pass::PerSampleLighting]),
+        AaMode::Sparse(_) => {
+            passes.extend([Pass::SparseDepth, Pass::SparseLists, Pass::SparseLighting]);
+        }
+        _ => passes.push(Pass::Lighting),
+    }
+    if needs.transparent_objects > 0 {
+        passes.push(Pass::Transparent);
+    } else {
+        decisions.leave_out(Pass::Transparent.name(), "no alpha-blended object");
+    }
+    passes.push(Pass::Tonemap);
+    if aa == AaMode::Gbaa {
+        passes.push(Pass::GbaaPost);
+    }
+    if options.fxaa {
+        passes.push(Pass::Fxaa);
+    } else {
+        decisions.leave_out(Pass::Fxaa.name(), "not asked for");
+    }
+    passes
 }
 
 /// Remove the attachment `name` from `layout`, keeping the key on the same

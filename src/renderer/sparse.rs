@@ -162,7 +162,7 @@ pub struct SparseOptions {
     /// Blocks in the pool, shared by all pixels, for the fragments beyond
     /// each pixel's first. `None`: [`DEFAULT_POOL_BLOCKS_PER_PIXEL`] per
     /// pixel. When the pool runs out, the pixels that asked for more fall
-    /// back to one sample ([`Renderer::sparse_stats`] counts them).
+    /// back to one sample ([`super::technique::Sparse::stats`] counts them).
     pub pool_blocks: Option<u32>,
     /// Where to anti-alias (the resolve's selective-AA region; `None`:
     /// everywhere). Pixel centres inside are anti-aliased, the others show
@@ -279,10 +279,10 @@ impl SparseStats {
     }
 }
 
-/// The value [`Renderer::read_sparse_mask`] gives a pixel that fell back
+/// The value [`super::technique::Sparse::read_mask`] gives a pixel that fell back
 /// to one sample because the pool ran out.
 pub const MASK_OVERFLOW: u8 = 255;
-/// The value [`Renderer::read_sparse_mask`] gives a pixel that shows one
+/// The value [`super::technique::Sparse::read_mask`] gives a pixel that shows one
 /// sample because a visible fragment is not to be anti-aliased (its
 /// object's flag, or beyond the depth limit).
 pub const MASK_SINGLE: u8 = 128;
@@ -352,10 +352,7 @@ impl SparseState {
     /// otherwise free the targets.
     pub(crate) fn prepare(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
         let AaMode::Sparse(sparse) = options.aa else {
-            if let Some(t) = self.targets.take() {
-                t.destroy(gl);
-            }
-            self.rendered.set(false);
+            self.release(gl);
             return Ok(());
         };
         check_support(gl, &options.aa)?;
@@ -448,34 +445,23 @@ impl SparseState {
     }
 }
 
-impl Renderer {
-    /// Whether this context can render with `aa`: [`Error::Unsupported`](deferred_msaa::Error::Unsupported),
-    /// naming what is missing, when it cannot. Of the methods, only
-    /// [`AaMode::Sparse`] needs more than OpenGL 3.2 (the others fall back
-    /// where a feature is missing); [`Renderer::new`] and
-    /// [`Renderer::set_options`] make the same check.
-    pub fn check_support(gl: &glow::Context, aa: &AaMode) -> Result<()> {
-        check_support(gl, aa)
+impl SparseState {
+    /// Free the targets (another method was chosen); the programs stay.
+    pub(crate) fn release(&mut self, gl: &glow::Context) {
+        if let Some(t) = self.targets.take() {
+            t.destroy(gl);
+        }
+        self.rendered.set(false);
     }
 
-    /// The GPU memory [`AaMode::Sparse`] has allocated, by part (`None`
-    /// with other methods). [`SparseMemory::total`] is what the bench
-    /// reports as its G-buffer bytes.
-    pub fn sparse_memory(&self) -> Option<SparseMemory> {
-        matches!(self.options.aa, AaMode::Sparse(_))
-            .then(|| self.sparse.memory())
-            .flatten()
-    }
-
-    /// What the last [`AaMode::Sparse`] frame's G-buffer pass counted: the
-    /// pool's use and the pixels that fell back to one sample because it ran
-    /// out, read back from the atomic counters (this waits for the frame).
-    /// `None` with other methods or before the first frame.
-    pub fn sparse_stats(&self, gl: &glow::Context) -> Result<Option<SparseStats>> {
-        if !matches!(self.options.aa, AaMode::Sparse(_)) || !self.sparse.rendered.get() {
+    /// What the last frame's G-buffer pass counted, read back from the
+    /// atomic counters (this waits for the frame); `None` before the first
+    /// frame.
+    pub(crate) fn stats(&self, gl: &glow::Context) -> Result<Option<SparseStats>> {
+        if !self.rendered.get() {
             return Ok(None);
         }
-        let Some(targets) = self.sparse.targets.as_ref() else {
+        let Some(targets) = self.targets.as_ref() else {
             return Ok(None);
         };
         let (pool_requested, overflow_pixels) = targets.read_counters(gl)?;
@@ -486,17 +472,13 @@ impl Renderer {
         }))
     }
 
-    /// The last [`AaMode::Sparse`] frame's one-sample pixels, read back from
-    /// the heads (row 0 at the top): [`MASK_OVERFLOW`] where the pool ran
-    /// out, [`MASK_SINGLE`] where a visible fragment is not anti-aliased
-    /// (object flag or depth limit), 0 elsewhere (pixels outside
-    /// [`SparseOptions::region`] are not marked: the region alone decides
-    /// them). `None` with other methods or before the first frame.
-    pub fn read_sparse_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
-        if !matches!(self.options.aa, AaMode::Sparse(_)) || !self.sparse.rendered.get() {
+    /// The last frame's one-sample pixels, read back from the heads (see
+    /// [`super::technique::Sparse::read_mask`]); `None` before the first frame.
+    pub(crate) fn read_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
+        if !self.rendered.get() {
             return Ok(None);
         }
-        let Some(targets) = self.sparse.targets.as_ref() else {
+        let Some(targets) = self.targets.as_ref() else {
             return Ok(None);
         };
         let flags = targets.read_flags(gl)?;
@@ -525,6 +507,17 @@ impl Renderer {
         image::GrayImage::from_raw(w as u32, h as u32, pixels)
             .map(Some)
             .ok_or_else(|| Error::invalid("the sparse mask does not hold the image"))
+    }
+}
+
+impl Renderer {
+    /// Whether this context can render with `aa`: [`Error::Unsupported`](deferred_msaa::Error::Unsupported),
+    /// naming what is missing, when it cannot. Of the methods, only
+    /// [`AaMode::Sparse`] needs more than OpenGL 3.2 (the others fall back
+    /// where a feature is missing); [`Renderer::new`] and
+    /// [`Renderer::set_options`] make the same check.
+    pub fn check_support(gl: &glow::Context, aa: &AaMode) -> Result<()> {
+        check_support(gl, aa)
     }
 
     /// The fragment shader of [`AaMode::Sparse`]'s lighting pass exactly as

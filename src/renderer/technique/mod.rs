@@ -1,0 +1,447 @@
+//! The anti-aliasing techniques of the frame: one type per technique (the
+//! four resolve methods of [`AaMode::Resolve`] share one), each in its own
+//! module beside the passes it adds.
+//!
+//! The renderer runs one frame for every technique (see the
+//! [renderer's documentation](super)) and asks the technique for the steps
+//! that differ: where the G-buffer pass draws and what it draws
+//! (`Technique::geometry_target`, `Technique::draw_gbuffer`), what runs
+//! after it (`Technique::after_geometry`: the resolve, for the methods
+//! with multisampled twins), how the HDR target is lit
+//! (`Technique::light`) and what follows the tonemap
+//! (`Technique::tonemap_target`, `Technique::post`). Everything a
+//! technique builds or allocates it owns and frees in
+//! `Technique::destroy`.
+//!
+//! Adding a technique: a module here with a type implementing
+//! `Technique`, and its line in `registry`.
+//!
+//! The public types here are the techniques whose own state a renderer
+//! lends out, through [`Renderer::technique`](super::Renderer::technique).
+
+mod complex;
+mod gbaa;
+mod none;
+mod per_sample;
+mod resolve;
+mod sparse;
+
+use super::background_copy::{BackgroundCopyPass, CopyTarget};
+use super::geometry::{GeometryPass, GeometryTarget};
+use super::lighting::{LightBatch, LightingPass, StandIns};
+use super::mesh::GpuScene;
+use super::targets::{ColorTarget, Targets};
+use super::{AaMode, GBufferSlots, RenderOptions, timed};
+use crate::Result;
+use crate::frame::Frame as ResolveFrame;
+use crate::gbuffer::GBuffer;
+use crate::gl::{GpuTimer, Texture2d, VertexArray};
+use crate::retrofit::MsaaRetrofit;
+pub use complex::Complex;
+pub use gbaa::Gbaa;
+use glam::{DMat4, Mat4};
+pub(crate) use per_sample::PerSample;
+pub use sparse::Sparse;
+use std::any::Any;
+
+/// Every technique, once, in an empty state (nothing is built before a
+/// technique is first used). Adding a technique is one line here.
+pub(crate) fn registry() -> Vec<Box<dyn Technique>> {
+    vec![
+        Box::new(none::NoAntialiasing),
+        Box::new(resolve::Resolve),
+        Box::new(PerSample::default()),
+        Box::new(Complex::default()),
+        Box::new(Gbaa::default()),
+        Box::new(Sparse::default()),
+    ]
+}
+
+/// A technique whose state [`Renderer::technique`](super::Renderer::technique)
+/// lends out: [`Gbaa`], [`Complex`] or [`Sparse`].
+pub trait TechniqueState: std::any::Any + sealed::Sealed {}
+
+mod sealed {
+    /// Only this crate's techniques are [`TechniqueState`](super::TechniqueState)s.
+    pub trait Sealed {}
+    impl Sealed for super::Gbaa {}
+    impl Sealed for super::Complex {}
+    impl Sealed for super::Sparse {}
+}
+
+/// What a technique builds against.
+#[derive(Clone, Copy)]
+pub(crate) struct Setup<'a> {
+    /// The options the frame runs with (the plan applied).
+    pub(crate) options: &'a RenderOptions,
+    /// The attachment numbers of the G-buffer.
+    pub(crate) slots: GBufferSlots,
+    /// The G-buffer's colour attachments; a technique's own outputs take
+    /// the next draw buffers.
+    pub(crate) colors: u32,
+}
+
+/// The frame's size- and layout-dependent objects, lent to a technique.
+#[derive(Clone, Copy)]
+pub(crate) struct FrameParts<'a> {
+    /// The method the frame runs, with its options.
+    pub(crate) aa: AaMode,
+    /// The host's single-sample G-buffer.
+    pub(crate) gbuffer: &'a GBuffer,
+    /// The retrofit, for the methods with multisampled twins.
+    pub(crate) retrofit: Option<&'a MsaaRetrofit>,
+    /// The background, HDR and LDR targets.
+    pub(crate) targets: &'a Targets,
+}
+
+/// The framebuffer the G-buffer pass draws into and its draw buffers.
+#[derive(Clone, Debug)]
+pub(crate) struct GBufferTarget {
+    /// The framebuffer.
+    pub(crate) fbo: glow::Framebuffer,
+    /// Its draw buffers (the background copy writes the emissive one).
+    pub(crate) draw_buffers: Vec<Option<u32>>,
+}
+
+impl GBufferTarget {
+    /// The retrofit's multisampled twin when there is one (the first of the
+    /// two integration lines), else the G-buffer itself.
+    pub(crate) fn of_frame(frame: &FrameParts<'_>) -> Self {
+        match frame.retrofit {
+            Some(r) => GBufferTarget {
+                fbo: r.framebuffer(),
+                draw_buffers: r.host().draw_buffers.clone(),
+            },
+            None => GBufferTarget {
+                fbo: frame.gbuffer.fbo.raw(),
+                draw_buffers: (0..frame.gbuffer.colors.len() as u32).map(Some).collect(),
+            },
+        }
+    }
+}
+
+/// The G-buffer pass's inputs, after the clear and the background.
+pub(crate) struct GeometryStep<'a> {
+    /// Where it draws.
+    pub(crate) target: GeometryTarget,
+    /// The draw buffers of `target`.
+    pub(crate) draw_buffers: &'a [Option<u32>],
+    /// The frame's objects.
+    pub(crate) frame: FrameParts<'a>,
+    /// The model program of the layout.
+    pub(crate) model: &'a GeometryPass,
+    /// The pass that copies the background into every sample.
+    pub(crate) background_copy: &'a BackgroundCopyPass,
+    /// The full-screen vertex array.
+    pub(crate) fullscreen: &'a VertexArray,
+    /// The layout's attachment numbers.
+    pub(crate) slots: GBufferSlots,
+    /// The scene's meshes.
+    pub(crate) scene: &'a GpuScene,
+    /// The camera's view.
+    pub(crate) view: &'a DMat4,
+    /// The projection in the frame's depth mode.
+    pub(crate) projection: &'a Mat4,
+    /// The depth function that lets the nearer fragment pass.
+    pub(crate) nearer_func: u32,
+    /// The depth the G-buffer is cleared to.
+    pub(crate) clear_depth: f32,
+}
+
+impl GeometryStep<'_> {
+    /// Copy the background into the target's emissive attachment. Without
+    /// one the lighting pass reads the background texture itself.
+    pub(crate) fn copy_background(&self, gl: &glow::Context) -> Result<()> {
+        let Some(emissive) = self.slots.emissive else {
+            return Ok(());
+        };
+        let copy = CopyTarget {
+            fbo: self.target.fbo,
+            width: self.target.width,
+            height: self.target.height,
+            emissive,
+            draw_buffers: self.draw_buffers,
+        };
+        self.background_copy.draw(
+            gl,
+            copy,
+            self.fullscreen,
+            &self.frame.targets.background.texture,
+        )
+    }
+
+    /// Draw the scene's opaque and alpha-tested objects with `model`.
+    pub(crate) fn draw_models(&self, gl: &glow::Context, model: &GeometryPass) -> Result<()> {
+        model.draw(
+            gl,
+            self.target,
+            self.scene,
+            self.view,
+            self.projection,
+            self.nearer_func,
+        )
+    }
+}
+
+/// The lighting step's inputs.
+pub(crate) struct LightingStep<'a> {
+    /// The frame's objects (the HDR target is `frame.targets.hdr`).
+    pub(crate) frame: FrameParts<'a>,
+    /// The per-pixel lighting program of the layout.
+    pub(crate) lighting: &'a LightingPass,
+    /// The full-screen vertex array.
+    pub(crate) fullscreen: &'a VertexArray,
+    /// The layout's attachment numbers.
+    pub(crate) slots: GBufferSlots,
+    /// The scene's lights in view space.
+    pub(crate) batches: &'a [LightBatch],
+    /// The depth background pixels keep.
+    pub(crate) clear_depth: f32,
+    /// What stands in for attachments the plan left out.
+    pub(crate) stand_ins: StandIns<'a>,
+    /// The projection in the frame's depth mode.
+    pub(crate) projection: &'a Mat4,
+    /// The size of a pixel at unit distance (`tan(fov_y / height)`).
+    pub(crate) footprint: f32,
+}
+
+impl LightingStep<'_> {
+    /// Light every pixel once from the resolved G-buffer.
+    pub(crate) fn light_per_pixel(&self, gl: &glow::Context) -> Result<()> {
+        self.lighting.draw(
+            gl,
+            &self.frame.targets.hdr,
+            self.fullscreen,
+            self.frame.gbuffer,
+            self.slots,
+            self.batches,
+            self.clear_depth,
+            self.stand_ins,
+        )
+    }
+
+    /// The image size.
+    pub(crate) fn size(&self) -> (u32, u32) {
+        let hdr = &self.frame.targets.hdr.texture;
+        (hdr.width, hdr.height)
+    }
+
+    /// The background's own texture.
+    pub(crate) fn background(&self) -> &Texture2d {
+        &self.frame.targets.background.texture
+    }
+}
+
+/// What [`Technique::complex_pixels`] may read.
+pub(crate) struct ComplexPixelsInput<'a> {
+    /// The retrofit, for the methods with multisampled twins.
+    pub(crate) retrofit: Option<&'a mut MsaaRetrofit>,
+    /// The last frame's resolve input.
+    pub(crate) resolve_frame: ResolveFrame,
+    /// The image size.
+    pub(crate) width: u32,
+    /// The image size.
+    pub(crate) height: u32,
+}
+
+/// One anti-aliasing technique: the steps of the renderer's frame that
+/// differ by method. Programs are built by the first
+/// [`prepare`](Technique::prepare) that needs them and kept; targets that
+/// refer to the frame's are dropped by [`options_changed`](Technique::options_changed).
+pub(crate) trait Technique: std::fmt::Debug {
+    /// Whether this technique renders `aa`.
+    fn renders(&self, aa: &AaMode) -> bool;
+
+    /// Build what a frame with `setup` needs: programs (and targets of its
+    /// own) always; targets that refer to the frame's objects when `frame`
+    /// is given (it is not while options are being changed).
+    fn prepare(
+        &mut self,
+        _gl: &glow::Context,
+        _setup: &Setup<'_>,
+        _frame: Option<FrameParts<'_>>,
+    ) -> Result<()> {
+        Ok(())
+    }
+
+    /// The options changed: free what refers to the old frame's objects;
+    /// `active`: whether this technique renders the new options.
+    fn options_changed(&mut self, _gl: &glow::Context, _active: bool) {}
+
+    /// Where the G-buffer pass draws.
+    fn geometry_target(&self, frame: &FrameParts<'_>) -> GBufferTarget {
+        GBufferTarget::of_frame(frame)
+    }
+
+    /// Clear the technique's own G-buffer outputs, after the G-buffer's
+    /// clear (which zeroes every draw buffer).
+    fn clear_outputs(&self, _gl: &glow::Context) {}
+
+    /// The G-buffer pass, after the clear and the background: the
+    /// background copy, then the model program.
+    fn draw_gbuffer(&self, gl: &glow::Context, step: &GeometryStep<'_>) -> Result<()> {
+        step.copy_background(gl)?;
+        step.draw_models(gl, step.model)
+    }
+
+    /// What runs between the G-buffer pass and the decal hook, timed; the
+    /// milliseconds it took (0 when nothing runs, untimed).
+    fn after_geometry(
+        &self,
+        _gl: &glow::Context,
+        _retrofit: Option<&mut MsaaRetrofit>,
+        _resolve_frame: &ResolveFrame,
+        _timer: &mut GpuTimer,
+    ) -> Result<f64> {
+        Ok(0.0)
+    }
+
+    /// Light the HDR target (the renderer times it).
+    fn light(&mut self, gl: &glow::Context, step: &LightingStep<'_>) -> Result<()> {
+        step.light_per_pixel(gl)
+    }
+
+    /// Where the tonemap writes: the LDR image unless a post pass follows.
+    fn tonemap_target<'a>(&'a self, targets: &'a Targets) -> &'a ColorTarget {
+        &targets.ldr
+    }
+
+    /// The pass after the tonemap and before FXAA, timed; the milliseconds
+    /// it took (0 when there is none, untimed).
+    fn post(
+        &self,
+        _gl: &glow::Context,
+        _targets: &Targets,
+        _fullscreen: &VertexArray,
+        _timer: &mut GpuTimer,
+    ) -> Result<f64> {
+        Ok(0.0)
+    }
+
+    /// The bytes the technique allocates beside the G-buffer and its twins
+    /// for `options`.
+    fn memory(&self, _options: &RenderOptions) -> u64 {
+        0
+    }
+
+    /// The real samples per pixel of the technique's own multisampled
+    /// targets, when it has any (the twins' count is the retrofit's).
+    fn samples(&self) -> Option<u32> {
+        None
+    }
+
+    /// Which pixels the last frame treated as complex (255) or simple (0),
+    /// row 0 at the top; `None` when the technique has no such notion.
+    fn complex_pixels(
+        &self,
+        _gl: &glow::Context,
+        _input: ComplexPixelsInput<'_>,
+    ) -> Result<Option<image::GrayImage>> {
+        Ok(None)
+    }
+
+    /// For [`Techniques::get`].
+    fn as_any(&self) -> &dyn Any;
+
+    /// Free every GL object the technique made.
+    fn destroy(self: Box<Self>, gl: &glow::Context);
+}
+
+/// The resolve of the multisampled twins into the G-buffer's own textures
+/// (the second integration line), timed; 0 without twins.
+pub(crate) fn resolve_twins(
+    gl: &glow::Context,
+    retrofit: Option<&mut MsaaRetrofit>,
+    resolve_frame: &ResolveFrame,
+    timer: &mut GpuTimer,
+) -> Result<f64> {
+    match retrofit {
+        Some(r) => timed(gl, timer, || Ok(r.resolve(gl, resolve_frame)?)),
+        None => Ok(0.0),
+    }
+}
+
+/// The registry's techniques, with their state.
+#[derive(Debug)]
+pub(crate) struct Techniques {
+    all: Vec<Box<dyn Technique>>,
+}
+
+impl Techniques {
+    /// Every technique, nothing built yet.
+    pub(crate) fn new() -> Self {
+        Techniques { all: registry() }
+    }
+
+    /// The technique that renders `aa`.
+    pub(crate) fn active(&self, aa: &AaMode) -> &dyn Technique {
+        let position = self.position(aa);
+        &*self.all[position]
+    }
+
+    /// The technique that renders `aa`, to prepare or draw with.
+    pub(crate) fn active_mut(&mut self, aa: &AaMode) -> &mut dyn Technique {
+        let position = self.position(aa);
+        &mut *self.all[position]
+    }
+
+    fn position(&self, aa: &AaMode) -> usize {
+        // Every AaMode has its technique: the registry's own tests check it.
+        self.all
+            .iter()
+            .position(|t| t.renders(aa))
+            .unwrap_or_else(|| unreachable!("no technique renders {aa:?}"))
+    }
+
+    /// The technique of type `T` when it is the one that renders `aa`.
+    pub(crate) fn get<T: Any>(&self, aa: &AaMode) -> Option<&T> {
+        self.active(aa).as_any().downcast_ref::<T>()
+    }
+
+    /// Tell every technique that the options changed to ones `aa` renders.
+    pub(crate) fn options_changed(&mut self, gl: &glow::Context, aa: &AaMode) {
+        for t in &mut self.all {
+            let active = t.renders(aa);
+            t.options_changed(gl, active);
+        }
+    }
+
+    /// Free everything.
+    pub(crate) fn destroy(self, gl: &glow::Context) {
+        for t in self.all {
+            t.destroy(gl);
+        }
+    }
+}
+
+/// The bytes the technique that renders `options.aa` allocates beside the
+/// G-buffer and its twins, before anything is built (for the plan).
+pub(crate) fn planned_memory(options: &RenderOptions) -> u64 {
+    Techniques::new().active(&options.aa).memory(options)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::resolve::{ResolveMethod, ResolveSettings};
+
+    #[test]
+    fn every_method_has_one_technique() {
+        let modes = [
+            AaMode::None,
+            AaMode::Resolve(ResolveSettings::default()),
+            AaMode::Resolve(ResolveSettings {
+                method: ResolveMethod::Average,
+                ..ResolveSettings::default()
+            }),
+            AaMode::PerSample,
+            AaMode::Complex,
+            AaMode::Gbaa,
+            AaMode::Sparse(Default::default()),
+        ];
+        let all = registry();
+        for aa in modes {
+            assert_eq!(all.iter().filter(|t| t.renders(&aa)).count(), 1, "{aa:?}");
+        }
+    }
+}

@@ -1,0 +1,143 @@
+//! Method `per-sample` ([`AaMode::PerSample`]): the G-buffer is resolved
+//! for the decal hook and transparent objects, but lighting reads every
+//! sample of the multisampled twins (`lighting_per_sample.frag`) and
+//! averages them as the tonemap will see them.
+
+use super::{ComplexPixelsInput, FrameParts, LightingStep, Setup, Technique, resolve_twins};
+use crate::frame::Frame as ResolveFrame;
+use crate::gl::GpuTimer;
+use crate::renderer::lighting_per_sample::{PerSampleLightingPass, SampleInputs};
+use crate::renderer::pass::{LightTarget, StencilSelect};
+use crate::renderer::{AaMode, GBufferSlots};
+use crate::retrofit::MsaaRetrofit;
+use crate::{Error, Result};
+use std::any::Any;
+
+/// Per-sample lighting of every pixel.
+#[derive(Debug, Default)]
+pub(crate) struct PerSample {
+    /// Built when the method is first used, and kept.
+    lighting: Option<PerSampleLightingPass>,
+    /// Pixels the last frame's lighting pass lit (`GL_SAMPLES_PASSED`).
+    lit_pixels: Option<u64>,
+}
+
+impl PerSample {
+    /// How many pixels the last frame's per-sample lighting lit; `None`
+    /// before the first frame after a change of options or without a
+    /// query object.
+    pub(crate) fn lit_pixels(&self) -> Option<u64> {
+        self.lit_pixels
+    }
+}
+
+/// Build (or, when the attachment numbers moved, rebuild) the per-sample
+/// lighting program in `slot`.
+pub(super) fn prepare_lighting(
+    slot: &mut Option<PerSampleLightingPass>,
+    gl: &glow::Context,
+    slots: GBufferSlots,
+) -> Result<()> {
+    if slot.as_ref().map(PerSampleLightingPass::slots) != Some(slots) {
+        let pass = PerSampleLightingPass::new(gl, slots)?;
+        if let Some(old) = slot.replace(pass) {
+            old.destroy(gl);
+        }
+    }
+    Ok(())
+}
+
+/// The per-sample lighting program and the twins it reads.
+pub(super) fn per_sample_inputs<'a>(
+    lighting: Option<&'a PerSampleLightingPass>,
+    frame: &FrameParts<'_>,
+    slots: GBufferSlots,
+) -> Result<(&'a PerSampleLightingPass, SampleInputs)> {
+    let pass = lighting.ok_or_else(|| {
+        Error::invalid("the per-sample lighting program is missing (not prepared)")
+    })?;
+    let retrofit = frame.retrofit.ok_or_else(|| {
+        Error::invalid("per-sample lighting needs the multisampled G-buffer, which is missing")
+    })?;
+    Ok((pass, SampleInputs::of(retrofit, slots)?))
+}
+
+impl Technique for PerSample {
+    fn renders(&self, aa: &AaMode) -> bool {
+        *aa == AaMode::PerSample
+    }
+
+    fn prepare(
+        &mut self,
+        gl: &glow::Context,
+        setup: &Setup<'_>,
+        frame: Option<FrameParts<'_>>,
+    ) -> Result<()> {
+        if frame.is_some() {
+            // A new frame: nothing is lit yet.
+            self.lit_pixels = None;
+        }
+        prepare_lighting(&mut self.lighting, gl, setup.slots)
+    }
+
+    fn options_changed(&mut self, _gl: &glow::Context, _active: bool) {
+        self.lit_pixels = None;
+    }
+
+    /// The resolved G-buffer serves the decal hook and transparent objects.
+    fn after_geometry(
+        &self,
+        gl: &glow::Context,
+        retrofit: Option<&mut MsaaRetrofit>,
+        resolve_frame: &ResolveFrame,
+        timer: &mut GpuTimer,
+    ) -> Result<f64> {
+        resolve_twins(gl, retrofit, resolve_frame, timer)
+    }
+
+    fn light(&mut self, gl: &glow::Context, step: &LightingStep<'_>) -> Result<()> {
+        let (pass, inputs) = per_sample_inputs(self.lighting.as_ref(), &step.frame, step.slots)?;
+        let (width, height) = step.size();
+        let hdr = LightTarget {
+            fbo: step.frame.targets.hdr.fbo.raw(),
+            width,
+            height,
+            stencil: StencilSelect::All,
+        };
+        self.lit_pixels = pass.draw(
+            gl,
+            hdr,
+            step.fullscreen,
+            &inputs,
+            inputs.samples,
+            step.batches,
+            step.clear_depth,
+            true,
+            step.stand_ins,
+        )?;
+        Ok(())
+    }
+
+    /// Every pixel: each is lit per sample.
+    fn complex_pixels(
+        &self,
+        _gl: &glow::Context,
+        input: ComplexPixelsInput<'_>,
+    ) -> Result<Option<image::GrayImage>> {
+        Ok(Some(image::GrayImage::from_pixel(
+            input.width,
+            input.height,
+            image::Luma([255]),
+        )))
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+
+    fn destroy(self: Box<Self>, gl: &glow::Context) {
+        if let Some(p) = self.lighting {
+            p.destroy(gl);
+        }
+    }
+}

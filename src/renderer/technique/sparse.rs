@@ -1,0 +1,148 @@
+//! Method `sparse` ([`AaMode::Sparse`]): the G-buffer pass becomes a
+//! multisampled depth pre-pass, a set-up pass and a pass that writes
+//! per-pixel lists of G-buffer blocks, and lighting lights the lists
+//! (`sparse*.frag`; the passes are in the renderer's `sparse` module, see
+//! [`SparseOptions`](crate::renderer::SparseOptions)).
+
+use super::{FrameParts, GeometryStep, LightingStep, Setup, Technique, TechniqueState};
+use crate::Result;
+use crate::renderer::pass::{LightTarget, StencilSelect};
+use crate::renderer::sparse::{BuildParams, LightParams, SparseState};
+use crate::renderer::{AaMode, RenderOptions, SparseMemory, SparseStats};
+use std::any::Any;
+
+/// The multisampled G-buffer as per-pixel linked lists of blocks
+/// ([`AaMode::Sparse`]), as
+/// [`Renderer::technique`](crate::renderer::Renderer::technique) lends it:
+/// its memory, counters and one-sample pixels.
+#[derive(Debug, Default)]
+pub struct Sparse {
+    /// The programs (kept once built) and the targets (they follow the
+    /// options, and go when another method is chosen).
+    state: SparseState,
+}
+
+impl TechniqueState for Sparse {}
+
+impl Sparse {
+    /// The GPU memory it has allocated, by part, once allocated.
+    /// [`SparseMemory::total`] is what the bench reports as its G-buffer bytes.
+    pub fn allocated(&self) -> Option<SparseMemory> {
+        self.state.memory()
+    }
+
+    /// What the last frame's G-buffer pass counted: the pool's use and the
+    /// pixels that fell back to one sample because it ran out, read back
+    /// from the atomic counters (this waits for the frame). `None` before
+    /// the first frame.
+    pub fn stats(&self, gl: &glow::Context) -> Result<Option<SparseStats>> {
+        self.state.stats(gl)
+    }
+
+    /// The last frame's one-sample pixels, read back from the heads (row 0
+    /// at the top): [`MASK_OVERFLOW`] where the pool ran out,
+    /// [`MASK_SINGLE`] where a visible fragment is not anti-aliased (object
+    /// flag or depth limit), 0 elsewhere (pixels outside
+    /// [`SparseOptions::region`] are not marked: the region alone decides
+    /// them). `None` before the first frame.
+    ///
+    /// [`MASK_OVERFLOW`]: crate::renderer::MASK_OVERFLOW
+    /// [`MASK_SINGLE`]: crate::renderer::MASK_SINGLE
+    /// [`SparseOptions::region`]: crate::renderer::SparseOptions::region
+    pub fn read_mask(&self, gl: &glow::Context) -> Result<Option<image::GrayImage>> {
+        self.state.read_mask(gl)
+    }
+}
+
+impl Technique for Sparse {
+    fn renders(&self, aa: &AaMode) -> bool {
+        matches!(aa, AaMode::Sparse(_))
+    }
+
+    /// Its targets depend on the options alone, so they are allocated
+    /// while options change too.
+    fn prepare(
+        &mut self,
+        gl: &glow::Context,
+        setup: &Setup<'_>,
+        _frame: Option<FrameParts<'_>>,
+    ) -> Result<()> {
+        self.state.prepare(gl, setup.options)
+    }
+
+    fn options_changed(&mut self, gl: &glow::Context, active: bool) {
+        if !active {
+            self.state.release(gl);
+        }
+    }
+
+    /// The lists instead of the G-buffer's colours (which stay cleared; the
+    /// set-up pass writes its depth); no background copy.
+    fn draw_gbuffer(&self, gl: &glow::Context, step: &GeometryStep<'_>) -> Result<()> {
+        let AaMode::Sparse(o) = step.frame.aa else {
+            return Ok(());
+        };
+        let build = BuildParams {
+            view: step.view,
+            projection: step.projection,
+            nearer_func: step.nearer_func,
+            clear_depth: step.clear_depth,
+            region: o.region,
+            max_depth: o.max_depth.unwrap_or(f32::MAX),
+        };
+        self.state.build_lists(
+            gl,
+            step.scene,
+            step.frame.gbuffer.fbo.raw(),
+            step.fullscreen,
+            &build,
+        )
+    }
+
+    fn light(&mut self, gl: &glow::Context, step: &LightingStep<'_>) -> Result<()> {
+        let AaMode::Sparse(o) = step.frame.aa else {
+            return Ok(());
+        };
+        let (width, height) = step.size();
+        let hdr = LightTarget {
+            fbo: step.frame.targets.hdr.fbo.raw(),
+            width,
+            height,
+            stencil: StencilSelect::All,
+        };
+        let params = LightParams {
+            background: step.background(),
+            projection: step.projection,
+            region: o.region,
+        };
+        self.state
+            .light(gl, hdr, step.fullscreen, step.batches, &params)
+    }
+
+    /// The lists, the pool and the multisampled pre-pass depth.
+    fn memory(&self, options: &RenderOptions) -> u64 {
+        match options.aa {
+            AaMode::Sparse(o) => SparseMemory::planned(
+                &o,
+                options.width,
+                options.height,
+                options.samples.max(1),
+                options.layout.depth,
+            )
+            .total(),
+            _ => 0,
+        }
+    }
+
+    fn samples(&self) -> Option<u32> {
+        self.state.samples()
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+
+    fn destroy(self: Box<Self>, gl: &glow::Context) {
+        self.state.destroy(gl);
+    }
+}
