@@ -219,6 +219,9 @@ impl Report {
                 );
             }
             let _ = writeln!(md);
+            if let Some(line) = lighting_orderings(&runs) {
+                let _ = writeln!(md, "{line}\n");
+            }
             for run in runs.iter().filter(|r| r.full_ms_gbuffer_bytes.is_some()) {
                 let full = run.full_ms_gbuffer_bytes.unwrap_or(0);
                 let _ = writeln!(
@@ -248,6 +251,36 @@ impl Report {
         std::fs::write(&md, self.to_markdown()).map_err(|e| Error::io(&md, e))?;
         Ok(())
     }
+}
+
+/// The orderings of one scene's lighting times the bench is about, and
+/// whether this run's measurements kept them: lighting every sample costs
+/// more than lighting the resolved G-buffer (`per-sample` above `median`),
+/// and lighting only the complex pixels' samples sits between the two.
+/// Times vary with the machine's load, so no test asserts these; the report
+/// states them. `None` without both a `median` and a `per-sample` run.
+pub fn lighting_orderings(runs: &[&Run]) -> Option<String> {
+    let lighting = |method: &str| {
+        runs.iter()
+            .find(|r| r.method == method)
+            .map(|r| r.ms_lighting)
+    };
+    let held = |ok: bool| if ok { "held" } else { "did not hold" };
+    let (median, per_sample) = (lighting("median")?, lighting("per-sample")?);
+    let mut line = format!(
+        "Lighting-time orderings (measured, not asserted): `per-sample` > `median`: {} \
+         ({per_sample:.2} > {median:.2} ms)",
+        held(per_sample > median)
+    );
+    if let Some(complex) = lighting("complex") {
+        let _ = write!(
+            line,
+            "; `median` < `complex` < `per-sample`: {} ({median:.2} < {complex:.2} < {per_sample:.2} ms)",
+            held(median < complex && complex < per_sample)
+        );
+    }
+    line.push('.');
+    Some(line)
 }
 
 /// Which points of (time, error) pairs are on the Pareto front: no other
@@ -280,5 +313,61 @@ mod tests {
             (0.5, f64::NAN),
         ];
         assert_eq!(pareto_front(&pts), [true, true, false, true, false]);
+    }
+
+    fn run(method: &str, ms_lighting: f64) -> Run {
+        Run {
+            scene: "builtin:halo".into(),
+            method: method.into(),
+            fxaa: false,
+            samples: 4,
+            width: 96,
+            height: 54,
+            ms_total: 2.0,
+            ms_aa: 0.5,
+            timer: "finish-wall-clock".into(),
+            flip_mean: 0.1,
+            psnr_db: Some(30.0),
+            halo_pixels: 0,
+            gbuffer_bytes: 1 << 20,
+            ms_resolve: 0.1,
+            ms_fxaa: 0.0,
+            ms_lighting,
+            flip_p95: 0.2,
+            complex_fraction: None,
+            sparse_overflow_pixels: None,
+            full_ms_gbuffer_bytes: None,
+            samples_requested: 4,
+            lights: 7,
+        }
+    }
+
+    #[test]
+    fn the_lighting_orderings_say_whether_they_held() {
+        let (median, complex, per_sample) = (
+            run("median", 1.0),
+            run("complex", 2.0),
+            run("per-sample", 3.0),
+        );
+        assert_eq!(
+            lighting_orderings(&[&median, &complex, &per_sample]).as_deref(),
+            Some(
+                "Lighting-time orderings (measured, not asserted): `per-sample` > `median`: held \
+                 (3.00 > 1.00 ms); `median` < `complex` < `per-sample`: held (1.00 < 2.00 < 3.00 ms)."
+            )
+        );
+        let slow_complex = run("complex", 4.0);
+        let line = lighting_orderings(&[&per_sample, &slow_complex, &median]).unwrap();
+        assert!(line.contains("`per-sample` > `median`: held"), "{line}");
+        assert!(
+            line.contains("`complex` < `per-sample`: did not hold"),
+            "{line}"
+        );
+        let line = lighting_orderings(&[&run("median", 3.0), &run("per-sample", 1.0)]).unwrap();
+        assert!(
+            line.contains("`median`: did not hold") && !line.contains("complex"),
+            "{line}"
+        );
+        assert_eq!(lighting_orderings(&[&median, &complex]), None);
     }
 }

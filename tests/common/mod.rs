@@ -1,4 +1,6 @@
-//! Shared helpers for the GL integration tests.
+//! The test kit both tiers (`tests/fast`, `tests/slow`) share: contexts and
+//! the skip rule, the RNG, a host renderer and its projections (`host`),
+//! goldens (`golden`).
 #![allow(dead_code)]
 
 pub mod golden;
@@ -56,4 +58,43 @@ pub fn skip(reason: &str) {
         panic!("required but missing: {reason}");
     }
     eprintln!("skipped: {reason}");
+}
+
+/// Whether the calling test runs its body here: in a child process of the
+/// test binary that runs that test and nothing else. A measure of the whole
+/// process (its resident memory) then sees that test alone, not the other
+/// tests the tier's one binary runs beside it on other threads. In the
+/// parent it runs the child, fails with the child's output if the child
+/// fails, and returns `false`. `module` is the caller's `module_path!()`.
+pub fn alone(module: &str, test: &str) -> bool {
+    const VAR: &str = "DEFERRED_MSAA_TEST_ALONE";
+    // Test names leave out the crate: `reliability::name`, not `fast::reliability::name`.
+    let module = module.split_once("::").map_or("", |(_, m)| m);
+    let name = if module.is_empty() {
+        test.to_string()
+    } else {
+        format!("{module}::{test}")
+    };
+    if std::env::var_os(VAR).is_some_and(|v| v == name.as_str()) {
+        return true;
+    }
+    let exe = std::env::current_exe().expect("the test binary's path");
+    let out = std::process::Command::new(exe)
+        .args(["--exact", &name, "--include-ignored", "--nocapture"])
+        .args(["--test-threads", "1"])
+        .env(VAR, &name)
+        .output()
+        .expect("running the test alone");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    eprint!("{stderr}");
+    assert!(
+        out.status.success(),
+        "{name}, run alone, failed:\n{stdout}\n{stderr}"
+    );
+    assert!(
+        stdout.contains("1 passed"),
+        "{name} did not run alone:\n{stdout}"
+    );
+    false
 }

@@ -3,7 +3,7 @@
 //! and object lifetimes. Images are small so the suite stays fast on
 //! llvmpipe. Set `DEFERRED_MSAA_SAVE_RENDERS=DIR` to keep the images.
 
-mod common;
+use crate::common;
 
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -1245,7 +1245,7 @@ fn complex_falls_back_to_the_discontinuity_test_without_sample_mask_in() {
         .args([
             "--ignored",
             "--exact",
-            "complex_without_sample_mask_in_child",
+            "renderer::complex_without_sample_mask_in_child",
             "--nocapture",
             "--test-threads",
             "1",

@@ -10,7 +10,7 @@
 //! process, so the refusal is exercised on every run. (Mesa's OpenGL 3.2
 //! override still lists the extensions, so there `sparse` really runs.)
 
-mod common;
+use crate::common;
 
 use deferred_msaa::Error as CoreError;
 use deferred_msaa_lab::Error;

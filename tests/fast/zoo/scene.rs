@@ -54,14 +54,9 @@ pub fn view() -> Mat4 {
 
 /// The OpenGL projection for `width` x `height`.
 pub fn projection(width: u32, height: u32) -> Mat4 {
-    let f = 1.0 / (FOV_Y / 2.0).tan();
-    let aspect = width as f32 / height as f32;
-    Mat4::from_cols(
-        glam::Vec4::new(f / aspect, 0.0, 0.0, 0.0),
-        glam::Vec4::new(0.0, f, 0.0, 0.0),
-        glam::Vec4::new(0.0, 0.0, (FAR + NEAR) / (NEAR - FAR), -1.0),
-        glam::Vec4::new(0.0, 0.0, 2.0 * FAR * NEAR / (NEAR - FAR), 0.0),
-    )
+    let aspect = width as f64 / height as f64;
+    let m = crate::common::host::perspective(FOV_Y.into(), aspect, NEAR.into(), Some(FAR.into()));
+    Mat4::from_cols_array(&m.map(|v| v as f32))
 }
 
 fn colour(i: u32) -> Vec3 {

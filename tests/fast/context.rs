@@ -11,15 +11,14 @@ use deferred_msaa_lab::context::Error;
 use deferred_msaa_lab::context::{Backend, ContextRequest, GlVersion, HeadlessContext};
 use glow::HasContext;
 
+use crate::common;
+
 /// Whether `backend`'s library is installed; prints `skipped: ...` if not.
 fn available(backend: Backend) -> bool {
     match backend.check_library() {
         Ok(()) => true,
         Err(e) => {
-            if std::env::var_os("DEFERRED_MSAA_REQUIRE_ALL").is_some() {
-                panic!("required but missing: {e}");
-            }
-            eprintln!("skipped: {e}");
+            common::skip(&e.to_string());
             false
         }
     }

@@ -4,7 +4,7 @@
 //! (The resolve's selection math against the CPU reference, every criterion
 //! and schedule, is in `tests/retrofit.rs`.)
 
-mod common;
+use crate::common;
 
 use deferred_msaa_lab::gl::{TextureRef, live_objects};
 use deferred_msaa_lab::readback::{Readback, SampleImage};

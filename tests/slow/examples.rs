@@ -7,9 +7,9 @@
 //!
 //! The examples are built here with `cargo build --examples` (a no-op after
 //! a plain `cargo test`, which builds them too), so the binaries are never
-//! stale when one runs `cargo test --test examples`.
+//! stale when one runs `cargo test --test slow -- --ignored examples::`.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -184,6 +184,7 @@ fn median() -> AaMode {
 }
 
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn every_example_builds() {
     let dir = built_examples().as_ref().unwrap_or_else(|e| panic!("{e}"));
     for name in ["retrofit", "viewer", "headless"] {
@@ -265,6 +266,7 @@ fn write_gltf(dir: &Path) -> PathBuf {
 }
 
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn headless_example_renders_a_gltf_file_like_the_library() {
     if common::egl_context().is_none() {
         return;
@@ -300,6 +302,7 @@ fn headless_example_renders_a_gltf_file_like_the_library() {
 }
 
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn examples_refuse_bad_input_in_one_line() {
     let missing = scratch("no-such-model.gltf");
     let out = run_with_limit(
@@ -385,6 +388,7 @@ fn run_retrofit(method: &str, out: &Path) -> image::RgbaImage {
 /// the example's MSAA image must be nearer the renderer's MSAA image than
 /// the aliased one.
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn retrofit_example_matches_the_builtin_pipeline() {
     let Some(_probe) = common::egl_context() else {
         return;
@@ -546,6 +550,7 @@ fn start_xvfb() -> Option<Xvfb> {
 }
 
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn viewer_runs_in_a_window_and_switches_live() {
     let viewer = example("viewer");
     let Some(xvfb) = start_xvfb() else {
@@ -622,6 +627,7 @@ fn viewer_runs_in_a_window_and_switches_live() {
 /// the old): no GL object outlives the run and resident memory stays flat
 /// after the first hundred frames (every mode has been built by then).
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn viewer_survives_a_thousand_mode_switches_without_leaking() {
     let viewer = example("viewer");
     let Some(xvfb) = start_xvfb() else {

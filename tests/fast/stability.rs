@@ -2,7 +2,7 @@
 //! asserts finite outputs and the right classification of geometry and
 //! background, through a host G-buffer retrofitted by the public API.
 
-mod common;
+use crate::common;
 
 use common::host::{Host, perspective, perspective_reversed, triangle};
 use deferred_msaa::ColorAttachment;

@@ -3,7 +3,7 @@
 //! API alone; every resolved pixel is checked against the CPU reference
 //! computed from the very samples the GPU rasterised.
 
-mod common;
+use crate::common;
 
 use common::host::{Host, perspective, triangle};
 use deferred_msaa::{ColorAttachment, Error};

@@ -1,7 +1,7 @@
 //! The command line as a user meets it: real processes, real files, exit codes
 //! and one-line refusals.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Output};

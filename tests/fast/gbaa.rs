@@ -4,7 +4,7 @@
 //! scenes built pixel by pixel; the unchanged G-buffer; object lifetimes;
 //! and the OpenGL 3.2 floor.
 
-mod common;
+use crate::common;
 
 use deferred_msaa_lab::bench::{self, BenchConfig};
 use deferred_msaa_lab::gl::TextureRef;

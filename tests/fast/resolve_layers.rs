@@ -9,7 +9,7 @@
 // Per-sample arrays run in parallel; indices read clearer than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
+use crate::common;
 
 use common::Rng;
 use deferred_msaa::ColorAttachment;

@@ -1,9 +1,10 @@
 //! `deferred-msaa bench` as a user meets it: one real run on the default
 //! scenes at a tiny size, its four files, the orderings the report must
-//! show on the scenes they are about (measured, never hard-coded), and
-//! one-line refusals of bad input.
+//! show on the scenes they are about (measured, never hard-coded: those of
+//! errors asserted, those of times stated by the report and never
+//! asserted), and one-line refusals of bad input.
 
-mod common;
+use crate::common;
 
 use deferred_msaa_lab::bench::{DEFAULT_SCENES, MethodEntry};
 use serde_json::Value;
@@ -66,7 +67,7 @@ fn bench_run() -> Option<&'static (PathBuf, Value)> {
 /// [`MANY_LIGHTS`] more; seven timed frames each, interleaved. A little
 /// larger than [`SIZE`], so that lighting, not per-pass overhead, is what
 /// the lighting time measures.
-fn lighting_run(extra: u32) -> Option<&'static Value> {
+fn lighting_run(extra: u32) -> Option<&'static (PathBuf, Value)> {
     static FEW: OnceLock<Option<(PathBuf, Value)>> = OnceLock::new();
     static MANY: OnceLock<Option<(PathBuf, Value)>> = OnceLock::new();
     let cell = if extra == 0 { &FEW } else { &MANY };
@@ -81,7 +82,6 @@ fn lighting_run(extra: u32) -> Option<&'static Value> {
         Some(bench(&format!("lights{extra}"), COST_SIZE, &args))
     })
     .as_ref()
-    .map(|(_, report)| report)
 }
 
 fn runs(report: &Value) -> &Vec<Value> {
@@ -132,6 +132,7 @@ fn resolves<'a>(report: &'a Value, scene: &'a str) -> impl Iterator<Item = &'a s
 }
 
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn the_report_has_every_key_and_one_run_per_scene_method_and_count() {
     let Some((dir, report)) = bench_run() else {
         return;
@@ -268,6 +269,7 @@ fn psnr(report: &Value, scene: &str, method: &str) -> f64 {
 
 /// The uniform-pixel fast path changes no pixel, measured on both scenes.
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn the_fast_path_changes_nothing_the_report_measures() {
     let Some((_, report)) = bench_run() else {
         return;
@@ -287,6 +289,7 @@ fn the_fast_path_changes_nothing_the_report_measures() {
 /// coverage restores sub-pixel wires against a bright sky that a single
 /// sample per pixel breaks up (`builtin:thin`, its own small run).
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn msaa_restores_sub_pixel_detail() {
     if common::egl_context().is_none() {
         return;
@@ -331,6 +334,7 @@ fn msaa_restores_sub_pixel_detail() {
 /// real surface and makes none. Nothing else makes one either (`none`,
 /// per-sample lighting): the scene shows the artefact and nothing but it.
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn average_makes_halos_that_the_depth_aware_resolves_do_not() {
     let Some((_, report)) = bench_run() else {
         return;
@@ -361,6 +365,7 @@ fn average_makes_halos_that_the_depth_aware_resolves_do_not() {
 /// once, which for one surface per pixel is what per-sample lighting gives:
 /// the two may tie.)
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn per_sample_lighting_leaves_the_least_error_and_complex_sits_between() {
     let Some((_, report)) = bench_run() else {
         return;
@@ -393,49 +398,57 @@ fn per_sample_lighting_leaves_the_least_error_and_complex_sits_between() {
 /// more, a second run; medians of interleaved frames). Where lighting is
 /// the work (many lights) and complex pixels are few (`halo`), lighting only
 /// those costs less than lighting every sample and more than lighting the
-/// resolved G-buffer. Not asserted, because it does not hold as measured on
-/// llvmpipe (README, "Benchmark"): with the scenes' own 7 lights `complex`'s
-/// detection pass costs more than the lighting it saves, and on `hull` a
-/// third of the pixels are complex, spread over nearly every block of
-/// pixels llvmpipe shades together, so its two stencil-selected passes shade
-/// about everything twice.
+/// resolved G-buffer. These are orderings of measured times, so no test
+/// asserts them: each report states, per scene, whether they held
+/// (`report.md`, "Lighting-time orderings"), and this test checks that it
+/// does and prints them. As measured on llvmpipe (README, "Benchmark"),
+/// `complex`'s does not hold: with the scenes' own 7 lights its detection
+/// pass costs more than the lighting it saves, and on `hull` a third of the
+/// pixels are complex, spread over nearly every block of pixels llvmpipe
+/// shades together, so its two stencil-selected passes shade about
+/// everything twice.
 #[test]
-fn per_sample_lighting_costs_the_most_and_grows_with_the_lights() {
-    let (Some(few), Some(many)) = (lighting_run(0), lighting_run(MANY_LIGHTS)) else {
+#[ignore = "slow tier: scripts/test runs it"]
+fn the_reports_state_the_lighting_time_orderings() {
+    let (Some((few_dir, few)), Some((many_dir, many))) =
+        (lighting_run(0), lighting_run(MANY_LIGHTS))
+    else {
         return;
     };
-    let lighting =
-        |report: &Value, scene: &str, method: &str| number(report, scene, method, "ms_lighting");
-    for scene in SCENES {
-        for report in [few, many] {
-            let lights = &run(report, scene, "per-sample")["lights"];
-            let (per_sample, median) = (
-                lighting(report, scene, "per-sample"),
-                lighting(report, scene, "median"),
-            );
+    for (dir, report) in [(few_dir, few), (many_dir, many)] {
+        let md = std::fs::read_to_string(dir.join("report.md")).expect("report.md");
+        for scene in SCENES {
+            let section = md
+                .split("## `")
+                .find(|s| s.starts_with(&format!("{scene}`")))
+                .unwrap_or_else(|| panic!("report.md has no section for {scene}:\n{md}"));
+            let line = section
+                .lines()
+                .find(|l| l.starts_with("Lighting-time orderings"))
+                .unwrap_or_else(|| panic!("{scene}: no lighting-time orderings:\n{section}"));
             assert!(
-                per_sample > median,
-                "{scene}, {lights} lights: per-sample lighting {per_sample} ms is not above median's {median} ms"
+                line.contains("`per-sample` > `median`: ")
+                    && line.contains("`median` < `complex` < `per-sample`: "),
+                "{scene}: {line}"
             );
+            let lights = &run(report, scene, "per-sample")["lights"];
+            eprintln!("{scene}, {lights} lights: {line}");
         }
-        let (before, after) = (
-            lighting(few, scene, "per-sample"),
-            lighting(many, scene, "per-sample"),
-        );
-        assert!(
-            after > before,
-            "{scene}: per-sample lighting took {before} ms, and {after} ms with {MANY_LIGHTS} more lights"
+    }
+    for scene in SCENES {
+        let lights = |report: &Value| {
+            run(report, scene, "per-sample")["lights"]
+                .as_u64()
+                .expect("lights")
+        };
+        assert_eq!(lights(many), lights(few) + MANY_LIGHTS as u64, "{scene}");
+        let lighting = |report: &Value| number(report, scene, "per-sample", "ms_lighting");
+        eprintln!(
+            "{scene}: per-sample lighting {:.2} ms, and {:.2} ms with {MANY_LIGHTS} more lights",
+            lighting(few),
+            lighting(many)
         );
     }
-    let (median, complex, per_sample) = (
-        lighting(many, HALO, "median"),
-        lighting(many, HALO, "complex"),
-        lighting(many, HALO, "per-sample"),
-    );
-    assert!(
-        median < complex && complex < per_sample,
-        "{HALO}, many lights: complex lighting {complex} ms is not between median's {median} ms and per-sample's {per_sample} ms"
-    );
 }
 
 // `median+fxaa` against `none+fxaa` on `hull`: fine intra-model detail
@@ -446,6 +459,7 @@ fn per_sample_lighting_costs_the_most_and_grows_with_the_lights() {
 // none+fxaa 0.0125 at 640x360), which is why the layout selects normals
 // (`GBufferLayout::recommended`).
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn median_fxaa_leaves_less_error_than_none_fxaa() {
     let Some((_, report)) = bench_run() else {
         return;
@@ -461,6 +475,7 @@ fn median_fxaa_leaves_less_error_than_none_fxaa() {
 }
 
 #[test]
+#[ignore = "slow tier: scripts/test runs it"]
 fn bad_input_is_refused_in_one_line() {
     let dir = std::env::temp_dir().join(format!("dmsaa-bench-bad-{}", std::process::id()));
     let d = dir.to_str().expect("a UTF-8 temp path");

@@ -5,10 +5,10 @@
 //! the layout the first goldens were blessed with (`SCENE-4x-median`, normals
 //! blended) and in the shipped recommended layout (`SCENE-recommended-...`,
 //! normals selected). See `tests/common/golden.rs` for blessing
-//! (`DEFERRED_MSAA_BLESS=1 cargo test --test goldens`), the `blessed on`
+//! (`DEFERRED_MSAA_BLESS=1 cargo test --test fast -- goldens::`), the `blessed on`
 //! header and what a failure leaves behind.
 
-mod common;
+use crate::common;
 
 use common::golden::{
     FlipTolerance, Plane, SampleTolerance, check_image, check_samples, decode, driver, encode,

@@ -3,7 +3,7 @@
 //! --explain`, and the per-pixel view of which pixels took the resolve's
 //! slow path (`--view complex`, `complex_fraction`).
 
-mod common;
+use crate::common;
 
 use deferred_msaa_lab::compare;
 use deferred_msaa_lab::gbuffer::GBufferLayout;

@@ -22,19 +22,20 @@
 //! `ZOO_DUMP=1` writes the three images of each host under the target's
 //! test temporary folder.
 
-mod common;
+use crate::common;
 
-mod zoo {
-    pub mod harness;
-    pub mod scene;
+// The hosts are this module's children; the tests below name them `zoo::…`.
+use crate::zoo;
 
-    pub mod holes;
-    pub mod layered;
-    pub mod learnopengl;
-    pub mod pbr;
-    pub mod picking;
-    pub mod stencil;
-}
+pub mod harness;
+pub mod scene;
+
+pub mod holes;
+pub mod layered;
+pub mod learnopengl;
+pub mod pbr;
+pub mod picking;
+pub mod stencil;
 
 /// What cannot work is refused with the typed error, in one line naming
 /// the attachment and the GL enum: a host whose G-buffer is already
@@ -118,7 +119,7 @@ fn an_already_multisampled_gbuffer_is_refused_in_one_line() {
 /// silhouettes against the brighter sky, a pixel whose samples are half
 /// background takes the median reference's surface whole, which is the
 /// background, while the host's own pixel centre hits the geometry. Run it
-/// with `cargo test --test zoo -- --ignored`.
+/// with `cargo test --test fast -- --ignored zoo::`.
 #[test]
 #[ignore = "silhouette pixels half covered take the background whole (the median reference); needs a second resolved layer"]
 fn no_host_gains_halo_pixels() {

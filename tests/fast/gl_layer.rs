@@ -1,7 +1,7 @@
 //! The GL resource layer on real contexts, both backends: multisample
 //! framebuffers, per-sample reads, leak counters, and typed errors.
 
-mod common;
+use crate::common;
 
 use deferred_msaa::Error;
 use deferred_msaa_lab::context::{Backend, HeadlessContext};

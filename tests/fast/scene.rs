@@ -7,7 +7,7 @@
 //! `DEFERRED_MSAA_REQUIRE_ALL=1`). Run with `-- --nocapture` to see the
 //! corpus outcome table.
 
-mod common;
+use crate::common;
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};

@@ -3,7 +3,7 @@
 //! used unchanged — retrofitted through the public API alone, gives the same
 //! resolved G-buffer and the same lit image as the built-in pipeline.
 
-mod common;
+use crate::common;
 
 use deferred_msaa::ColorAttachment;
 use deferred_msaa_lab::gbuffer::GBufferLayout;

@@ -3,7 +3,7 @@
 //! down to the highest offered count that fits (or to single-sample), with
 //! a warning, or the request is refused when the budget is strict.
 
-mod common;
+use crate::common;
 
 use deferred_msaa::Error;
 use deferred_msaa_lab::gbuffer::{MemoryBudget, choose_samples, gbuffer_bytes, real_sample_count};

@@ -1,0 +1,28 @@
+//! The fast tier of the lab's integration tests, one binary: what plain
+//! `cargo test` runs, in minutes on two cores. The resolve against the CPU
+//! reference, the retrofit, the goldens, reliability, the renderer, scenes,
+//! the CLI and the host zoo. The slow tier (`tests/slow`) is the bench, the
+//! examples under Xvfb and the viewer's long runs; `scripts/test` runs both.
+//! The shared test kit (contexts and skips, the RNG, the host renderer and
+//! its projections, goldens) is `tests/common`.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod budget;
+mod cli;
+mod context;
+mod gbaa;
+mod gl_layer;
+mod goldens;
+mod host_equivalence;
+mod plan;
+mod reliability;
+mod renderer;
+mod resolve_layers;
+mod retrofit;
+mod scene;
+mod selective;
+mod sparse;
+mod stability;
+mod zoo;

@@ -1,0 +1,12 @@
+//! The slow tier of the lab's integration tests, one binary: the bench as a
+//! user runs it, and the examples (the viewer under Xvfb, its thousand live
+//! mode switches). Every test here is `#[ignore]`d, so plain `cargo test`
+//! only lists them; `scripts/test` runs them with
+//! `cargo test --test slow -- --ignored`. The fast tier is `tests/fast`; both
+//! share the test kit in `tests/common`.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod bench;
+mod examples;
