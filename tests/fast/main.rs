@@ -14,6 +14,7 @@ mod cli;
 mod context;
 mod gbaa;
 mod gl_layer;
+mod gltf_sources;
 mod goldens;
 mod host_equivalence;
 mod plan;

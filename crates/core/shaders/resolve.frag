@@ -340,7 +340,7 @@ vec4 acc_finish(Acc a, int rule, vec4 reference) {
 // samples alone is not exact. A sample is background by its own depth (the
 // clear depth), and a background sample's position is whatever the host
 // cleared the attachment to, which a geometry sample's may equal (a host
-// clearing position to (0, 0, -far); tests/resolve_layers.rs's
+// clearing position to (0, 0, -far); tests/fast/resolve_layers.rs's
 // one-geometry-sample case, whose background samples keep the geometry's z);
 // geometry exactly at the clear depth (a sky drawn at the far plane) is
 // background in one sample and geometry in its neighbour. The converse is
