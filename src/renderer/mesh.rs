@@ -1,7 +1,7 @@
 //! The scene on the GPU: one vertex array per object, the material textures,
 //! and the draw lists (G-buffer objects and forward transparent objects).
 
-use crate::gl::{Buffer, Format, Program, Texture2d, VertexArray, check_error};
+use crate::gl::{Buffer, Format, Made, Program, Texture2d, VertexArray, check_error};
 use crate::scene::{AlphaMode, Material, Object, Scene};
 use crate::{Error, Result};
 use glam::{DMat4, DVec3};
@@ -51,65 +51,33 @@ pub(crate) struct GpuMesh {
 impl GpuMesh {
     fn new(gl: &glow::Context, object: &Object) -> Result<Self> {
         let label = |what: &str| format!("{} {what}", object.name);
-        let positions = Buffer::with_data(
-            gl,
-            &label("positions"),
-            glow::ARRAY_BUFFER,
-            bytemuck::cast_slice(&object.positions),
-            glow::STATIC_DRAW,
-        )?;
-        let normals = match Buffer::with_data(
-            gl,
-            &label("normals"),
-            glow::ARRAY_BUFFER,
-            bytemuck::cast_slice(&object.normals),
-            glow::STATIC_DRAW,
-        ) {
-            Ok(b) => b,
-            Err(e) => {
-                positions.destroy(gl);
-                return Err(e.into());
-            }
-        };
-        let uvs = match Buffer::with_data(
-            gl,
-            &label("uvs"),
-            glow::ARRAY_BUFFER,
-            bytemuck::cast_slice(&object.uvs),
-            glow::STATIC_DRAW,
-        ) {
-            Ok(b) => b,
-            Err(e) => {
-                positions.destroy(gl);
-                normals.destroy(gl);
-                return Err(e.into());
-            }
-        };
-        let indices = match Buffer::with_data(
-            gl,
-            &label("indices"),
-            glow::ELEMENT_ARRAY_BUFFER,
-            bytemuck::cast_slice(&object.indices),
-            glow::STATIC_DRAW,
-        ) {
-            Ok(b) => b,
-            Err(e) => {
-                positions.destroy(gl);
-                normals.destroy(gl);
-                uvs.destroy(gl);
-                return Err(e.into());
-            }
-        };
-        let vao = match VertexArray::new(gl, &label("vertex array")) {
-            Ok(v) => v,
-            Err(e) => {
-                positions.destroy(gl);
-                normals.destroy(gl);
-                uvs.destroy(gl);
-                indices.destroy(gl);
-                return Err(e.into());
-            }
-        };
+        let (positions, normals, uvs, indices, vao) = Made::build(gl, |made| {
+            let vertex_data = |what: &str, target, data: &[u8]| {
+                Buffer::with_data(gl, &label(what), target, data, glow::STATIC_DRAW)
+            };
+            let positions = made.keep(vertex_data(
+                "positions",
+                glow::ARRAY_BUFFER,
+                bytemuck::cast_slice(&object.positions),
+            )?);
+            let normals = made.keep(vertex_data(
+                "normals",
+                glow::ARRAY_BUFFER,
+                bytemuck::cast_slice(&object.normals),
+            )?);
+            let uvs = made.keep(vertex_data(
+                "uvs",
+                glow::ARRAY_BUFFER,
+                bytemuck::cast_slice(&object.uvs),
+            )?);
+            let indices = made.keep(vertex_data(
+                "indices",
+                glow::ELEMENT_ARRAY_BUFFER,
+                bytemuck::cast_slice(&object.indices),
+            )?);
+            let vao = made.keep(VertexArray::new(gl, &label("vertex array"))?);
+            Ok::<_, crate::Error>((positions, normals, uvs, indices, vao))
+        })?;
         unsafe {
             vao.bind(gl);
             gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(indices.raw()));
