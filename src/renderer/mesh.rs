@@ -1,7 +1,9 @@
 //! The scene on the GPU: one vertex array per object, the material textures,
 //! and the draw lists (G-buffer objects and forward transparent objects).
 
-use crate::gl::{Buffer, Format, Made, Program, Texture2d, VertexArray, check_error};
+use crate::gl::{
+    Buffer, Format, GlObject, Handle, Made, Program, Texture2d, VertexArray, check_error,
+};
 use crate::scene::{AlphaMode, Material, Object, Scene};
 use crate::{Error, Result};
 use glam::{DMat4, DVec3};
@@ -136,6 +138,16 @@ impl GpuMesh {
     }
 }
 
+impl GlObject for GpuMesh {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.vao.handles(out);
+        self.positions.handles(out);
+        self.normals.handles(out);
+        self.uvs.handles(out);
+        self.indices.handles(out);
+    }
+}
+
 /// One drawable: its mesh, model matrix and material.
 #[derive(Clone, Debug)]
 pub(crate) struct DrawItem {
@@ -237,26 +249,32 @@ fn upload_texture(
 impl GpuScene {
     /// Upload every object with triangles and every texture.
     pub(crate) fn new(gl: &glow::Context, scene: &Scene) -> Result<Self> {
-        let white = Texture2d::with_data(gl, "white texel", Format::Rgba8, 1, 1, Some(&[255; 4]))?;
-        let mut gpu = GpuScene {
-            meshes: Vec::new(),
-            textures: Vec::new(),
-            white,
-            gbuffer_items: Vec::new(),
-            transparent_items: Vec::new(),
-        };
-        match gpu.upload(gl, scene) {
-            Ok(()) => Ok(gpu),
-            Err(e) => {
-                gpu.destroy(gl);
-                Err(e)
-            }
-        }
+        Made::build(gl, |made| {
+            let white = made.keep(Texture2d::with_data(
+                gl,
+                "white texel",
+                Format::Rgba8,
+                1,
+                1,
+                Some(&[255; 4]),
+            )?);
+            let mut gpu = GpuScene {
+                meshes: Vec::new(),
+                textures: Vec::new(),
+                white,
+                gbuffer_items: Vec::new(),
+                transparent_items: Vec::new(),
+            };
+            gpu.upload(gl, scene, made)?;
+            Ok(gpu)
+        })
     }
 
-    fn upload(&mut self, gl: &glow::Context, scene: &Scene) -> Result<()> {
+    /// Upload into `self`, every object through `made` (freed by it on failure).
+    fn upload(&mut self, gl: &glow::Context, scene: &Scene, made: &mut Made) -> Result<()> {
         for (index, data) in scene.textures.iter().enumerate() {
-            self.textures.push(upload_texture(gl, index, data)?);
+            self.textures
+                .push(made.keep(upload_texture(gl, index, data)?));
         }
         for object in &scene.objects {
             if object.indices.len() < 3 || object.positions.is_empty() {
@@ -272,7 +290,7 @@ impl GpuScene {
                 )));
             }
             let mesh = self.meshes.len();
-            self.meshes.push(GpuMesh::new(gl, object)?);
+            self.meshes.push(made.keep(GpuMesh::new(gl, object)?));
             let material = scene.material_of(object);
             let item = DrawItem {
                 mesh,
@@ -331,6 +349,14 @@ impl GpuScene {
             texture.destroy(gl);
         }
         self.white.destroy(gl);
+    }
+}
+
+impl GlObject for GpuScene {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.meshes.handles(out);
+        self.textures.handles(out);
+        self.white.handles(out);
     }
 }
 

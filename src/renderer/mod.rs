@@ -90,8 +90,8 @@ use crate::frame::{DepthMode as ResolveDepthMode, Frame as ResolveFrame};
 use crate::gbuffer::{GBuffer, GBufferLayout, MemoryBudget};
 use crate::gl::ColorAttachment;
 use crate::gl::{
-    Attachment, Capabilities, Framebuffer, GpuTimer, Texture2d, TextureRef, TimerKind, VertexArray,
-    check_error, framebuffer_status_name,
+    Attachment, Capabilities, Framebuffer, GlObject, GpuTimer, Handle, Made, Texture2d, TextureRef,
+    TimerKind, VertexArray, check_error, framebuffer_status_name,
 };
 use crate::resolve::{KeySource, ResolveSettings, ResolveSlot, SelectionFlag};
 use crate::retrofit::{MsaaRetrofit, PositionSpace, RetrofitOptions};
@@ -476,84 +476,34 @@ struct Passes {
     timer: GpuTimer,
 }
 
+impl GlObject for Passes {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.background.handles(out);
+        self.background_copy.handles(out);
+        self.geometry.handles(out);
+        self.lighting.handles(out);
+        self.transparent.handles(out);
+        self.tonemap.handles(out);
+        self.fxaa.handles(out);
+        self.fullscreen.handles(out);
+        self.timer.handles(out);
+    }
+}
+
 impl Passes {
     fn new(gl: &glow::Context, slots: GBufferSlots) -> Result<Self> {
-        // On failure, free what was built so far.
-        macro_rules! step {
-            ($e:expr $(, $built:ident)*) => {
-                match $e {
-                    Ok(v) => v,
-                    Err(e) => {
-                        $( $built.destroy(gl); )*
-                        return Err(e.into());
-                    }
-                }
-            };
-        }
-        let background = BackgroundPass::new(gl)?;
-        let background_copy = step!(BackgroundCopyPass::new(gl), background);
-        let geometry = step!(GeometryPass::new(gl, slots), background, background_copy);
-        let lighting = step!(
-            LightingPass::new(gl, slots),
-            background,
-            background_copy,
-            geometry
-        );
-        let transparent = step!(
-            TransparentPass::new(gl),
-            background,
-            background_copy,
-            geometry,
-            lighting
-        );
-        let tonemap = step!(
-            TonemapPass::new(gl),
-            background,
-            background_copy,
-            geometry,
-            lighting,
-            transparent
-        );
-        let fxaa = step!(
-            FxaaPass::new(gl),
-            background,
-            background_copy,
-            geometry,
-            lighting,
-            transparent,
-            tonemap
-        );
-        let fullscreen = step!(
-            VertexArray::new(gl, "renderer full-screen triangle"),
-            background,
-            background_copy,
-            geometry,
-            lighting,
-            transparent,
-            tonemap,
-            fxaa
-        );
-        let timer = step!(
-            GpuTimer::new(gl, false),
-            background,
-            background_copy,
-            geometry,
-            lighting,
-            transparent,
-            tonemap,
-            fxaa,
-            fullscreen
-        );
-        Ok(Passes {
-            background,
-            background_copy,
-            geometry,
-            lighting,
-            transparent,
-            tonemap,
-            fxaa,
-            fullscreen,
-            timer,
+        Made::build(gl, |made| {
+            Ok(Passes {
+                background: made.keep(BackgroundPass::new(gl)?),
+                background_copy: made.keep(BackgroundCopyPass::new(gl)?),
+                geometry: made.keep(GeometryPass::new(gl, slots)?),
+                lighting: made.keep(LightingPass::new(gl, slots)?),
+                transparent: made.keep(TransparentPass::new(gl)?),
+                tonemap: made.keep(TonemapPass::new(gl)?),
+                fxaa: made.keep(FxaaPass::new(gl)?),
+                fullscreen: made.keep(VertexArray::new(gl, "renderer full-screen triangle")?),
+                timer: made.keep(GpuTimer::new(gl, false)?),
+            })
         })
     }
 
@@ -579,42 +529,43 @@ struct Frame {
     targets: Targets,
 }
 
+impl GlObject for Frame {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.gbuffer.handles(out);
+        self.retrofit.handles(out);
+        self.targets.handles(out);
+    }
+}
+
 impl Frame {
     fn new(
         gl: &glow::Context,
         options: &RenderOptions,
         opt_out_flag: Option<SelectionFlag>,
     ) -> Result<Self> {
-        let gbuffer = GBuffer::new(gl, &options.layout, options.width, options.height)?;
-        let retrofit = if options.aa.is_multisampled() {
-            match MsaaRetrofit::new(
+        Made::build(gl, |made| {
+            let gbuffer = made.keep(GBuffer::new(
                 gl,
-                gbuffer.fbo.raw(),
-                &options.retrofit_options(opt_out_flag),
-            ) {
-                Ok(r) => Some(r),
-                Err(e) => {
-                    gbuffer.destroy(gl);
-                    return Err(e.into());
-                }
-            }
-        } else {
-            None
-        };
-        match Targets::new(gl, &gbuffer.depth, options.fxaa) {
-            Ok(targets) => Ok(Frame {
+                &options.layout,
+                options.width,
+                options.height,
+            )?);
+            let retrofit = if options.aa.is_multisampled() {
+                Some(made.keep(MsaaRetrofit::new(
+                    gl,
+                    gbuffer.fbo.raw(),
+                    &options.retrofit_options(opt_out_flag),
+                )?))
+            } else {
+                None
+            };
+            let targets = made.keep(Targets::new(gl, &gbuffer.depth, options.fxaa)?);
+            Ok(Frame {
                 gbuffer,
                 retrofit,
                 targets,
-            }),
-            Err(e) => {
-                if let Some(r) = retrofit {
-                    r.destroy(gl);
-                }
-                gbuffer.destroy(gl);
-                Err(e)
-            }
-        }
+            })
+        })
     }
 
     fn destroy(self, gl: &glow::Context) {
@@ -634,23 +585,21 @@ fn allocate_gbuffer_textures(
     width: u32,
     height: u32,
 ) -> Result<(Vec<Texture2d>, Texture2d)> {
-    let mut colors = Vec::with_capacity(layout.colors.len());
-    for a in &layout.colors {
-        match Texture2d::new(gl, &format!("gbuffer {}", a.name), a.format, width, height) {
-            Ok(t) => colors.push(t),
-            Err(e) => {
-                free_textures(gl, colors, None);
-                return Err(e.into());
-            }
+    Made::build(gl, |made| {
+        let mut colors = Vec::with_capacity(layout.colors.len());
+        for a in &layout.colors {
+            let name = format!("gbuffer {}", a.name);
+            colors.push(made.keep(Texture2d::new(gl, &name, a.format, width, height)?));
         }
-    }
-    match Texture2d::new(gl, "gbuffer depth", layout.depth, width, height) {
-        Ok(depth) => Ok((colors, depth)),
-        Err(e) => {
-            free_textures(gl, colors, None);
-            Err(e.into())
-        }
-    }
+        let depth = made.keep(Texture2d::new(
+            gl,
+            "gbuffer depth",
+            layout.depth,
+            width,
+            height,
+        )?);
+        Ok((colors, depth))
+    })
 }
 
 fn free_textures(gl: &glow::Context, colors: Vec<Texture2d>, depth: Option<Texture2d>) {
@@ -808,33 +757,23 @@ impl Renderer {
         for w in &warnings {
             log::warn!("scene `{}` ({depth_mode} depth): {w}", scene.name);
         }
-        let passes = Passes::new(gl, slots)?;
-        let gpu_scene = match GpuScene::new(gl, scene) {
-            Ok(s) => s,
-            Err(e) => {
-                passes.destroy(gl);
-                return Err(e);
-            }
-        };
-        // Objects that opted out of anti-aliasing (`Object::antialias`, a
-        // glTF `extras` field) write 0 into `color.a`: the resolve reads it
-        // as its selective-AA flag unless the options name another.
-        let opt_out_flag = gpu_scene
-            .gbuffer_items
-            .iter()
-            .any(|i| !i.antialias)
-            .then_some(SelectionFlag {
-                attachment: ColorAttachment(slots.color),
-                component: 3,
-            });
-        let frame = match Frame::new(gl, options, opt_out_flag) {
-            Ok(f) => f,
-            Err(e) => {
-                passes.destroy(gl);
-                gpu_scene.destroy(gl);
-                return Err(e);
-            }
-        };
+        let (passes, gpu_scene, frame, opt_out_flag) = Made::build(gl, |made| {
+            let passes = made.keep(Passes::new(gl, slots)?);
+            let gpu_scene = made.keep(GpuScene::new(gl, scene)?);
+            // Objects that opted out of anti-aliasing (`Object::antialias`, a
+            // glTF `extras` field) write 0 into `color.a`: the resolve reads it
+            // as its selective-AA flag unless the options name another.
+            let opt_out_flag = gpu_scene
+                .gbuffer_items
+                .iter()
+                .any(|i| !i.antialias)
+                .then_some(SelectionFlag {
+                    attachment: ColorAttachment(slots.color),
+                    component: 3,
+                });
+            let frame = made.keep(Frame::new(gl, options, opt_out_flag)?);
+            Ok::<_, Error>((passes, gpu_scene, frame, opt_out_flag))
+        })?;
         let mut renderer = Renderer {
             opt_out_flag,
             options: options.clone(),
@@ -1268,33 +1207,21 @@ impl Renderer {
     /// program when the attachment numbers moved).
     fn rebuild_frame(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
         let slots = GBufferSlots::of(&options.layout)?;
-        let frame = Frame::new(gl, options, self.opt_out_flag)?;
-        let geometry = if slots != self.passes.geometry.slots() {
-            match GeometryPass::new(gl, slots) {
-                Ok(g) => Some(g),
-                Err(e) => {
-                    frame.destroy(gl);
-                    return Err(e);
-                }
-            }
-        } else {
-            None
-        };
-        // The lighting program follows the attachment set too.
-        let lighting = if slots != self.passes.lighting.slots() {
-            match LightingPass::new(gl, slots) {
-                Ok(l) => Some(l),
-                Err(e) => {
-                    frame.destroy(gl);
-                    if let Some(g) = geometry {
-                        g.destroy(gl);
-                    }
-                    return Err(e);
-                }
-            }
-        } else {
-            None
-        };
+        // The model and lighting programs follow the attachment set.
+        let (frame, geometry, lighting) = Made::build(gl, |made| {
+            let frame = made.keep(Frame::new(gl, options, self.opt_out_flag)?);
+            let geometry = if slots != self.passes.geometry.slots() {
+                Some(made.keep(GeometryPass::new(gl, slots)?))
+            } else {
+                None
+            };
+            let lighting = if slots != self.passes.lighting.slots() {
+                Some(made.keep(LightingPass::new(gl, slots)?))
+            } else {
+                None
+            };
+            Ok::<_, Error>((frame, geometry, lighting))
+        })?;
         std::mem::replace(&mut self.frame, frame).destroy(gl);
         if let Some(g) = geometry {
             std::mem::replace(&mut self.passes.geometry, g).destroy(gl);
@@ -1307,15 +1234,13 @@ impl Renderer {
 
     /// A new size with the same layout.
     fn resize(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
-        let (colors, depth) =
-            allocate_gbuffer_textures(gl, &options.layout, options.width, options.height)?;
-        let targets = match Targets::new(gl, &depth, options.fxaa) {
-            Ok(t) => t,
-            Err(e) => {
-                free_textures(gl, colors, Some(depth));
-                return Err(e);
-            }
-        };
+        let (colors, depth, targets) = Made::build(gl, |made| {
+            let (colors, depth) =
+                allocate_gbuffer_textures(gl, &options.layout, options.width, options.height)?;
+            let (colors, depth) = (made.keep(colors), made.keep(depth));
+            let targets = made.keep(Targets::new(gl, &depth, options.fxaa)?);
+            Ok::<_, Error>((colors, depth, targets))
+        })?;
         let gb = &mut self.frame.gbuffer;
         if let Err(e) = attach_gbuffer_textures(gl, &mut gb.fbo, &colors, &depth) {
             let _ = attach_gbuffer_textures(gl, &mut gb.fbo, &gb.colors, &gb.depth);

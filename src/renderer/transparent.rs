@@ -11,7 +11,7 @@ use super::mesh::{
 };
 use super::pass::bind_target;
 use crate::Result;
-use crate::gl::{Framebuffer, Program, ShaderSource, ShaderStage, check_error};
+use crate::gl::{Framebuffer, GlObject, Handle, Program, ShaderSource, ShaderStage, check_error};
 use glam::{DMat4, Mat4};
 use glow::HasContext;
 
@@ -113,5 +113,11 @@ impl TransparentPass {
     /// Free the program.
     pub(crate) fn destroy(self, gl: &glow::Context) {
         self.program.destroy(gl);
+    }
+}
+
+impl GlObject for TransparentPass {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.program.handles(out);
     }
 }
