@@ -214,36 +214,35 @@ fn upload_texture(
     } else {
         Format::Rgba8
     };
-    let texture = Texture2d::with_data(
-        gl,
-        &format!("scene texture {index}"),
-        format,
-        data.width,
-        data.height,
-        Some(&data.rgba8),
-    )?;
-    unsafe {
-        gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw()));
-        gl.generate_mipmap(glow::TEXTURE_2D);
-        gl.tex_parameter_i32(
-            glow::TEXTURE_2D,
-            glow::TEXTURE_MIN_FILTER,
-            glow::LINEAR_MIPMAP_LINEAR as i32,
-        );
-        gl.tex_parameter_i32(
-            glow::TEXTURE_2D,
-            glow::TEXTURE_MAG_FILTER,
-            glow::LINEAR as i32,
-        );
-        gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_S, glow::REPEAT as i32);
-        gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_T, glow::REPEAT as i32);
-        gl.bind_texture(glow::TEXTURE_2D, None);
-    }
-    if let Err(e) = check_error(gl, &format!("building mipmaps of scene texture {index}")) {
-        texture.destroy(gl);
-        return Err(e.into());
-    }
-    Ok(texture)
+    Made::build(gl, |made| {
+        let texture = made.keep(Texture2d::with_data(
+            gl,
+            &format!("scene texture {index}"),
+            format,
+            data.width,
+            data.height,
+            Some(&data.rgba8),
+        )?);
+        unsafe {
+            gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw()));
+            gl.generate_mipmap(glow::TEXTURE_2D);
+            gl.tex_parameter_i32(
+                glow::TEXTURE_2D,
+                glow::TEXTURE_MIN_FILTER,
+                glow::LINEAR_MIPMAP_LINEAR as i32,
+            );
+            gl.tex_parameter_i32(
+                glow::TEXTURE_2D,
+                glow::TEXTURE_MAG_FILTER,
+                glow::LINEAR as i32,
+            );
+            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_S, glow::REPEAT as i32);
+            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_T, glow::REPEAT as i32);
+            gl.bind_texture(glow::TEXTURE_2D, None);
+        }
+        check_error(gl, &format!("building mipmaps of scene texture {index}"))?;
+        Ok(texture)
+    })
 }
 
 impl GpuScene {
