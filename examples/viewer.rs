@@ -40,10 +40,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use deferred_msaa_lab::gl::Capabilities;
+use deferred_msaa_lab::gl::{Capabilities, ShaderSource};
 use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
 use deferred_msaa_lab::resolve::{
-    DepthProjection, KeySource, ResolveMethod, ResolveSettings, ResolveSlot,
+    COMPLEX_GLSL, COMPLEX_GLSL_NAME, DepthProjection, KeySource, ResolveMethod, ResolveSettings,
+    ResolveSlot,
 };
 use deferred_msaa_lab::scene::{Aabb, Camera, Scene};
 use glam::Vec3;
@@ -923,7 +924,7 @@ void main() {
 "#;
 
 /// One texel of the chosen texture per window pixel, made readable.
-const PRESENT_FRAG: &str = r#"#version 150 core
+const PRESENT_FRAG: &str = r#"
 uniform sampler2D u_image;
 uniform vec2 u_window;
 uniform int u_mode;       // 0 as is, 1 linear colour, 2 position, 3 normal, 4 HDR, 5 depth
@@ -967,8 +968,9 @@ void main() {
 "#;
 
 /// The final image in grey, with the pixels whose samples differ in their
-/// depth key in orange: where the resolve has work to do.
-const COMPLEX_FRAG: &str = r#"#version 150 core
+/// depth key in orange: where the resolve has work to do. It follows
+/// `complex.glsl` ([`COMPLEX_GLSL`]), composed in front of it.
+const COMPLEX_FRAG: &str = r#"
 uniform sampler2D u_image;
 uniform sampler2DMS u_key;
 uniform int u_samples;
@@ -987,7 +989,9 @@ void main() {
     bool complex = false;
     float first = key(p, 0);
     for (int i = 1; i < u_samples; ++i) {
-        complex = complex || key(p, i) != first;
+        // No depth samples here to tell background by (with a position key),
+        // so every sample counts as geometry: the view stays as it was.
+        complex = complex || !dmsaa_same_surface(false, key(p, i), false, first);
     }
     vec3 c = texelFetch(u_image, p, 0).rgb;
     float grey = dot(c, vec3(0.299, 0.587, 0.114)) * 0.7;
@@ -1003,8 +1007,12 @@ struct Presenter {
 
 impl Presenter {
     fn new(gl: &glow::Context) -> AnyResult<Presenter> {
-        let view = build_program(gl, PRESENT_VERT, PRESENT_FRAG)?;
-        let complex = match build_program(gl, PRESENT_VERT, COMPLEX_FRAG) {
+        let present = ShaderSource::new().part("viewer present.frag", PRESENT_FRAG);
+        let view = build_program(gl, PRESENT_VERT, &present)?;
+        let complex_source = ShaderSource::new()
+            .part(COMPLEX_GLSL_NAME, COMPLEX_GLSL)
+            .part("viewer complex.frag", COMPLEX_FRAG);
+        let complex = match build_program(gl, PRESENT_VERT, &complex_source) {
             Ok(p) => p,
             Err(e) => {
                 unsafe { gl.delete_program(view) };
@@ -1135,13 +1143,18 @@ impl Presenter {
     }
 }
 
-fn build_program(gl: &glow::Context, vertex: &str, fragment: &str) -> AnyResult<glow::Program> {
+fn build_program(
+    gl: &glow::Context,
+    vertex: &str,
+    fragment: &ShaderSource,
+) -> AnyResult<glow::Program> {
+    let fragment_text = fragment.text();
     unsafe {
         let program = gl.create_program()?;
         let mut shaders = Vec::new();
         for (stage, source) in [
             (glow::VERTEX_SHADER, vertex),
-            (glow::FRAGMENT_SHADER, fragment),
+            (glow::FRAGMENT_SHADER, fragment_text.as_str()),
         ] {
             let shader = gl.create_shader(stage)?;
             gl.shader_source(shader, source);
@@ -1153,7 +1166,13 @@ fn build_program(gl: &glow::Context, vertex: &str, fragment: &str) -> AnyResult<
                     gl.delete_shader(s);
                 }
                 gl.delete_program(program);
-                return Err(format!("viewer shader: {}", log.trim()).into());
+                // The fragment stage's parts: name the file and line.
+                let located = if stage == glow::FRAGMENT_SHADER {
+                    fragment.explain(&log)
+                } else {
+                    String::new()
+                };
+                return Err(format!("viewer shader: {}\n{located}", log.trim()).into());
             }
             gl.attach_shader(program, shader);
             shaders.push(shader);

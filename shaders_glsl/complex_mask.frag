@@ -5,11 +5,12 @@
 // A pixel is complex when
 //   - COVERAGE: a sample's coverage flag (geometry_coverage.frag) is set: a
 //     triangle edge crosses the pixel;
-//   - some samples are background and others are not (background samples
-//     have position.w = 0: the G-buffer pass clears it to 0 and geometry.frag
-//     writes 1, so no depth fetch is needed);
-//   - a sample's depth differs from sample 0's by more than
-//     u_depth_tolerance pixel footprints (distance x u_footprint);
+//   - complex.glsl's dmsaa_same_surface_within fails for a sample: some
+//     samples are background and others are not, or a sample's depth
+//     differs from sample 0's by more than u_depth_tolerance pixel
+//     footprints (distance x u_footprint). Background is position.w = 0 (the
+//     G-buffer pass clears it to 0 and geometry.frag writes 1), not the
+//     resolve's clear depth: the pass reads no depth, and kept its masks;
 //   - a sample's normal is more than acos(u_normal_cos) away from sample 0's;
 //   - a sample's base colour differs from sample 0's by more than
 //     u_color_tolerance in a channel.
@@ -50,15 +51,14 @@ bool is_complex(ivec2 pixel) {
     for (int i = 1; i < u_samples; ++i) {
         vec4 p = texelFetch(u_position, pixel, i);
         bool background = p.w == 0.0;
-        if (background != background0) {
+        float z = -p.z;
+        // complex.glsl's test, with a depth tolerance (see there).
+        if (!dmsaa_same_surface_within(background, z, background0, z0,
+                                       u_depth_tolerance * u_footprint)) {
             return true;
         }
         if (background) {
             continue;
-        }
-        float z = -p.z;
-        if (abs(z - z0) > u_depth_tolerance * u_footprint * max(min(z, z0), 0.0)) {
-            return true;
         }
         if (dot(unit_normal(texelFetch(u_normal, pixel, i).xyz), n0) < u_normal_cos) {
             return true;

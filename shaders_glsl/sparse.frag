@@ -40,14 +40,14 @@ uniform vec4 u_region;         // rect: x0, y0, x1, y1; ellipse: centre x, y, 1/
                                // (window pixels: resolve::Region::window_uniform)
 
 // Whether the pixel whose centre is at `frag` (gl_FragCoord.xy) is in the
-// anti-aliased region; outside it every pixel shows its sample 0.
+// anti-aliased region; outside it every pixel shows its sample 0. The test
+// is the resolve's (complex.glsl, composed in front of this file).
 bool sparse_in_region(vec2 frag) {
     if (u_region_kind == SPARSE_REGION_RECT) {
-        return all(greaterThanEqual(frag, u_region.xy)) && all(lessThan(frag, u_region.zw));
+        return !dmsaa_outside_rect(frag, u_region);
     }
     if (u_region_kind == SPARSE_REGION_ELLIPSE) {
-        vec2 d = (frag - u_region.xy) * u_region.zw;
-        return dot(d, d) <= 1.0;
+        return !dmsaa_outside_ellipse(frag, u_region);
     }
     return true;
 }

@@ -66,7 +66,7 @@ void main() {
     model_main();
 
     uint p = sparse_pixel(ivec2(gl_FragCoord.xy));
-    bool antialiased = u_object_antialias != 0 && -o_position.z <= u_max_depth;
+    bool antialiased = u_object_antialias != 0 && dmsaa_within_depth(false, -o_position.z, u_max_depth);
     if (!antialiased) {
         atomicOr(heads[2u * p + 1u], SPARSE_SINGLE);
     }

@@ -4,7 +4,7 @@
 use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
 use super::targets::ColorTarget;
 use crate::Result;
-use crate::gl::{Program, VertexArray, check_error};
+use crate::gl::{GlObject, Handle, Program, VertexArray, check_error};
 use crate::scene::Background;
 use glam::{DMat3, DMat4, Mat4};
 
@@ -77,5 +77,11 @@ impl BackgroundPass {
     /// Free the program.
     pub(crate) fn destroy(self, gl: &glow::Context) {
         self.program.destroy(gl);
+    }
+}
+
+impl GlObject for BackgroundPass {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.program.handles(out);
     }
 }

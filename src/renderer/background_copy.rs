@@ -5,7 +5,7 @@
 
 use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
 use crate::Result;
-use crate::gl::{Program, Texture2d, VertexArray, check_error};
+use crate::gl::{GlObject, Handle, Program, Texture2d, VertexArray, check_error};
 use glow::HasContext;
 
 /// The copy shader's body.
@@ -80,5 +80,11 @@ impl BackgroundCopyPass {
     /// Free the program.
     pub(crate) fn destroy(self, gl: &glow::Context) {
         self.program.destroy(gl);
+    }
+}
+
+impl GlObject for BackgroundCopyPass {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.program.handles(out);
     }
 }

@@ -8,8 +8,8 @@
 
 use super::lighting_per_sample::SampleInputs;
 use super::pass::{bind_target, draw_fullscreen, fullscreen_state};
-use crate::gl::FULLSCREEN_VERT;
-use crate::gl::{Program, ShaderStage, TextureRef, VertexArray, check_error, preamble};
+use crate::gl::{FullscreenPass, Program, ShaderSource, TextureRef, VertexArray, check_error};
+use crate::resolve::{COMPLEX_GLSL, COMPLEX_GLSL_NAME};
 use crate::{Error, Result};
 use glow::HasContext;
 
@@ -57,24 +57,17 @@ impl ComplexMaskPass {
         } else {
             Vec::new()
         };
-        let program = Program::build(
-            gl,
-            if coverage {
-                "complex-pixel mask (coverage + discontinuities)"
-            } else {
-                "complex-pixel mask (discontinuities)"
-            },
-            &preamble(&[], &defines),
-            &[
-                (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
-                (
-                    ShaderStage::Fragment,
-                    "complex_mask.frag",
-                    COMPLEX_MASK_FRAG,
-                ),
-            ],
-            &[],
-        )?;
+        let fragment = ShaderSource::new()
+            .defines(&defines)
+            .part(COMPLEX_GLSL_NAME, COMPLEX_GLSL)
+            .part("complex_mask.frag", COMPLEX_MASK_FRAG);
+        let label = if coverage {
+            "complex-pixel mask (coverage + discontinuities)"
+        } else {
+            "complex-pixel mask (discontinuities)"
+        };
+        // The pass keeps its own draw code (stencil writes, no colour).
+        let program = FullscreenPass::new(gl, label, &fragment, &[])?.into_program();
         Ok(ComplexMaskPass { program, coverage })
     }
 

@@ -20,14 +20,14 @@
 
 use super::GBufferSlots;
 use super::gbaa_geometry::{GbaaGeometryPass, NO_EDGE, edge_defines};
-use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
+use super::pass::{bind_target, draw_fullscreen, fullscreen_state};
 use super::targets::ColorTarget;
 use super::tonemap::TONEMAP_FRAG;
 use crate::Result;
 use crate::gbuffer::GBuffer;
 use crate::gl::{
-    Attachment, Capabilities, Format, Framebuffer, Program, Texture2d, TextureRef, VertexArray,
-    check_error,
+    Attachment, Capabilities, Format, Framebuffer, FullscreenPass, Made, Program, ShaderSource,
+    Texture2d, TextureRef, VertexArray, check_error,
 };
 use glow::HasContext;
 
@@ -96,27 +96,17 @@ impl GbaaPasses {
     }
 
     fn new(gl: &glow::Context, slots: GBufferSlots, edge_slot: u32) -> Result<Self> {
-        let geometry = GbaaGeometryPass::new(gl, slots, edge_slot)?;
-        let post = match Self::post_program(gl, false) {
-            Ok(p) => p,
-            Err(e) => {
-                geometry.destroy(gl);
-                return Err(e);
-            }
-        };
-        match Self::post_program(gl, true) {
-            Ok(show_edges) => Ok(GbaaPasses {
+        Made::build(gl, |made| {
+            let geometry = made.keep(GbaaGeometryPass::new(gl, slots, edge_slot)?);
+            let post = made.keep(Self::post_program(gl, false)?);
+            let show_edges = made.keep(Self::post_program(gl, true)?);
+            Ok(GbaaPasses {
                 geometry,
                 edge_slot,
                 post,
                 show_edges,
-            }),
-            Err(e) => {
-                geometry.destroy(gl);
-                post.destroy(gl);
-                Err(e)
-            }
-        }
+            })
+        })
     }
 
     /// `tonemap.frag`'s functions (for `srgb_encode`), then `gbaa.frag`.
@@ -128,16 +118,12 @@ impl GbaaPasses {
             defines.push(("GBAA_SHOW_EDGES".into(), "1".into()));
         }
 
-        let body = format!("{TONEMAP_FRAG}\n#line 0 1\n{GBAA_FRAG}");
+        let fragment = ShaderSource::new()
+            .defines(&defines)
+            .part("tonemap.frag", TONEMAP_FRAG)
+            .part("gbaa.frag", GBAA_FRAG);
         let label = if show_edges { "gbaa edges" } else { "gbaa" };
-        fullscreen_program(
-            gl,
-            label,
-            "tonemap.frag + gbaa.frag",
-            &body,
-            &defines,
-            "o_color",
-        )
+        Ok(FullscreenPass::new(gl, label, &fragment, &[("o_color", 0)])?.into_program())
     }
 
     /// The G-buffer pass's program.
@@ -212,36 +198,28 @@ impl GbaaTargets {
     pub(crate) fn new(gl: &glow::Context, gbuffer: &GBuffer) -> Result<Self> {
         let (w, h) = (gbuffer.width, gbuffer.height);
         let colors = gbuffer.colors.len() as u32;
-        let edge = Texture2d::new(gl, "gbaa edge", EDGE_FORMAT, w, h)?;
-        let far = match Texture2d::new(gl, "gbaa far side", FAR_FORMAT, w, h) {
-            Ok(t) => t,
-            Err(e) => {
-                edge.destroy(gl);
-                return Err(e.into());
-            }
-        };
-        let mut attachments = gbuffer.fbo.attachments.clone();
-        attachments.push((Attachment::Color(colors), TextureRef::from(&edge)));
-        attachments.push((Attachment::Color(colors + 1), TextureRef::from(&far)));
-        let draw_buffers: Vec<Option<u32>> = (0..colors + 2).map(Some).collect();
-        let fbo =
-            match Framebuffer::new(gl, "G-buffer with gbaa edges", &attachments, &draw_buffers) {
-                Ok(f) => f,
-                Err(e) => {
-                    edge.destroy(gl);
-                    far.destroy(gl);
-                    return Err(e.into());
-                }
-            };
-        let tonemapped = match ColorTarget::new(gl, "gbaa tonemapped", Format::Srgb8Alpha8, w, h) {
-            Ok(t) => t,
-            Err(e) => {
-                fbo.destroy(gl);
-                edge.destroy(gl);
-                far.destroy(gl);
-                return Err(e);
-            }
-        };
+        let (edge, far, fbo, draw_buffers, tonemapped) = Made::build(gl, |made| {
+            let edge = made.keep(Texture2d::new(gl, "gbaa edge", EDGE_FORMAT, w, h)?);
+            let far = made.keep(Texture2d::new(gl, "gbaa far side", FAR_FORMAT, w, h)?);
+            let mut attachments = gbuffer.fbo.attachments.clone();
+            attachments.push((Attachment::Color(colors), TextureRef::from(&edge)));
+            attachments.push((Attachment::Color(colors + 1), TextureRef::from(&far)));
+            let draw_buffers: Vec<Option<u32>> = (0..colors + 2).map(Some).collect();
+            let fbo = made.keep(Framebuffer::new(
+                gl,
+                "G-buffer with gbaa edges",
+                &attachments,
+                &draw_buffers,
+            )?);
+            let tonemapped = made.keep(ColorTarget::new(
+                gl,
+                "gbaa tonemapped",
+                Format::Srgb8Alpha8,
+                w,
+                h,
+            )?);
+            Ok::<_, crate::Error>((edge, far, fbo, draw_buffers, tonemapped))
+        })?;
         tonemapped.texture.set_filter(gl, glow::LINEAR);
         Ok(GbaaTargets {
             edge,

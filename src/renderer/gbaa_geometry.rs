@@ -9,10 +9,11 @@
 //! the floor.
 
 use super::GBufferSlots;
-use super::geometry::{GEOMETRY_FRAG, GEOMETRY_VERT, GeometryTarget, ModelDraw, draw_models};
+use super::geometry::{GEOMETRY_VERT, GeometryTarget, ModelDraw, draw_models};
 use super::mesh::{AttribLocations, GpuScene};
+use super::pass::model_wrapped;
 use crate::Result;
-use crate::gl::{Program, ShaderStage, check_error, preamble};
+use crate::gl::{GlObject, Handle, Program, ShaderSource, ShaderStage, check_error};
 use glam::{DMat4, Mat4};
 
 /// The geometry stage's body.
@@ -58,22 +59,25 @@ impl GbaaGeometryPass {
         outputs.extend([("o_edge", edge_slot), ("o_edge_far", edge_slot + 1)]);
         let mut defines = edge_defines();
         defines.extend(slots.defines());
-        let program = Program::build(
+        let header = ShaderSource::new().defines(&defines);
+        // geometry.vert's outputs renamed to the geometry stage's inputs.
+        let vertex = header
+            .clone()
+            .define("v_position", "vert_position")
+            .define("v_normal", "vert_normal")
+            .define("v_uv", "vert_uv")
+            .part("geometry.vert", GEOMETRY_VERT);
+        let geometry = header
+            .clone()
+            .part("gbaa_geometry.geom", GBAA_GEOMETRY_GEOM);
+        let fragment = model_wrapped(header, &[("gbaa_geometry.frag", GBAA_GEOMETRY_FRAG)]);
+        let program = Program::from_sources(
             gl,
             "geometry + gbaa edges",
-            &preamble(&[], &defines),
             &[
-                (ShaderStage::Vertex, "geometry.vert", &Self::vertex_body()),
-                (
-                    ShaderStage::Geometry,
-                    "gbaa_geometry.geom",
-                    GBAA_GEOMETRY_GEOM,
-                ),
-                (
-                    ShaderStage::Fragment,
-                    "geometry.frag + gbaa_geometry.frag",
-                    &Self::fragment_body(),
-                ),
+                (ShaderStage::Vertex, &vertex),
+                (ShaderStage::Geometry, &geometry),
+                (ShaderStage::Fragment, &fragment),
             ],
             &outputs,
         )?;
@@ -83,21 +87,6 @@ impl GbaaGeometryPass {
             slots,
             locations,
         })
-    }
-
-    /// `geometry.vert` with its outputs renamed to the geometry stage's inputs.
-    fn vertex_body() -> String {
-        format!(
-            "#define v_position vert_position\n#define v_normal vert_normal\n#define v_uv vert_uv\n#line 0\n{GEOMETRY_VERT}"
-        )
-    }
-
-    /// `geometry.frag` with `main` renamed to `model_main`, then the wrapper.
-    /// `#line 0` keeps the driver's line numbers on each file's own.
-    fn fragment_body() -> String {
-        format!(
-            "#define main model_main\n#line 0\n{GEOMETRY_FRAG}\n#undef main\n#line 0 1\n{GBAA_GEOMETRY_FRAG}"
-        )
     }
 
     /// The attachment numbers the model outputs are bound to.
@@ -143,5 +132,11 @@ impl GbaaGeometryPass {
     /// Free the program.
     pub(crate) fn destroy(self, gl: &glow::Context) {
         self.program.destroy(gl);
+    }
+}
+
+impl GlObject for GbaaGeometryPass {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.program.handles(out);
     }
 }

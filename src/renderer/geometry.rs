@@ -9,7 +9,7 @@ use super::mesh::{
 };
 use super::pass::bind_target;
 use crate::Result;
-use crate::gl::{Program, ShaderSource, ShaderStage, check_error};
+use crate::gl::{GlObject, Handle, Program, ShaderSource, ShaderStage, check_error};
 use glam::{DMat4, Mat4};
 use glow::HasContext;
 
@@ -172,6 +172,12 @@ impl GeometryPass {
     /// Free the program.
     pub(crate) fn destroy(self, gl: &glow::Context) {
         self.program.destroy(gl);
+    }
+}
+
+impl GlObject for GeometryPass {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.program.handles(out);
     }
 }
 

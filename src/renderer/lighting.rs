@@ -7,7 +7,7 @@ use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_s
 use super::targets::ColorTarget;
 use crate::Result;
 use crate::gbuffer::GBuffer;
-use crate::gl::{Program, ShaderSource, Texture2d, VertexArray, check_error};
+use crate::gl::{GlObject, Handle, Program, ShaderSource, Texture2d, VertexArray, check_error};
 use crate::scene::{Light, LightKind};
 use glam::DMat4;
 use glow::HasContext;
@@ -264,5 +264,11 @@ impl LightingPass {
     /// Free the program.
     pub(crate) fn destroy(self, gl: &glow::Context) {
         self.program.destroy(gl);
+    }
+}
+
+impl GlObject for LightingPass {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.program.handles(out);
     }
 }

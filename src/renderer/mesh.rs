@@ -1,7 +1,9 @@
 //! The scene on the GPU: one vertex array per object, the material textures,
 //! and the draw lists (G-buffer objects and forward transparent objects).
 
-use crate::gl::{Buffer, Format, Program, Texture2d, VertexArray, check_error};
+use crate::gl::{
+    Buffer, Format, GlObject, Handle, Made, Program, Texture2d, VertexArray, check_error,
+};
 use crate::scene::{AlphaMode, Material, Object, Scene};
 use crate::{Error, Result};
 use glam::{DMat4, DVec3};
@@ -51,65 +53,33 @@ pub(crate) struct GpuMesh {
 impl GpuMesh {
     fn new(gl: &glow::Context, object: &Object) -> Result<Self> {
         let label = |what: &str| format!("{} {what}", object.name);
-        let positions = Buffer::with_data(
-            gl,
-            &label("positions"),
-            glow::ARRAY_BUFFER,
-            bytemuck::cast_slice(&object.positions),
-            glow::STATIC_DRAW,
-        )?;
-        let normals = match Buffer::with_data(
-            gl,
-            &label("normals"),
-            glow::ARRAY_BUFFER,
-            bytemuck::cast_slice(&object.normals),
-            glow::STATIC_DRAW,
-        ) {
-            Ok(b) => b,
-            Err(e) => {
-                positions.destroy(gl);
-                return Err(e.into());
-            }
-        };
-        let uvs = match Buffer::with_data(
-            gl,
-            &label("uvs"),
-            glow::ARRAY_BUFFER,
-            bytemuck::cast_slice(&object.uvs),
-            glow::STATIC_DRAW,
-        ) {
-            Ok(b) => b,
-            Err(e) => {
-                positions.destroy(gl);
-                normals.destroy(gl);
-                return Err(e.into());
-            }
-        };
-        let indices = match Buffer::with_data(
-            gl,
-            &label("indices"),
-            glow::ELEMENT_ARRAY_BUFFER,
-            bytemuck::cast_slice(&object.indices),
-            glow::STATIC_DRAW,
-        ) {
-            Ok(b) => b,
-            Err(e) => {
-                positions.destroy(gl);
-                normals.destroy(gl);
-                uvs.destroy(gl);
-                return Err(e.into());
-            }
-        };
-        let vao = match VertexArray::new(gl, &label("vertex array")) {
-            Ok(v) => v,
-            Err(e) => {
-                positions.destroy(gl);
-                normals.destroy(gl);
-                uvs.destroy(gl);
-                indices.destroy(gl);
-                return Err(e.into());
-            }
-        };
+        let (positions, normals, uvs, indices, vao) = Made::build(gl, |made| {
+            let vertex_data = |what: &str, target, data: &[u8]| {
+                Buffer::with_data(gl, &label(what), target, data, glow::STATIC_DRAW)
+            };
+            let positions = made.keep(vertex_data(
+                "positions",
+                glow::ARRAY_BUFFER,
+                bytemuck::cast_slice(&object.positions),
+            )?);
+            let normals = made.keep(vertex_data(
+                "normals",
+                glow::ARRAY_BUFFER,
+                bytemuck::cast_slice(&object.normals),
+            )?);
+            let uvs = made.keep(vertex_data(
+                "uvs",
+                glow::ARRAY_BUFFER,
+                bytemuck::cast_slice(&object.uvs),
+            )?);
+            let indices = made.keep(vertex_data(
+                "indices",
+                glow::ELEMENT_ARRAY_BUFFER,
+                bytemuck::cast_slice(&object.indices),
+            )?);
+            let vao = made.keep(VertexArray::new(gl, &label("vertex array"))?);
+            Ok::<_, crate::Error>((positions, normals, uvs, indices, vao))
+        })?;
         unsafe {
             vao.bind(gl);
             gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(indices.raw()));
@@ -165,6 +135,16 @@ impl GpuMesh {
         self.normals.destroy(gl);
         self.uvs.destroy(gl);
         self.indices.destroy(gl);
+    }
+}
+
+impl GlObject for GpuMesh {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.vao.handles(out);
+        self.positions.handles(out);
+        self.normals.handles(out);
+        self.uvs.handles(out);
+        self.indices.handles(out);
     }
 }
 
@@ -234,61 +214,66 @@ fn upload_texture(
     } else {
         Format::Rgba8
     };
-    let texture = Texture2d::with_data(
-        gl,
-        &format!("scene texture {index}"),
-        format,
-        data.width,
-        data.height,
-        Some(&data.rgba8),
-    )?;
-    unsafe {
-        gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw()));
-        gl.generate_mipmap(glow::TEXTURE_2D);
-        gl.tex_parameter_i32(
-            glow::TEXTURE_2D,
-            glow::TEXTURE_MIN_FILTER,
-            glow::LINEAR_MIPMAP_LINEAR as i32,
-        );
-        gl.tex_parameter_i32(
-            glow::TEXTURE_2D,
-            glow::TEXTURE_MAG_FILTER,
-            glow::LINEAR as i32,
-        );
-        gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_S, glow::REPEAT as i32);
-        gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_T, glow::REPEAT as i32);
-        gl.bind_texture(glow::TEXTURE_2D, None);
-    }
-    if let Err(e) = check_error(gl, &format!("building mipmaps of scene texture {index}")) {
-        texture.destroy(gl);
-        return Err(e.into());
-    }
-    Ok(texture)
+    Made::build(gl, |made| {
+        let texture = made.keep(Texture2d::with_data(
+            gl,
+            &format!("scene texture {index}"),
+            format,
+            data.width,
+            data.height,
+            Some(&data.rgba8),
+        )?);
+        unsafe {
+            gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw()));
+            gl.generate_mipmap(glow::TEXTURE_2D);
+            gl.tex_parameter_i32(
+                glow::TEXTURE_2D,
+                glow::TEXTURE_MIN_FILTER,
+                glow::LINEAR_MIPMAP_LINEAR as i32,
+            );
+            gl.tex_parameter_i32(
+                glow::TEXTURE_2D,
+                glow::TEXTURE_MAG_FILTER,
+                glow::LINEAR as i32,
+            );
+            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_S, glow::REPEAT as i32);
+            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_T, glow::REPEAT as i32);
+            gl.bind_texture(glow::TEXTURE_2D, None);
+        }
+        check_error(gl, &format!("building mipmaps of scene texture {index}"))?;
+        Ok(texture)
+    })
 }
 
 impl GpuScene {
     /// Upload every object with triangles and every texture.
     pub(crate) fn new(gl: &glow::Context, scene: &Scene) -> Result<Self> {
-        let white = Texture2d::with_data(gl, "white texel", Format::Rgba8, 1, 1, Some(&[255; 4]))?;
-        let mut gpu = GpuScene {
-            meshes: Vec::new(),
-            textures: Vec::new(),
-            white,
-            gbuffer_items: Vec::new(),
-            transparent_items: Vec::new(),
-        };
-        match gpu.upload(gl, scene) {
-            Ok(()) => Ok(gpu),
-            Err(e) => {
-                gpu.destroy(gl);
-                Err(e)
-            }
-        }
+        Made::build(gl, |made| {
+            let white = made.keep(Texture2d::with_data(
+                gl,
+                "white texel",
+                Format::Rgba8,
+                1,
+                1,
+                Some(&[255; 4]),
+            )?);
+            let mut gpu = GpuScene {
+                meshes: Vec::new(),
+                textures: Vec::new(),
+                white,
+                gbuffer_items: Vec::new(),
+                transparent_items: Vec::new(),
+            };
+            gpu.upload(gl, scene, made)?;
+            Ok(gpu)
+        })
     }
 
-    fn upload(&mut self, gl: &glow::Context, scene: &Scene) -> Result<()> {
+    /// Upload into `self`, every object through `made` (freed by it on failure).
+    fn upload(&mut self, gl: &glow::Context, scene: &Scene, made: &mut Made) -> Result<()> {
         for (index, data) in scene.textures.iter().enumerate() {
-            self.textures.push(upload_texture(gl, index, data)?);
+            self.textures
+                .push(made.keep(upload_texture(gl, index, data)?));
         }
         for object in &scene.objects {
             if object.indices.len() < 3 || object.positions.is_empty() {
@@ -304,7 +289,7 @@ impl GpuScene {
                 )));
             }
             let mesh = self.meshes.len();
-            self.meshes.push(GpuMesh::new(gl, object)?);
+            self.meshes.push(made.keep(GpuMesh::new(gl, object)?));
             let material = scene.material_of(object);
             let item = DrawItem {
                 mesh,
@@ -363,6 +348,14 @@ impl GpuScene {
             texture.destroy(gl);
         }
         self.white.destroy(gl);
+    }
+}
+
+impl GlObject for GpuScene {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.meshes.handles(out);
+        self.textures.handles(out);
+        self.white.handles(out);
     }
 }
 

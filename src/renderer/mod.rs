@@ -77,6 +77,7 @@ mod geometry_coverage;
 mod lighting;
 mod lighting_per_sample;
 mod mesh;
+mod options;
 mod pass;
 pub mod plan;
 mod slow_path;
@@ -87,14 +88,14 @@ mod tonemap;
 mod transparent;
 
 use crate::frame::{DepthMode as ResolveDepthMode, Frame as ResolveFrame};
-use crate::gbuffer::{GBuffer, GBufferLayout, MemoryBudget};
+use crate::gbuffer::{GBuffer, GBufferLayout};
 use crate::gl::ColorAttachment;
 use crate::gl::{
-    Attachment, Capabilities, Framebuffer, GpuTimer, Texture2d, TextureRef, TimerKind, VertexArray,
-    check_error, framebuffer_status_name,
+    Attachment, Capabilities, Framebuffer, GlObject, GpuTimer, Handle, Made, Texture2d, TextureRef,
+    TimerKind, VertexArray, check_error, framebuffer_status_name,
 };
-use crate::resolve::{KeySource, ResolveSettings, ResolveSlot, SelectionFlag};
-use crate::retrofit::{MsaaRetrofit, PositionSpace, RetrofitOptions};
+use crate::resolve::SelectionFlag;
+use crate::retrofit::MsaaRetrofit;
 use crate::scene::{Background, Camera, Light, Scene};
 use crate::{Error, Result};
 use background::BackgroundPass;
@@ -108,6 +109,7 @@ use glow::HasContext;
 use lighting::{LightingPass, StandIns, light_batches};
 use lighting_per_sample::PerSampleLightingPass;
 use mesh::GpuScene;
+pub use options::{AaMode, RenderOptions};
 use plan::{Pass, Plan, PlanContext, SceneNeeds};
 pub use sparse::{
     DEFAULT_POOL_BLOCKS_PER_PIXEL, MASK_OVERFLOW, MASK_SINGLE, MAX_SPARSE_SAMPLES, SparseMemory,
@@ -124,247 +126,6 @@ use transparent::TransparentPass;
 pub mod shaders {
     pub use super::geometry::{GEOMETRY_FRAG, GEOMETRY_VERT};
     pub use super::lighting::{AMBIENT, LIGHTING_FRAG, LIGHTS_PER_BATCH, lighting_defines};
-}
-
-/// How the frame is anti-aliased.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum AaMode {
-    /// No multisampling: the G-buffer pass draws into the single-sample
-    /// G-buffer (method `none`).
-    None,
-    /// The G-buffer pass draws into the retrofit's multisampled twin, which
-    /// the depth-aware resolve writes back into the G-buffer; lighting is
-    /// per pixel (methods `average`, `front`, `median`, `back`).
-    Resolve(ResolveSettings),
-    /// Per-sample lighting (method `per-sample`), the reference quality of
-    /// MSAA deferred lighting at N× the lighting cost: the multisampled
-    /// G-buffer is not resolved for lighting; the lighting pass lights every
-    /// sample of the twins (`texelFetch(sampler2DMS, p, i)`) with every
-    /// light and averages the lit results after the tonemap curve (then
-    /// maps the average back to HDR), so the tonemapped pixel is the box
-    /// filter of its tonemapped samples, as in a supersampled image; a
-    /// pixel whose samples all have one radiance keeps it exactly. (A plain
-    /// HDR average lets a bright sample wash out the others: thin dark wires
-    /// vanish against an HDR sky.) With more than 256 lights the pass draws
-    /// once per 256 and the average is linear in HDR.
-    ///
-    /// The G-buffer is still resolved (the default median resolve) for the
-    /// decal hook and for the depth test of transparent objects, but the lit
-    /// image does not read it, so decals written into it are not lit.
-    PerSample,
-    /// Per-sample lighting on complex pixels only (method `complex`):
-    /// complex pixels are marked in a stencil mask — a triangle edge crosses
-    /// the pixel (the coverage mask `gl_SampleMaskIn` recorded by the
-    /// G-buffer pass, where the context has it), or its samples differ in
-    /// background, depth, normal or base colour (triangles that intersect,
-    /// which coverage misses; the whole test without `gl_SampleMaskIn`).
-    /// Two stencil-masked passes of the per-sample lighting program then
-    /// light simple pixels once, from sample 0, and complex pixels per
-    /// sample exactly as [`AaMode::PerSample`] does, so the image matches
-    /// it wherever the detection is right. The G-buffer is resolved as with
-    /// [`AaMode::PerSample`] (decals are not lit either). See
-    /// [`technique::Complex::fraction`] and [`technique::Complex::read_mask`].
-    Complex,
-    /// Geometry-buffer anti-aliasing (method `gbaa`, after Persson's GBAA,
-    /// with fixes for converging edges): no multisampling. The G-buffer
-    /// pass runs the unchanged model shaders through a geometry stage that
-    /// also writes, per pixel, the distance to its triangle's nearest edge
-    /// along x or y (`RG16F`) and to the triangle's far side (`R16F`);
-    /// after the tonemap a post pass blends each pixel an edge crosses with
-    /// the neighbour beyond it by the covered fraction, in linear light, in
-    /// one bilinear fetch (two where a triangle thinner than a pixel puts
-    /// both of its sides in the pixel), and leaves two pixels their own
-    /// colours when their edges point at each other across a gap (a thin
-    /// triangle between their centres). See [`technique::Gbaa::edge_textures`]
-    /// and [`technique::Gbaa::read_edges`].
-    Gbaa,
-    /// The multisampled G-buffer without its redundancy (method `sparse`):
-    /// a multisampled depth pre-pass, then one G-buffer block per pixel and
-    /// visible triangle, with the count of samples it covers, in per-pixel
-    /// linked lists in shader storage buffers; lighting shades each block
-    /// once and averages the blocks by their counts as
-    /// [`AaMode::PerSample`] averages samples. Needs shader storage buffers,
-    /// atomic counters and post-depth coverage; selective anti-aliasing by
-    /// screen region, depth and object flag comes with it; no multisampled
-    /// twins. See [`SparseOptions`] for how it works and what it needs,
-    /// [`technique::Sparse::allocated`] and [`technique::Sparse::stats`].
-    Sparse(SparseOptions),
-}
-
-impl AaMode {
-    /// `none`, the resolve method's name (`average`, `front`, `median`,
-    /// `back`), `per-sample`, `complex`, `gbaa` or `sparse`: the name a
-    /// bench method entry starts with.
-    pub fn name(&self) -> &'static str {
-        match self {
-            AaMode::None => "none",
-            AaMode::Resolve(s) => s.method.name(),
-            AaMode::PerSample => "per-sample",
-            AaMode::Complex => "complex",
-            AaMode::Gbaa => "gbaa",
-            AaMode::Sparse(_) => "sparse",
-        }
-    }
-
-    /// The settings of the G-buffer's resolve, when multisampling: those
-    /// given with [`AaMode::Resolve`]; the default (median, smooth) for
-    /// [`AaMode::PerSample`] and [`AaMode::Complex`], whose resolved
-    /// G-buffer serves decals and transparent objects.
-    pub fn settings(&self) -> Option<ResolveSettings> {
-        match self {
-            AaMode::None | AaMode::Gbaa | AaMode::Sparse(_) => None,
-            AaMode::Resolve(s) => Some(*s),
-            AaMode::PerSample | AaMode::Complex => Some(ResolveSettings::default()),
-        }
-    }
-
-    /// The technique that renders the method: its name, or `resolve` for
-    /// the four resolve methods. Methods of one technique can share a
-    /// renderer: switching between them changes nothing on the GPU.
-    pub fn technique_name(&self) -> &'static str {
-        match self {
-            AaMode::Resolve(_) => "resolve",
-            other => other.name(),
-        }
-    }
-
-    /// Whether the method renders more than one sample per pixel, so that
-    /// [`RenderOptions::samples`] applies: into the multisampled twins, or
-    /// into [`AaMode::Sparse`]'s pre-pass.
-    pub fn takes_samples(&self) -> bool {
-        self.is_multisampled() || matches!(self, AaMode::Sparse(_))
-    }
-
-    /// Whether the G-buffer pass draws into the multisampled twins.
-    pub fn is_multisampled(&self) -> bool {
-        !matches!(self, AaMode::None | AaMode::Gbaa | AaMode::Sparse(_))
-    }
-
-    /// Whether the lighting pass lights samples of the multisampled
-    /// G-buffer ([`AaMode::PerSample`], [`AaMode::Complex`]) rather than
-    /// the resolved pixels.
-    pub fn lights_per_sample(&self) -> bool {
-        matches!(self, AaMode::PerSample | AaMode::Complex)
-    }
-}
-
-/// What to render at which size and how.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderOptions {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Requested samples per pixel when multisampling (the driver's real
-    /// count is used; see [`Renderer::samples`]). Ignored with [`AaMode::None`].
-    pub samples: u32,
-    /// Anti-aliasing of the G-buffer.
-    pub aa: AaMode,
-    /// Run the FXAA-style post filter after tonemapping.
-    pub fxaa: bool,
-    /// The full G-buffer layout. It must have colour attachments named
-    /// `color`, `position` and `normal`, and `specular` and `emissive`
-    /// unless the scene does without them (in any order; others are allowed
-    /// and left cleared). Default: [`GBufferLayout::recommended`].
-    pub layout: GBufferLayout,
-    /// Build the G-buffer from the scene-adaptive [`Plan`]: `layout` less
-    /// what the scene does not need (see [`plan`];
-    /// [`Renderer::layout`] is what it became). `false`: `layout` as given.
-    /// Default: `true`.
-    pub adaptive: bool,
-    /// The memory safety valve: the G-buffer's bytes are estimated before
-    /// allocating and, over this budget, the sample count steps down with a
-    /// warning ([`Renderer::warnings`]) or, when strict, the renderer
-    /// refuses with [`Error::MemoryBudget`](deferred_msaa::Error::MemoryBudget). Default: half the free video
-    /// memory the driver reports, else 1 GiB, not strict.
-    pub memory_budget: MemoryBudget,
-    /// Standard depth or reversed-Z. Default: [`DepthMode::Auto`] (reversed-Z
-    /// where the context and the layout's depth format allow it); see
-    /// [`Renderer::depth_mode`] for what it became.
-    pub depth_mode: DepthMode,
-}
-
-impl Default for RenderOptions {
-    /// 640×360, 4x MSAA with the default (median, smooth) resolve, no FXAA,
-    /// the recommended layout adapted to the scene, the default memory
-    /// budget, [`DepthMode::Auto`].
-    fn default() -> Self {
-        RenderOptions {
-            width: 640,
-            height: 360,
-            samples: 4,
-            aa: AaMode::Resolve(ResolveSettings::default()),
-            fxaa: false,
-            layout: GBufferLayout::recommended(),
-            adaptive: true,
-            memory_budget: MemoryBudget::default(),
-            depth_mode: DepthMode::Auto,
-        }
-    }
-}
-
-impl RenderOptions {
-    /// Check sizes, sample count, resolve settings and the layout.
-    pub fn validate(&self) -> Result<()> {
-        if self.width == 0 || self.height == 0 {
-            return Err(Error::invalid(format!(
-                "the image size must be at least 1x1, got {}x{}",
-                self.width, self.height
-            )));
-        }
-        if let Some(settings) = self.aa.settings() {
-            if self.samples == 0 {
-                return Err(Error::invalid(
-                    "a sample count of 0 is not a count; use 1 or more (or the `none` method)",
-                ));
-            }
-            settings.validate()?;
-        }
-        if let AaMode::Sparse(sparse) = &self.aa {
-            if self.samples == 0 {
-                return Err(Error::invalid(
-                    "a sample count of 0 is not a count; use 1 or more (or the `none` method)",
-                ));
-            }
-            sparse.validate(self.samples)?;
-        }
-        self.layout.validate()?;
-        GBufferSlots::of(&self.layout).map(|_| ())
-    }
-
-    /// The retrofit options for this layout, sample count and method: each
-    /// attachment's rule, the position attachment as the depth key, and
-    /// the resolve's settings, with `opt_out_flag` as the selective-AA flag
-    /// unless the settings name one.
-    fn retrofit_options(&self, opt_out_flag: Option<SelectionFlag>) -> RetrofitOptions {
-        let mut resolve = self.aa.settings().unwrap_or_default();
-        if resolve.selection.flag.is_none() {
-            resolve.selection.flag = opt_out_flag;
-        }
-        let (position_attachment, position_space) = match self.layout.key {
-            KeySource::Position(ResolveSlot(k)) => {
-                (Some(ColorAttachment(k as u32)), PositionSpace::View)
-            }
-            KeySource::WorldPosition(ResolveSlot(k)) => {
-                (Some(ColorAttachment(k as u32)), PositionSpace::World)
-            }
-            KeySource::Depth => (None, PositionSpace::View),
-        };
-        RetrofitOptions {
-            samples: self.samples,
-            rules: self
-                .layout
-                .colors
-                .iter()
-                .enumerate()
-                .map(|(k, a)| (ColorAttachment(k as u32), a.rule))
-                .collect(),
-            position_attachment,
-            position_space,
-            resolve,
-            ..RetrofitOptions::default()
-        }
-    }
 }
 
 /// The colour attachment numbers of the attachments the renderer writes.
@@ -476,84 +237,34 @@ struct Passes {
     timer: GpuTimer,
 }
 
+impl GlObject for Passes {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.background.handles(out);
+        self.background_copy.handles(out);
+        self.geometry.handles(out);
+        self.lighting.handles(out);
+        self.transparent.handles(out);
+        self.tonemap.handles(out);
+        self.fxaa.handles(out);
+        self.fullscreen.handles(out);
+        self.timer.handles(out);
+    }
+}
+
 impl Passes {
     fn new(gl: &glow::Context, slots: GBufferSlots) -> Result<Self> {
-        // On failure, free what was built so far.
-        macro_rules! step {
-            ($e:expr $(, $built:ident)*) => {
-                match $e {
-                    Ok(v) => v,
-                    Err(e) => {
-                        $( $built.destroy(gl); )*
-                        return Err(e.into());
-                    }
-                }
-            };
-        }
-        let background = BackgroundPass::new(gl)?;
-        let background_copy = step!(BackgroundCopyPass::new(gl), background);
-        let geometry = step!(GeometryPass::new(gl, slots), background, background_copy);
-        let lighting = step!(
-            LightingPass::new(gl, slots),
-            background,
-            background_copy,
-            geometry
-        );
-        let transparent = step!(
-            TransparentPass::new(gl),
-            background,
-            background_copy,
-            geometry,
-            lighting
-        );
-        let tonemap = step!(
-            TonemapPass::new(gl),
-            background,
-            background_copy,
-            geometry,
-            lighting,
-            transparent
-        );
-        let fxaa = step!(
-            FxaaPass::new(gl),
-            background,
-            background_copy,
-            geometry,
-            lighting,
-            transparent,
-            tonemap
-        );
-        let fullscreen = step!(
-            VertexArray::new(gl, "renderer full-screen triangle"),
-            background,
-            background_copy,
-            geometry,
-            lighting,
-            transparent,
-            tonemap,
-            fxaa
-        );
-        let timer = step!(
-            GpuTimer::new(gl, false),
-            background,
-            background_copy,
-            geometry,
-            lighting,
-            transparent,
-            tonemap,
-            fxaa,
-            fullscreen
-        );
-        Ok(Passes {
-            background,
-            background_copy,
-            geometry,
-            lighting,
-            transparent,
-            tonemap,
-            fxaa,
-            fullscreen,
-            timer,
+        Made::build(gl, |made| {
+            Ok(Passes {
+                background: made.keep(BackgroundPass::new(gl)?),
+                background_copy: made.keep(BackgroundCopyPass::new(gl)?),
+                geometry: made.keep(GeometryPass::new(gl, slots)?),
+                lighting: made.keep(LightingPass::new(gl, slots)?),
+                transparent: made.keep(TransparentPass::new(gl)?),
+                tonemap: made.keep(TonemapPass::new(gl)?),
+                fxaa: made.keep(FxaaPass::new(gl)?),
+                fullscreen: made.keep(VertexArray::new(gl, "renderer full-screen triangle")?),
+                timer: made.keep(GpuTimer::new(gl, false)?),
+            })
         })
     }
 
@@ -579,42 +290,43 @@ struct Frame {
     targets: Targets,
 }
 
+impl GlObject for Frame {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.gbuffer.handles(out);
+        self.retrofit.handles(out);
+        self.targets.handles(out);
+    }
+}
+
 impl Frame {
     fn new(
         gl: &glow::Context,
         options: &RenderOptions,
         opt_out_flag: Option<SelectionFlag>,
     ) -> Result<Self> {
-        let gbuffer = GBuffer::new(gl, &options.layout, options.width, options.height)?;
-        let retrofit = if options.aa.is_multisampled() {
-            match MsaaRetrofit::new(
+        Made::build(gl, |made| {
+            let gbuffer = made.keep(GBuffer::new(
                 gl,
-                gbuffer.fbo.raw(),
-                &options.retrofit_options(opt_out_flag),
-            ) {
-                Ok(r) => Some(r),
-                Err(e) => {
-                    gbuffer.destroy(gl);
-                    return Err(e.into());
-                }
-            }
-        } else {
-            None
-        };
-        match Targets::new(gl, &gbuffer.depth, options.fxaa) {
-            Ok(targets) => Ok(Frame {
+                &options.layout,
+                options.width,
+                options.height,
+            )?);
+            let retrofit = if options.aa.is_multisampled() {
+                Some(made.keep(MsaaRetrofit::new(
+                    gl,
+                    gbuffer.fbo.raw(),
+                    &options.retrofit_options(opt_out_flag),
+                )?))
+            } else {
+                None
+            };
+            let targets = made.keep(Targets::new(gl, &gbuffer.depth, options.fxaa)?);
+            Ok(Frame {
                 gbuffer,
                 retrofit,
                 targets,
-            }),
-            Err(e) => {
-                if let Some(r) = retrofit {
-                    r.destroy(gl);
-                }
-                gbuffer.destroy(gl);
-                Err(e)
-            }
-        }
+            })
+        })
     }
 
     fn destroy(self, gl: &glow::Context) {
@@ -634,23 +346,21 @@ fn allocate_gbuffer_textures(
     width: u32,
     height: u32,
 ) -> Result<(Vec<Texture2d>, Texture2d)> {
-    let mut colors = Vec::with_capacity(layout.colors.len());
-    for a in &layout.colors {
-        match Texture2d::new(gl, &format!("gbuffer {}", a.name), a.format, width, height) {
-            Ok(t) => colors.push(t),
-            Err(e) => {
-                free_textures(gl, colors, None);
-                return Err(e.into());
-            }
+    Made::build(gl, |made| {
+        let mut colors = Vec::with_capacity(layout.colors.len());
+        for a in &layout.colors {
+            let name = format!("gbuffer {}", a.name);
+            colors.push(made.keep(Texture2d::new(gl, &name, a.format, width, height)?));
         }
-    }
-    match Texture2d::new(gl, "gbuffer depth", layout.depth, width, height) {
-        Ok(depth) => Ok((colors, depth)),
-        Err(e) => {
-            free_textures(gl, colors, None);
-            Err(e.into())
-        }
-    }
+        let depth = made.keep(Texture2d::new(
+            gl,
+            "gbuffer depth",
+            layout.depth,
+            width,
+            height,
+        )?);
+        Ok((colors, depth))
+    })
 }
 
 fn free_textures(gl: &glow::Context, colors: Vec<Texture2d>, depth: Option<Texture2d>) {
@@ -808,33 +518,23 @@ impl Renderer {
         for w in &warnings {
             log::warn!("scene `{}` ({depth_mode} depth): {w}", scene.name);
         }
-        let passes = Passes::new(gl, slots)?;
-        let gpu_scene = match GpuScene::new(gl, scene) {
-            Ok(s) => s,
-            Err(e) => {
-                passes.destroy(gl);
-                return Err(e);
-            }
-        };
-        // Objects that opted out of anti-aliasing (`Object::antialias`, a
-        // glTF `extras` field) write 0 into `color.a`: the resolve reads it
-        // as its selective-AA flag unless the options name another.
-        let opt_out_flag = gpu_scene
-            .gbuffer_items
-            .iter()
-            .any(|i| !i.antialias)
-            .then_some(SelectionFlag {
-                attachment: ColorAttachment(slots.color),
-                component: 3,
-            });
-        let frame = match Frame::new(gl, options, opt_out_flag) {
-            Ok(f) => f,
-            Err(e) => {
-                passes.destroy(gl);
-                gpu_scene.destroy(gl);
-                return Err(e);
-            }
-        };
+        let (passes, gpu_scene, frame, opt_out_flag) = Made::build(gl, |made| {
+            let passes = made.keep(Passes::new(gl, slots)?);
+            let gpu_scene = made.keep(GpuScene::new(gl, scene)?);
+            // Objects that opted out of anti-aliasing (`Object::antialias`, a
+            // glTF `extras` field) write 0 into `color.a`: the resolve reads it
+            // as its selective-AA flag unless the options name another.
+            let opt_out_flag = gpu_scene
+                .gbuffer_items
+                .iter()
+                .any(|i| !i.antialias)
+                .then_some(SelectionFlag {
+                    attachment: ColorAttachment(slots.color),
+                    component: 3,
+                });
+            let frame = made.keep(Frame::new(gl, options, opt_out_flag)?);
+            Ok::<_, Error>((passes, gpu_scene, frame, opt_out_flag))
+        })?;
         let mut renderer = Renderer {
             opt_out_flag,
             options: options.clone(),
@@ -1268,33 +968,21 @@ impl Renderer {
     /// program when the attachment numbers moved).
     fn rebuild_frame(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
         let slots = GBufferSlots::of(&options.layout)?;
-        let frame = Frame::new(gl, options, self.opt_out_flag)?;
-        let geometry = if slots != self.passes.geometry.slots() {
-            match GeometryPass::new(gl, slots) {
-                Ok(g) => Some(g),
-                Err(e) => {
-                    frame.destroy(gl);
-                    return Err(e);
-                }
-            }
-        } else {
-            None
-        };
-        // The lighting program follows the attachment set too.
-        let lighting = if slots != self.passes.lighting.slots() {
-            match LightingPass::new(gl, slots) {
-                Ok(l) => Some(l),
-                Err(e) => {
-                    frame.destroy(gl);
-                    if let Some(g) = geometry {
-                        g.destroy(gl);
-                    }
-                    return Err(e);
-                }
-            }
-        } else {
-            None
-        };
+        // The model and lighting programs follow the attachment set.
+        let (frame, geometry, lighting) = Made::build(gl, |made| {
+            let frame = made.keep(Frame::new(gl, options, self.opt_out_flag)?);
+            let geometry = if slots != self.passes.geometry.slots() {
+                Some(made.keep(GeometryPass::new(gl, slots)?))
+            } else {
+                None
+            };
+            let lighting = if slots != self.passes.lighting.slots() {
+                Some(made.keep(LightingPass::new(gl, slots)?))
+            } else {
+                None
+            };
+            Ok::<_, Error>((frame, geometry, lighting))
+        })?;
         std::mem::replace(&mut self.frame, frame).destroy(gl);
         if let Some(g) = geometry {
             std::mem::replace(&mut self.passes.geometry, g).destroy(gl);
@@ -1307,15 +995,13 @@ impl Renderer {
 
     /// A new size with the same layout.
     fn resize(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
-        let (colors, depth) =
-            allocate_gbuffer_textures(gl, &options.layout, options.width, options.height)?;
-        let targets = match Targets::new(gl, &depth, options.fxaa) {
-            Ok(t) => t,
-            Err(e) => {
-                free_textures(gl, colors, Some(depth));
-                return Err(e);
-            }
-        };
+        let (colors, depth, targets) = Made::build(gl, |made| {
+            let (colors, depth) =
+                allocate_gbuffer_textures(gl, &options.layout, options.width, options.height)?;
+            let (colors, depth) = (made.keep(colors), made.keep(depth));
+            let targets = made.keep(Targets::new(gl, &depth, options.fxaa)?);
+            Ok::<_, Error>((colors, depth, targets))
+        })?;
         let gb = &mut self.frame.gbuffer;
         if let Err(e) = attach_gbuffer_textures(gl, &mut gb.fbo, &colors, &depth) {
             let _ = attach_gbuffer_textures(gl, &mut gb.fbo, &gb.colors, &gb.depth);

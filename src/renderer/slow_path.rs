@@ -5,7 +5,7 @@
 //! the frame made it.
 
 use crate::frame::Frame as ResolveFrame;
-use crate::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef};
+use crate::gl::{Attachment, Format, Framebuffer, Made, Texture2d, TextureRef};
 use crate::retrofit::MsaaRetrofit;
 use crate::{Error, Result};
 use glow::HasContext;
@@ -20,24 +20,21 @@ pub(crate) fn slow_path_mask(
     frame: &ResolveFrame,
 ) -> Result<image::GrayImage> {
     let (w, h) = retrofit.host().size();
-    let mask = Texture2d::new(gl, "slow-path mask", Format::R8, w, h)?;
     let colors = retrofit.host().colors.len();
     // Draw buffer k (resolved attachment k) goes nowhere; the mask output,
     // draw buffer `colors`, into the mask.
     let mut draw: Vec<Option<u32>> = vec![None; colors];
     draw.push(Some(0));
-    let fbo = match Framebuffer::new(
-        gl,
-        "slow-path mask",
-        &[(Attachment::Color(0), TextureRef::from(&mask))],
-        &draw,
-    ) {
-        Ok(f) => f,
-        Err(e) => {
-            mask.destroy(gl);
-            return Err(e.into());
-        }
-    };
+    let (mask, fbo) = Made::build(gl, |made| {
+        let mask = made.keep(Texture2d::new(gl, "slow-path mask", Format::R8, w, h)?);
+        let fbo = made.keep(Framebuffer::new(
+            gl,
+            "slow-path mask",
+            &[(Attachment::Color(0), TextureRef::from(&mask))],
+            &draw,
+        )?);
+        Ok::<_, Error>((mask, fbo))
+    })?;
     let result = (|| {
         // Pixels a resolve variant never draws count as fast.
         unsafe {

@@ -522,7 +522,8 @@ impl Renderer {
 
     /// The fragment shader of [`AaMode::Sparse`]'s lighting pass exactly as
     /// compiled: `lighting.frag` (with `LIGHTING_FUNCTIONS_ONLY`),
-    /// `tonemap.frag`'s curve, `sparse.frag`, then `sparse_lighting.frag`.
+    /// `tonemap.frag`'s curve, `complex.glsl` (the resolve's selection test),
+    /// `sparse.frag`, then `sparse_lighting.frag`.
     pub fn sparse_lighting_program_source(&self) -> String {
         SparseLightingPass::source()
     }

@@ -11,14 +11,16 @@
 use super::sparse_targets::SparseTargets;
 use super::{EXTENSIONS, SPARSE_FRAG, apply_region};
 use crate::Result;
-use crate::gl::FULLSCREEN_VERT;
-use crate::gl::{Program, ShaderStage, TextureRef, VertexArray, check_error, preamble};
-use crate::renderer::geometry::{GEOMETRY_FRAG, GEOMETRY_VERT};
+use crate::gl::{
+    FullscreenPass, GlObject, Handle, Made, Program, ShaderSource, ShaderStage, TextureRef,
+    VertexArray, check_error,
+};
+use crate::renderer::geometry::GEOMETRY_VERT;
 use crate::renderer::mesh::{
     AttribLocations, BASE_TEXTURE_UNIT, EMISSIVE_TEXTURE_UNIT, GpuScene, set_culling,
 };
-use crate::renderer::pass::{bind_target, draw_fullscreen, fullscreen_state};
-use crate::resolve::Region;
+use crate::renderer::pass::{bind_target, draw_fullscreen, fullscreen_state, model_wrapped};
+use crate::resolve::{COMPLEX_GLSL, COMPLEX_GLSL_NAME, Region};
 use glam::{DMat4, Mat4};
 use glow::HasContext;
 
@@ -38,19 +40,16 @@ struct ModelProgram {
 }
 
 impl ModelProgram {
-    fn build(
-        gl: &glow::Context,
-        label: &str,
-        extensions: &[&str],
-        (frag_name, frag_body): (&str, &str),
-    ) -> Result<Self> {
-        let program = Program::build(
+    /// `geometry.vert` and `fragment`, the vertex stage with the fragment
+    /// stage's header.
+    fn build(gl: &glow::Context, label: &str, fragment: &ShaderSource) -> Result<Self> {
+        let vertex = fragment.header_only().part("geometry.vert", GEOMETRY_VERT);
+        let program = Program::from_sources(
             gl,
             label,
-            &preamble(extensions, &[]),
             &[
-                (ShaderStage::Vertex, "geometry.vert", GEOMETRY_VERT),
-                (ShaderStage::Fragment, frag_name, frag_body),
+                (ShaderStage::Vertex, &vertex),
+                (ShaderStage::Fragment, fragment),
             ],
             // geometry.frag's outputs: the framebuffer has no colour
             // attachment, so what they get is dropped.
@@ -64,6 +63,12 @@ impl ModelProgram {
         )?;
         let locations = AttribLocations::of(gl, &program);
         Ok(ModelProgram { program, locations })
+    }
+}
+
+impl GlObject for ModelProgram {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.program.handles(out);
     }
 }
 
@@ -95,52 +100,34 @@ pub(crate) struct SparseBuildPasses {
 impl SparseBuildPasses {
     /// Build the programs (the caller has checked the extensions).
     pub(crate) fn new(gl: &glow::Context) -> Result<Self> {
-        let depth = ModelProgram::build(
-            gl,
-            "sparse depth pre-pass",
-            &[],
-            ("sparse_depth.frag", SPARSE_DEPTH_FRAG),
-        )?;
-        let setup = match Program::build(
-            gl,
-            "sparse set-up",
-            &preamble(EXTENSIONS, &[]),
-            &[
-                (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
-                (
-                    ShaderStage::Fragment,
-                    "sparse.frag + sparse_setup.frag",
-                    &format!("{SPARSE_FRAG}\n#line 0 1\n{SPARSE_SETUP_FRAG}"),
-                ),
-            ],
-            &[],
-        ) {
-            Ok(p) => p,
-            Err(e) => {
-                depth.program.destroy(gl);
-                return Err(e.into());
-            }
-        };
-        let body = format!(
-            "#define main model_main\n#line 0\n{GEOMETRY_FRAG}\n#undef main\n#line 0 1\n{SPARSE_FRAG}\n#line 0 2\n{SPARSE_GEOMETRY_FRAG}"
-        );
-        let geometry = match ModelProgram::build(
-            gl,
-            "sparse geometry",
-            EXTENSIONS,
-            ("geometry.frag + sparse.frag + sparse_geometry.frag", &body),
-        ) {
-            Ok(p) => p,
-            Err(e) => {
-                depth.program.destroy(gl);
-                setup.destroy(gl);
-                return Err(e);
-            }
-        };
-        Ok(SparseBuildPasses {
-            depth,
-            setup,
-            geometry,
+        Made::build(gl, |made| {
+            let depth = made.keep(ModelProgram::build(
+                gl,
+                "sparse depth pre-pass",
+                &ShaderSource::new().part("sparse_depth.frag", SPARSE_DEPTH_FRAG),
+            )?);
+            let setup = ShaderSource::new()
+                .extensions(EXTENSIONS)
+                .part(COMPLEX_GLSL_NAME, COMPLEX_GLSL)
+                .part("sparse.frag", SPARSE_FRAG)
+                .part("sparse_setup.frag", SPARSE_SETUP_FRAG);
+            let setup = made
+                .keep(FullscreenPass::new(gl, "sparse set-up", &setup, &[])?)
+                .into_program();
+            let geometry = model_wrapped(
+                ShaderSource::new().extensions(EXTENSIONS),
+                &[
+                    (COMPLEX_GLSL_NAME, COMPLEX_GLSL),
+                    ("sparse.frag", SPARSE_FRAG),
+                    ("sparse_geometry.frag", SPARSE_GEOMETRY_FRAG),
+                ],
+            );
+            let geometry = made.keep(ModelProgram::build(gl, "sparse geometry", &geometry)?);
+            Ok(SparseBuildPasses {
+                depth,
+                setup,
+                geometry,
+            })
         })
     }
 

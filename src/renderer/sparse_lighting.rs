@@ -7,13 +7,12 @@
 use super::sparse_targets::SparseTargets;
 use super::{EXTENSIONS, SPARSE_FRAG, apply_region};
 use crate::Result;
-use crate::gl::FULLSCREEN_VERT;
-use crate::gl::{Program, ShaderStage, Texture2d, VertexArray, check_error, preamble};
+use crate::gl::{FullscreenPass, Made, Program, ShaderSource, Texture2d, VertexArray, check_error};
 use crate::renderer::lighting::{AMBIENT, LIGHTING_FRAG, LightBatch, set_batch_blend};
 use crate::renderer::lighting_per_sample::{LIGHTS_PER_DRAW, LightBlock};
 use crate::renderer::pass::{LightTarget, draw_fullscreen};
 use crate::renderer::tonemap::{EXPOSURE, TONEMAP_FRAG, WHITE};
-use crate::resolve::Region;
+use crate::resolve::{COMPLEX_GLSL, COMPLEX_GLSL_NAME, Region};
 use glam::Mat4;
 use glow::HasContext;
 
@@ -46,28 +45,14 @@ pub(crate) struct SparseLightingPass {
 impl SparseLightingPass {
     /// Build the program and the light block's buffer.
     pub(crate) fn new(gl: &glow::Context) -> Result<Self> {
-        let program = Program::build(
-            gl,
-            "sparse lighting",
-            &preamble(EXTENSIONS, &Self::defines()),
-            &[
-                (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
-                (
-                    ShaderStage::Fragment,
-                    "lighting.frag + tonemap.frag + sparse.frag + sparse_lighting.frag",
-                    &Self::body(),
-                ),
-            ],
-            &[("o_color", 0)],
-        )?;
-        let lights = match LightBlock::new(gl, &program, "sparse lighting") {
-            Ok(b) => b,
-            Err(e) => {
-                program.destroy(gl);
-                return Err(e);
-            }
-        };
-        Ok(SparseLightingPass { program, lights })
+        Made::build(gl, |made| {
+            let program = made.keep(
+                FullscreenPass::new(gl, "sparse lighting", &Self::fragment(), &[("o_color", 0)])?
+                    .into_program(),
+            );
+            let lights = LightBlock::new(gl, &program, "sparse lighting")?;
+            Ok(SparseLightingPass { program, lights })
+        })
     }
 
     fn defines() -> Vec<(String, String)> {
@@ -80,17 +65,22 @@ impl SparseLightingPass {
         ]
     }
 
-    /// `lighting.frag`'s shared part, `tonemap.frag`'s, `sparse.frag`, then
-    /// this pass's `main()`; `#line 0 k`: driver messages name source string k.
-    fn body() -> String {
-        format!(
-            "{LIGHTING_FRAG}\n#line 0 1\n{TONEMAP_FRAG}\n#line 0 2\n{SPARSE_FRAG}\n#line 0 3\n{SPARSE_LIGHTING_FRAG}"
-        )
+    /// `lighting.frag`'s shared part, `tonemap.frag`'s, `complex.glsl`,
+    /// `sparse.frag`, then this pass's `main()`, each numbered as its own file.
+    fn fragment() -> ShaderSource {
+        ShaderSource::new()
+            .extensions(EXTENSIONS)
+            .defines(&Self::defines())
+            .part("lighting.frag", LIGHTING_FRAG)
+            .part("tonemap.frag", TONEMAP_FRAG)
+            .part(COMPLEX_GLSL_NAME, COMPLEX_GLSL)
+            .part("sparse.frag", SPARSE_FRAG)
+            .part("sparse_lighting.frag", SPARSE_LIGHTING_FRAG)
     }
 
-    /// The fragment shader's full source as compiled.
+    /// The fragment shader's full source as compiled: header, defines, parts.
     pub(crate) fn source() -> String {
-        format!("{}{}", preamble(EXTENSIONS, &Self::defines()), Self::body())
+        Self::fragment().text()
     }
 
     /// Light the lists of `targets` into `target` with all of `batches`'

@@ -6,7 +6,7 @@
 
 use super::SparseMemory;
 use crate::gl::{
-    Attachment, Buffer, Format, Framebuffer, Texture2dMultisample, TextureRef, check_error,
+    Attachment, Buffer, Format, Framebuffer, Made, Texture2dMultisample, TextureRef, check_error,
 };
 use crate::{Error, Result};
 use glow::HasContext;
@@ -105,57 +105,41 @@ impl SparseTargets {
         let (heads_bytes, first_bytes, pool_bytes) =
             (size(sizes[0].1)?, size(sizes[1].1)?, size(sizes[2].1)?);
 
-        let depth = Texture2dMultisample::new(
-            gl,
-            "sparse pre-pass depth",
-            key.format,
-            key.width,
-            key.height,
-            key.samples,
-        )?;
-        let fbo = match Framebuffer::new(
-            gl,
-            "sparse pre-pass",
-            &[(Attachment::DepthStencil, TextureRef::from(&depth))],
-            &[],
-        ) {
-            Ok(f) => f,
-            Err(e) => {
-                depth.destroy(gl);
-                return Err(e.into());
-            }
-        };
-        // Each buffer in turn; on failure, free what was made before it.
-        let mut made: Vec<Buffer> = Vec::with_capacity(4);
-        let allocated = (|| -> Result<()> {
-            for (label, bytes) in [
-                ("sparse heads", heads_bytes),
-                ("sparse first blocks", first_bytes),
-                ("sparse block pool", pool_bytes),
-            ] {
-                made.push(Buffer::with_size(
+        Made::build(gl, |made| {
+            let depth = made.keep(Texture2dMultisample::new(
+                gl,
+                "sparse pre-pass depth",
+                key.format,
+                key.width,
+                key.height,
+                key.samples,
+            )?);
+            let fbo = made.keep(Framebuffer::new(
+                gl,
+                "sparse pre-pass",
+                &[(Attachment::DepthStencil, TextureRef::from(&depth))],
+                &[],
+            )?);
+            let storage = |label: &str, bytes| {
+                Buffer::with_size(
                     gl,
                     label,
                     glow::SHADER_STORAGE_BUFFER,
                     bytes,
                     glow::DYNAMIC_COPY,
-                )?);
-            }
-            made.push(Buffer::with_data(
+                )
+            };
+            let heads = made.keep(storage("sparse heads", heads_bytes)?);
+            let first = made.keep(storage("sparse first blocks", first_bytes)?);
+            let pool = made.keep(storage("sparse block pool", pool_bytes)?);
+            let counters = made.keep(Buffer::with_data(
                 gl,
                 "sparse counters",
                 glow::ATOMIC_COUNTER_BUFFER,
                 &[0u8; COUNTER_BYTES],
                 glow::DYNAMIC_COPY,
             )?);
-            Ok(())
-        })();
-        if let Err(e) = allocated {
-            free(gl, depth, fbo, made);
-            return Err(e);
-        }
-        match <[Buffer; 4]>::try_from(made) {
-            Ok([heads, first, pool, counters]) => Ok(SparseTargets {
+            Ok(SparseTargets {
                 depth,
                 fbo,
                 heads,
@@ -165,12 +149,8 @@ impl SparseTargets {
                 width: key.width,
                 height: key.height,
                 pool_capacity: key.pool_capacity,
-            }),
-            Err(made) => {
-                free(gl, depth, fbo, made);
-                Err(Error::invalid("method `sparse`: expected four buffers"))
-            }
-        }
+            })
+        })
     }
 
     /// The key these targets match.

@@ -135,6 +135,16 @@ impl Targets {
     }
 }
 
+impl GlObject for Targets {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.background.handles(out);
+        self.hdr_with_depth.handles(out);
+        self.hdr.handles(out);
+        self.ldr.handles(out);
+        self.fxaa.handles(out);
+    }
+}
+
 /// The targets of [`AaMode::Complex`](super::AaMode::Complex), sized like
 /// the HDR target and the retrofit's twins they refer to.
 #[derive(Debug)]

@@ -4,7 +4,7 @@
 use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
 use super::targets::ColorTarget;
 use crate::Result;
-use crate::gl::{Program, Texture2d, VertexArray, check_error};
+use crate::gl::{GlObject, Handle, Program, Texture2d, VertexArray, check_error};
 use glow::HasContext;
 
 /// The tonemap shader's body; its first part (the curve, its inverse, the
@@ -62,5 +62,11 @@ impl TonemapPass {
     /// Free the program.
     pub(crate) fn destroy(self, gl: &glow::Context) {
         self.program.destroy(gl);
+    }
+}
+
+impl GlObject for TonemapPass {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.program.handles(out);
     }
 }

@@ -11,7 +11,7 @@ use super::mesh::{
 };
 use super::pass::bind_target;
 use crate::Result;
-use crate::gl::{Framebuffer, Program, ShaderStage, check_error, preamble};
+use crate::gl::{Framebuffer, GlObject, Handle, Program, ShaderSource, ShaderStage, check_error};
 use glam::{DMat4, Mat4};
 use glow::HasContext;
 
@@ -30,19 +30,17 @@ impl TransparentPass {
     pub(crate) fn new(gl: &glow::Context) -> Result<Self> {
         let mut defines = lighting_defines();
         defines.push(("LIGHTING_FUNCTIONS_ONLY".into(), "1".into()));
-        // `#line 1 1`: driver messages about the second part name source string 1.
-        let body = format!("{LIGHTING_FRAG}\n#line 1 1\n{TRANSPARENT_FRAG}");
-        let program = Program::build(
+        let fragment = ShaderSource::new()
+            .defines(&defines)
+            .part("lighting.frag", LIGHTING_FRAG)
+            .part("transparent.frag", TRANSPARENT_FRAG);
+        let vertex = fragment.header_only().part("geometry.vert", GEOMETRY_VERT);
+        let program = Program::from_sources(
             gl,
             "transparent",
-            &preamble(&[], &defines),
             &[
-                (ShaderStage::Vertex, "geometry.vert", GEOMETRY_VERT),
-                (
-                    ShaderStage::Fragment,
-                    "lighting.frag + transparent.frag",
-                    &body,
-                ),
+                (ShaderStage::Vertex, &vertex),
+                (ShaderStage::Fragment, &fragment),
             ],
             &[("o_color", 0)],
         )?;
@@ -115,5 +113,11 @@ impl TransparentPass {
     /// Free the program.
     pub(crate) fn destroy(self, gl: &glow::Context) {
         self.program.destroy(gl);
+    }
+}
+
+impl GlObject for TransparentPass {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.program.handles(out);
     }
 }

@@ -333,7 +333,8 @@ vec4 acc_finish(Acc a, int rule, vec4 reference) {
 
 
 // Uniform pixel: every sample is background, or every sample is geometry
-// with the same key (the CPU reference's definition; keep them equal).
+// with the same key (complex.glsl's dmsaa_same_surface, composed in front of
+// this file; the CPU reference's definition, keep them equal).
 //
 // With a position key the test reads every position sample (the key) and
 // every depth sample, not depth sample 0 alone: deciding from the position
@@ -356,13 +357,12 @@ bool keys_uniform() {
     // quarter pixel apart, on both sides of an edge between coplanar faces,
     // to one value; their depth samples still differ.
     for (int i = 1; i < NUM_SAMPLES; ++i)
-        if (g_bg[i] != g_bg[0]
-            || (!g_bg[0] && (any(notEqual(g_key_vals[i].xyz, g_key_vals[0].xyz))
-                             || g_raw_depth[i] != g_raw_depth[0])))
+        if (!dmsaa_same_surface(g_bg[i], vec4(g_key_vals[i].xyz, g_raw_depth[i]),
+                                g_bg[0], vec4(g_key_vals[0].xyz, g_raw_depth[0])))
             same = false;
 #else
     for (int i = 1; i < NUM_SAMPLES; ++i)
-        if (g_bg[i] != g_bg[0] || (!g_bg[0] && g_key[i] != g_key[0])) same = false;
+        if (!dmsaa_same_surface(g_bg[i], g_key[i], g_bg[0], g_key[0])) same = false;
 #endif
     return same;
 }
@@ -452,16 +452,15 @@ bool outside_selection(ivec2 p) {
 #if defined(SELECT_REGION)
     vec2 c = vec2(p) + 0.5;
 #if SELECT_REGION == REGION_RECT
-    outside = any(lessThan(c, u_region.xy)) || any(greaterThanEqual(c, u_region.zw));
+    outside = dmsaa_outside_rect(c, u_region);
 #else
-    vec2 d = (c - u_region.xy) * u_region.zw;
-    outside = dot(d, d) > 1.0;
+    outside = dmsaa_outside_ellipse(c, u_region);
 #endif
 #endif
 #ifdef SELECT_MAX_DEPTH
     bool near = false;
     for (int i = 0; i < NUM_SAMPLES; ++i)
-        if (!g_bg[i] && g_key[i] <= u_max_depth) near = true;
+        if (dmsaa_within_depth(g_bg[i], g_key[i], u_max_depth)) near = true;
     outside = outside || !near;
 #endif
 #ifdef SELECT_FLAG_SAMPLER

@@ -1091,3 +1091,13 @@ impl MsaaRetrofit {
         self.resolver.destroy(gl);
     }
 }
+
+/// What [`MsaaRetrofit::destroy`] frees, for a [`Made`](crate::gl::Made) guard.
+impl GlObject for MsaaRetrofit {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.twin.handles(out);
+        self.target.handles(out);
+        self.stencil.handles(out);
+        self.resolver.handles(out);
+    }
+}

@@ -1,6 +1,7 @@
 //! The resolve's CPU reference, in `f64`: the same math as
-//! `shaders/resolve.frag`, sample for sample. Tests compare the GLSL
-//! against it; change both together.
+//! `shaders/resolve.frag`, sample for sample (and the uniform-pixel and
+//! selection tests of `shaders/complex.glsl`, which every shader shares).
+//! Tests compare the GLSL against it; change both together.
 
 use super::{DepthProjection, ResolveMethod, ResolveRule, ResolveSettings, Window};
 

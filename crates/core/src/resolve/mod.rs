@@ -19,15 +19,44 @@ pub use stencil::{STENCIL_COPY_FRAG, StencilCopy};
 
 use crate::gl::format::SampleKind;
 use crate::gl::{
-    ColorAttachment, FULLSCREEN_VERT, Framebuffer, Program, SavedState, ShaderStage, TextureRef,
-    VertexArray, check_error, preamble,
+    ColorAttachment, FULLSCREEN_VERT, Framebuffer, Program, SavedState, ShaderSource, ShaderStage,
+    TextureRef, VertexArray, check_error, preamble,
 };
 use crate::{Error, Result};
 use glow::HasContext;
 use std::collections::HashMap;
 
-/// The resolve's fragment shader body.
+/// The resolve's fragment shader body; it needs [`COMPLEX_GLSL`] in front
+/// of it (see [`resolve_fragment_source`]).
 pub const RESOLVE_FRAG: &str = include_str!("../../shaders/resolve.frag");
+
+/// The shared definitions of a complex pixel and of the selective-AA
+/// selection test, as a [`ShaderSource`] part (`complex.glsl`, no `main`):
+///
+/// - `bool dmsaa_same_surface(bool bg_i, float key_i, bool bg_0, float key_0)`
+///   and its `vec4` key overload: sample `i` is the same surface as sample 0
+///   (both background, or geometry with equal keys); a pixel is complex when
+///   some sample is not;
+/// - `bool dmsaa_same_surface_within(bool bg_i, float key_i, bool bg_0, float key_0, float tolerance)`:
+///   the same with keys `tolerance` × the nearer key apart counting as equal;
+/// - `bool dmsaa_outside_rect(vec2 c, vec4 rect)`, `bool dmsaa_outside_ellipse(vec2 c, vec4 ellipse)`:
+///   a pixel centre outside a [`Region`] (its [`Region::window_uniform`] numbers);
+/// - `bool dmsaa_within_depth(bool bg, float key, float max_depth)`: a sample
+///   near enough for [`Selection::max_depth`].
+///
+/// The CPU reference (`resolve::cpu`) is the only other copy.
+pub const COMPLEX_GLSL: &str = include_str!("../../shaders/complex.glsl");
+
+/// The name [`COMPLEX_GLSL`] goes by in shader messages.
+pub const COMPLEX_GLSL_NAME: &str = "complex.glsl";
+
+/// The resolve's fragment stage: `header`, then [`COMPLEX_GLSL`] and
+/// [`RESOLVE_FRAG`] as two parts (so messages name the right file).
+pub fn resolve_fragment_source(header: &str) -> ShaderSource {
+    ShaderSource::with_header(header)
+        .part(COMPLEX_GLSL_NAME, COMPLEX_GLSL)
+        .part("resolve.frag", RESOLVE_FRAG)
+}
 
 /// The most colour attachments one resolve handles (GL 3.2 guarantees 8 draw buffers).
 pub const MAX_ATTACHMENTS: usize = 8;
@@ -606,13 +635,16 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
         key.window,
         key.attachments.len(),
     );
-    Program::build(
+    let fragment = resolve_fragment_source(&preamble(&[], &key.defines()));
+    let vertex = fragment
+        .header_only()
+        .part("fullscreen.vert", FULLSCREEN_VERT);
+    Program::from_sources(
         gl,
         &label,
-        &preamble(&[], &key.defines()),
         &[
-            (ShaderStage::Vertex, "fullscreen.vert", FULLSCREEN_VERT),
-            (ShaderStage::Fragment, "resolve.frag", RESOLVE_FRAG),
+            (ShaderStage::Vertex, &vertex),
+            (ShaderStage::Fragment, &fragment),
         ],
         &frag_outputs,
     )
