@@ -27,6 +27,9 @@
 //! `target/gpu-bench`). Exits 1 when no context can be made, when a check
 //! fails or when a timed case errs (the reports are still written then).
 
+mod common;
+
+use common::{Rng, parse_size, quantile};
 use deferred_msaa::gbuffer::{GBuffer, GBufferLayout};
 use deferred_msaa::gl::{
     Buffer, Capabilities, Format, GpuTimer, Program, ShaderStage, TextureRef, TimerKind,
@@ -106,101 +109,59 @@ struct Args {
     seed: u64,
 }
 
-const USAGE: &str = "usage: gpu_bench [--out DIR] [--quick] [--size WxH] [--runs K] [--warmup N] \
-                     [--budget-s S] [--seed N]";
-
-fn number<T: std::str::FromStr + PartialOrd + std::fmt::Display + Copy>(
-    name: &str,
-    v: &str,
-    min: T,
-) -> Result<T, String> {
-    match v.parse::<T>() {
-        Ok(n) if n >= min => Ok(n),
-        _ => Err(format!(
-            "{name}: expected a number of at least {min}, got `{v}`"
-        )),
-    }
+/// The command line (see the module docs).
+#[derive(clap::Parser)]
+#[command(
+    name = "gpu_bench",
+    about = "Native resolves against the CPU reference, and timed against the blits"
+)]
+struct Cli {
+    /// Where gpu-bench.json and gpu-bench.md go (default target/gpu-bench).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// 640x360 and fewer runs instead of 1920x1080.
+    #[arg(long)]
+    quick: bool,
+    /// Timed image size, WIDTHxHEIGHT (default by --quick).
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Timed runs per method (default 30, --quick 20).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    runs: Option<u64>,
+    /// Untimed rounds first (default 5, --quick 3).
+    #[arg(long)]
+    warmup: Option<u64>,
+    /// Seconds this process may take before optional timed counts are skipped.
+    #[arg(long = "budget-s", default_value_t = 420.0)]
+    budget_s: f64,
+    /// The random scene's seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Passed by `cargo bench` to every bench target.
+    #[arg(long, hide = true)]
+    bench: bool,
 }
 
-fn parse_args() -> Result<Args, String> {
-    let mut out = None;
-    let mut quick = false;
-    let mut size = None;
-    let mut runs = None;
-    let mut warmup = None;
-    let mut budget_s = 420.0;
-    let mut seed = 1;
-    let mut it = std::env::args().skip(1);
-    while let Some(arg) = it.next() {
-        let (name, inline) = match arg.split_once('=') {
-            Some((n, v)) if n.starts_with("--") => (n.to_string(), Some(v.to_string())),
-            _ => (arg.clone(), None),
-        };
-        let mut value = |what: &str| -> Result<String, String> {
-            inline
-                .clone()
-                .or_else(|| it.next())
-                .ok_or_else(|| format!("{name} needs {what}"))
-        };
-        match name.as_str() {
-            // cargo passes `--bench` to every bench target.
-            "--bench" => {}
-            "--out" => out = Some(PathBuf::from(value("a directory")?)),
-            "--quick" => quick = true,
-            "--size" => {
-                let v = value("WxH")?;
-                let (w, h) = v
-                    .split_once(['x', 'X'])
-                    .ok_or_else(|| format!("--size: expected WxH, got `{v}`"))?;
-                size = Some((
-                    number("--size width", w, 1u32)?,
-                    number("--size height", h, 1u32)?,
-                ));
-            }
-            "--runs" => runs = Some(number("--runs", &value("a count")?, 1usize)?),
-            "--warmup" => warmup = Some(number("--warmup", &value("a count")?, 0usize)?),
-            "--budget-s" => budget_s = number("--budget-s", &value("seconds")?, 0.0f64)?,
-            "--seed" => seed = number("--seed", &value("a number")?, 0u64)?,
-            "--help" | "-h" => {
-                println!("{USAGE}");
-                std::process::exit(0);
-            }
-            other => return Err(format!("unknown argument `{other}`; {USAGE}")),
-        }
-    }
-    let (width, height) = size.unwrap_or(if quick { (640, 360) } else { (1920, 1080) });
-    Ok(Args {
-        out: out
+fn parse_args() -> Args {
+    let cli = <Cli as clap::Parser>::parse();
+    let quick = cli.quick;
+    let (width, height) = cli
+        .size
+        .unwrap_or(if quick { (640, 360) } else { (1920, 1080) });
+    Args {
+        out: cli
+            .out
             .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/gpu-bench")),
         quick,
         width,
         height,
-        runs: runs.unwrap_or(if quick { 20 } else { 30 }),
-        warmup: warmup.unwrap_or(if quick { 3 } else { 5 }),
-        budget_s,
-        seed,
-    })
-}
-
-/// xorshift64*: the same scene on every machine.
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    fn unit(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.unit()
+        runs: cli.runs.map_or(if quick { 20 } else { 30 }, |r| r as usize),
+        warmup: cli.warmup.map_or(if quick { 3 } else { 5 }, |w| w as usize),
+        budget_s: cli.budget_s.max(0.0),
+        seed: cli.seed,
     }
 }
 
-/// GL's standard perspective matrix, column-major.
 fn perspective(aspect: f32) -> [f32; 16] {
     let f = 1.0 / (FOV_Y / 2.0).tan();
     let mut m = [0.0; 16];
@@ -836,12 +797,6 @@ struct Stats {
     q3: f64,
     min: f64,
     max: f64,
-}
-
-fn quantile(sorted: &[f64], q: f64) -> f64 {
-    let pos = q * (sorted.len() - 1) as f64;
-    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
-    sorted[lo] + (sorted[hi] - sorted[lo]) * (pos - lo as f64)
 }
 
 fn stats(times: &[f64]) -> Option<Stats> {
@@ -1669,13 +1624,7 @@ fn run(args: &Args) -> Result<bool, String> {
 }
 
 fn main() -> ExitCode {
-    let args = match parse_args() {
-        Ok(a) => a,
-        Err(msg) => {
-            eprintln!("gpu_bench: {msg}");
-            return ExitCode::from(2);
-        }
-    };
+    let args = parse_args();
     match run(&args) {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => {

@@ -38,6 +38,9 @@
 //! not span the pass (llvmpipe restarts it at every tile a thread rasterises).
 //! Results also go to `target/resolve_vs_blit.json`.
 
+mod common;
+
+use common::{Rng, parse_size, quantile};
 use deferred_msaa::{ColorAttachment, Frame};
 use deferred_msaa_lab::context::{Backend, HeadlessContext};
 use deferred_msaa_lab::gl::FULLSCREEN_VERT;
@@ -231,19 +234,6 @@ struct Cli {
     bench: bool,
 }
 
-/// `WIDTHxHEIGHT`, both at least 1.
-fn parse_size(v: &str) -> Result<(u32, u32), String> {
-    let (w, h) = v
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got `{v}`"))?;
-    match (w.parse::<u32>(), h.parse::<u32>()) {
-        (Ok(w), Ok(h)) if w > 0 && h > 0 => Ok((w, h)),
-        _ => Err(format!(
-            "expected two whole numbers of at least 1, got `{v}`"
-        )),
-    }
-}
-
 fn parse_args() -> Args {
     let cli = <Cli as clap::Parser>::parse();
     Args {
@@ -261,24 +251,6 @@ fn parse_args() -> Args {
         position_uniformity: cli.position_uniformity,
         json: cli.json,
         summarize: cli.summarize,
-    }
-}
-
-/// xorshift64*: a reproducible scene without a dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    fn unit(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.unit()
     }
 }
 
@@ -681,16 +653,6 @@ fn count_complex(
         }
     }
     Ok(c)
-}
-
-/// Quantile `q` of sorted data, linear between order statistics.
-fn quantile(sorted: &[f64], q: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let pos = q * (sorted.len() - 1) as f64;
-    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
-    sorted[lo] + (sorted[hi] - sorted[lo]) * (pos - lo as f64)
 }
 
 struct Stats {
