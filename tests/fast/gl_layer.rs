@@ -6,7 +6,7 @@ use crate::common;
 use deferred_msaa::Error;
 use deferred_msaa_lab::context::{Backend, HeadlessContext};
 use deferred_msaa_lab::gl::{
-    Attachment, Capabilities, ExtraFns, Format, Framebuffer, GpuTimer, Program, ShaderStage,
+    Attachment, Capabilities, ExtraFns, Format, Framebuffer, GpuTimer, Made, Program, ShaderStage,
     Texture2d, Texture2dMultisample, TextureRef, VertexArray, live_objects, preamble,
     sample_positions,
 };
@@ -166,6 +166,59 @@ fn single_samples_read_with_texel_fetch_differ_along_a_triangle_edge() {
         );
         assert_eq!(live_objects().total(), 0);
     }
+}
+
+/// A constructor that fails half-way through `Made::build` leaves nothing:
+/// what it kept is deleted (the GL names are gone, the counters back where
+/// they were), and a constructor that succeeds keeps everything.
+#[test]
+fn a_failed_constructor_frees_what_it_made() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let mut names = None;
+    let result = Made::build(gl, |made| {
+        let texture = made.keep(Texture2d::new(gl, "kept", Format::Rgba8, 8, 8)?);
+        let fbo = made.keep(Framebuffer::new(
+            gl,
+            "kept",
+            &[(Attachment::Color(0), TextureRef::from(&texture))],
+            &[Some(0)],
+        )?);
+        names = Some((texture.raw(), fbo.raw()));
+        assert_ne!(live_objects(), before);
+        Err::<(Texture2d, Framebuffer), _>(Error::invalid("the step after them failed"))
+    });
+    assert!(result.is_err());
+    assert_eq!(live_objects(), before, "a failed constructor leaks nothing");
+    let (texture, fbo) = names.expect("the constructor ran");
+    unsafe {
+        assert!(
+            !gl.is_texture(texture),
+            "the texture's name is still in use"
+        );
+        assert!(
+            !gl.is_framebuffer(fbo),
+            "the framebuffer's name is still in use"
+        );
+    }
+    let (texture, fbo) = Made::build(gl, |made| {
+        let texture = made.keep(Texture2d::new(gl, "kept", Format::Rgba8, 8, 8)?);
+        let fbo = made.keep(Framebuffer::new(
+            gl,
+            "kept",
+            &[(Attachment::Color(0), TextureRef::from(&texture))],
+            &[Some(0)],
+        )?);
+        Ok::<_, Error>((texture, fbo))
+    })
+    .expect("a working constructor");
+    assert!(unsafe { gl.is_texture(texture.raw()) });
+    fbo.destroy(gl);
+    texture.destroy(gl);
+    assert_eq!(live_objects(), before);
 }
 
 #[test]
