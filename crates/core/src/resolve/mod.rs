@@ -558,11 +558,10 @@ impl Resolver {
                 gl.disable(glow::DEPTH_TEST);
             }
             program.bind(gl);
+            // Units as build_program set them: depth at 0, attachment k at 1 + k.
             inputs.depth.bind(gl, 0);
-            program.set_i32(gl, "u_depth", 0);
             for (k, tex) in inputs.colors.iter().enumerate() {
                 tex.bind(gl, 1 + k as u32);
-                program.set_i32(gl, &format!("u_att{k}"), 1 + k as i32);
             }
             let proj = params.projection;
             program.set_f32(gl, "u_clear_depth", proj.clear_depth as f32);
@@ -576,7 +575,6 @@ impl Resolver {
             program.set_f32(gl, "u_footprint", params.footprint() as f32);
             program.set_f32(gl, "u_c", s.c as f32);
             program.set_f32(gl, "u_c_in", s.c_in as f32);
-            program.set_f32(gl, "u_infinity", f32::INFINITY);
             if let Some(row) = params.view_row {
                 program.set_vec4(gl, "u_view_row", row.map(|v| v as f32));
             }
@@ -639,7 +637,7 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
     let vertex = fragment
         .header_only()
         .part("fullscreen.vert", FULLSCREEN_VERT);
-    Program::from_sources(
+    let program = Program::from_sources(
         gl,
         &label,
         &[
@@ -647,5 +645,23 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
             (ShaderStage::Fragment, &fragment),
         ],
         &frag_outputs,
-    )
+    )?;
+    // The samplers' units and +inf never change: set once here, not per
+    // frame (a program keeps its uniforms).
+    unsafe {
+        let previous = gl.get_parameter_i32(glow::CURRENT_PROGRAM);
+        program.bind(gl);
+        program.set_i32(gl, "u_depth", 0);
+        for k in 0..key.attachments.len() {
+            program.set_i32(gl, &format!("u_att{k}"), 1 + k as i32);
+        }
+        program.set_f32(gl, "u_infinity", f32::INFINITY);
+        gl.use_program(
+            u32::try_from(previous)
+                .ok()
+                .and_then(std::num::NonZeroU32::new)
+                .map(glow::NativeProgram),
+        );
+    }
+    Ok(program)
 }
