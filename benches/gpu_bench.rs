@@ -681,6 +681,7 @@ fn check_retrofit(
             key_source,
             clear_depth: projection.clear_depth,
             footprint: (fov_y / model.height as f64).tan(),
+            normal: None,
         };
         comparisons.push(compare(
             &cpu,

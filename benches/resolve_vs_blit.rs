@@ -607,6 +607,7 @@ fn count_complex(
         },
         clear_depth: params.projection.clear_depth,
         footprint: params.footprint(),
+        normal: None,
     };
     let cpu = cpu_for(params);
     let cpu_exact = cpu_for(exact);

@@ -42,6 +42,11 @@ pub struct RenderArgs {
     /// Resolve uniform pixels the slow way too.
     #[arg(long)]
     no_fast_path: bool,
+    /// Resolved layers per pixel for front, median and back: 2 also resolves
+    /// each pixel's second cluster of samples (silhouettes, creases), lights
+    /// it with the unchanged lighting pass and mixes the two by coverage.
+    #[arg(long, default_value_t = 1)]
+    layers: u32,
     /// Selective anti-aliasing for the resolve methods and sparse: only pixels inside
     /// this region are resolved, the others take one sample;
     /// `rect:X,Y,W,H` or `ellipse:CX,CY,RX,RY` in pixels from the top-left.
@@ -157,6 +162,13 @@ impl RenderArgs {
                 self.method
             )));
         }
+        let resolves = ResolveMethod::all().iter().any(|m| m.name() == self.method);
+        if self.layers != 1 && !resolves {
+            return Err(Error::invalid(format!(
+                "--layers is an option of the resolve methods (front, median, back), not `{}`",
+                self.method
+            )));
+        }
         let aa = if self.method == "none" {
             AaMode::None
         } else if self.method == "gbaa" {
@@ -193,7 +205,14 @@ impl RenderArgs {
                     max_depth: self.aa_max_depth,
                     flag: None,
                 },
+                layers: self.layers,
+                ..ResolveSettings::default()
             };
+            if self.layers == 2 && method == ResolveMethod::Average {
+                return Err(Error::invalid(
+                    "--layers 2 needs front, median or back: average weighs every sample, so it has one cluster",
+                ));
+            }
             if !(self.c.is_finite() && self.c > 0.0) {
                 return Err(Error::invalid(format!(
                     "--c must be a finite number above 0, got {}",

@@ -18,11 +18,12 @@ use deferred_msaa_lab::gl::{
 };
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::resolve::cpu::{
-    CpuKeySource, CpuResolve, PixelSamples, ResolvedPixel, standard_sample_positions,
+    CpuKeySource, CpuResolve, PixelSamples, ResolvedPixel, SecondLayerPixel,
+    standard_sample_positions,
 };
 use deferred_msaa_lab::resolve::{
-    DepthProjection, KeySource, ResolveInputs, ResolveMethod, ResolveParams, ResolveRule,
-    ResolveSettings, ResolveSlot, Resolver, Window,
+    DepthProjection, KeySource, NormalEncoding, ResolveInputs, ResolveMethod, ResolveParams,
+    ResolveRule, ResolveSettings, ResolveSlot, Resolver, Window,
 };
 
 const W: u32 = 24;
@@ -170,6 +171,8 @@ struct Harness {
     out_depth: Texture2d,
     target: Framebuffer,
     cases: Vec<Case>,
+    /// The normal input (attachment 2) and its encoding, for two layers.
+    normal: Option<(usize, NormalEncoding)>,
 }
 
 impl Harness {
@@ -240,6 +243,7 @@ impl Harness {
             out_depth,
             target,
             cases,
+            normal: None,
         }
     }
 
@@ -292,6 +296,7 @@ impl Harness {
             rules: &RULES,
             key,
             samples: self.n,
+            normal: self.normal.map(|(k, e)| (ResolveSlot(k), e)),
         };
         resolver
             .run(gl, &inputs, &self.target, &params, false)
@@ -318,6 +323,7 @@ impl Harness {
             },
             clear_depth: CLEAR_DEPTH as f64,
             footprint: params.footprint(),
+            normal: self.normal,
         };
         let mut ambiguous = 0;
         let mut pixels = Vec::with_capacity(self.cases.len());
@@ -382,6 +388,153 @@ impl Harness {
             "{ambiguous} ambiguous pixels"
         );
         pixels
+    }
+
+    /// The second layer on the GPU against the CPU reference's
+    /// `resolve_second_layer_at`: every attachment, the depth and the
+    /// coverage of every pixel. Returns the CPU's second layers.
+    fn check_second_layer(
+        &self,
+        gl: &glow::Context,
+        resolver: &mut Resolver,
+        readback: &mut Readback,
+        settings: ResolveSettings,
+    ) -> Vec<SecondLayerPixel> {
+        let formats = [
+            Format::Rgba32f,
+            Format::Rgba32f,
+            Format::Rgba32f,
+            Format::Rgba32f,
+            Format::Rgba32ui,
+            Format::R32f,
+        ];
+        let outputs: Vec<Texture2d> = formats
+            .iter()
+            .enumerate()
+            .map(|(k, &f)| Texture2d::new(gl, &format!("second layer {k}"), f, W, H).unwrap())
+            .collect();
+        let depth = Texture2d::new(gl, "second layer depth", Format::Depth32f, W, H).unwrap();
+        let mut attachments: Vec<(Attachment, TextureRef)> = outputs
+            .iter()
+            .enumerate()
+            .map(|(k, t)| (Attachment::Color(k as u32), TextureRef::from(t)))
+            .collect();
+        attachments.push((Attachment::Depth, TextureRef::from(&depth)));
+        let draw: Vec<Option<u32>> = (0..outputs.len() as u32).map(Some).collect();
+        let target = Framebuffer::new(gl, "second layer target", &attachments, &draw).unwrap();
+        let colors: Vec<TextureRef> = self.inputs.iter().map(TextureRef::from).collect();
+        let points: Vec<ColorAttachment> = (0..colors.len() as u32).map(ColorAttachment).collect();
+        let projection = DepthProjection {
+            p22: -1.0,
+            p23: -0.2,
+            zero_to_one: false,
+            clear_depth: CLEAR_DEPTH as f64,
+        };
+        let params = ResolveParams {
+            settings,
+            projection,
+            fov_y: FOV_Y,
+            height_px: H,
+            view_row: None,
+        };
+        let inputs = ResolveInputs {
+            depth: TextureRef::from(&self.depth),
+            colors: &colors,
+            attachments: &points,
+            rules: &RULES,
+            key: KeySource::Position(ResolveSlot(1)),
+            samples: self.n,
+            normal: self.normal.map(|(k, e)| (ResolveSlot(k), e)),
+        };
+        resolver
+            .run_second_layer(gl, &inputs, &target, &params)
+            .unwrap();
+        let gpu: Vec<_> = outputs
+            .iter()
+            .map(|t| readback.read(gl, TextureRef::from(t), 1).unwrap())
+            .collect();
+        let gpu_depth = readback.read(gl, TextureRef::from(&depth), 1).unwrap();
+        let cpu = CpuResolve {
+            settings,
+            rules: RULES.to_vec(),
+            key_source: CpuKeySource::Position(1),
+            clear_depth: CLEAR_DEPTH as f64,
+            footprint: params.footprint(),
+            normal: self.normal,
+        };
+        let mut failures = Vec::new();
+        let mut ambiguous = 0;
+        let mut layers = Vec::with_capacity(self.cases.len());
+        for (p, case) in self.cases.iter().enumerate() {
+            let px = PixelSamples {
+                depth: case.depth.iter().map(|&d| d as f64).collect(),
+                attachments: case
+                    .atts
+                    .iter()
+                    .map(|a| a.iter().map(|v| v.map(|c| c as f64)).collect())
+                    .collect(),
+            };
+            let want = cpu.resolve_second_layer_at(&px, None);
+            layers.push(want.clone());
+            if want.ambiguous {
+                ambiguous += 1;
+                continue;
+            }
+            let (x, y) = (p as u32 % W, H - 1 - p as u32 / W);
+            for k in 0..RULES.len() {
+                let got = gpu[k].get(0, x, y);
+                let scale = if RULES[k] == ResolveRule::BlendNormal {
+                    normal_conditioning(&px.attachments[k], &want.weights)
+                } else {
+                    1.0
+                };
+                for c in 0..4 {
+                    let within = if c < 3 {
+                        close_scaled(got[c], want.attachments[k][c], scale)
+                    } else {
+                        close(got[c], want.attachments[k][c])
+                    };
+                    if !within {
+                        failures.push(format!(
+                            "pixel {p} (case {}) attachment {k}[{c}]: gpu {} cpu {} (seed {:?}, weights {:?})",
+                            p % 10, got[c], want.attachments[k][c], want.reference, want.weights
+                        ));
+                    }
+                }
+            }
+            let coverage = gpu[5].get(0, x, y)[0];
+            if !close(coverage, want.coverage) {
+                failures.push(format!(
+                    "pixel {p} (case {}) coverage: gpu {coverage} cpu {} (seed {:?})",
+                    p % 10,
+                    want.coverage,
+                    want.reference
+                ));
+            }
+            let d = gpu_depth.get(0, x, y)[0];
+            if !close(d, want.depth) {
+                failures.push(format!("pixel {p} depth: gpu {d} cpu {}", want.depth));
+            }
+        }
+        target.destroy(gl);
+        depth.destroy(gl);
+        for t in outputs {
+            t.destroy(gl);
+        }
+        assert!(
+            failures.is_empty(),
+            "{}x {:?} normals {:?}: {} mismatches, first: {:#?}",
+            self.n,
+            settings,
+            self.normal,
+            failures.len(),
+            &failures[..failures.len().min(8)]
+        );
+        assert!(
+            ambiguous * 10 < self.cases.len(),
+            "{ambiguous} ambiguous pixels"
+        );
+        layers
     }
 
     fn destroy(self, gl: &glow::Context) {
@@ -676,4 +829,69 @@ fn plane_uniformity_takes_one_sample_on_a_tilted_triangle() {
     }
     resolver.destroy(gl);
     readback.destroy(gl);
+}
+
+/// The second layer, and the first layer with clusters split by normal,
+/// against the CPU reference for N = 2, 4, 8 and 16 over the adversarial
+/// cases, by depth alone and with each normal encoding; pixels of one
+/// cluster, two, and three or more all occur.
+#[test]
+fn second_layer_matches_the_cpu_reference() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = deferred_msaa_lab::gl::live_objects();
+    let mut resolver = Resolver::new(gl).unwrap();
+    let mut readback = Readback::new(gl).unwrap();
+    for n in [2u32, 4, 8, 16] {
+        let mut harness = Harness::new(gl, n, 0x2A7E + n as u64);
+        let normals = [
+            None,
+            Some((2, NormalEncoding::Xyz)),
+            Some((2, NormalEncoding::Unorm)),
+            Some((2, NormalEncoding::Octahedral)),
+            Some((2, NormalEncoding::OctahedralUnorm)),
+        ];
+        for normal in normals {
+            harness.normal = normal;
+            for (method, window) in [
+                (ResolveMethod::Median, Window::Smooth),
+                (ResolveMethod::Front, Window::Hard),
+                (ResolveMethod::Back, Window::Smooth),
+            ] {
+                let settings = ResolveSettings {
+                    method,
+                    window,
+                    layers: 2,
+                    ..ResolveSettings::default()
+                };
+                // The first layer, its clusters split by normal.
+                harness.check(gl, &mut resolver, &mut readback, settings);
+                let layers = harness.check_second_layer(gl, &mut resolver, &mut readback, settings);
+                let two = layers.iter().filter(|l| l.reference.is_some()).count();
+                // Three or more clusters: the two kept share the pixel, so the
+                // coverage is not the second cluster's share of all samples.
+                let three = layers
+                    .iter()
+                    .filter(|l| {
+                        let members = l.weights.iter().filter(|&&w| w > 0.0).count();
+                        l.reference.is_some() && l.coverage * n as f64 > members as f64 + 1e-9
+                    })
+                    .count();
+                assert!(
+                    two > 0,
+                    "{n}x {normal:?} {method}: no pixel has a second layer"
+                );
+                if n >= 4 && method == ResolveMethod::Median {
+                    assert!(three > 0, "{n}x {normal:?}: no pixel has three clusters");
+                }
+                assert!(two < layers.len(), "{n}x: every pixel has a second layer");
+            }
+        }
+        harness.destroy(gl);
+    }
+    resolver.destroy(gl);
+    readback.destroy(gl);
+    assert_eq!(deferred_msaa_lab::gl::live_objects(), before);
 }

@@ -236,6 +236,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
                     key_source: CpuKeySource::Position(1),
                     clear_depth: 1.0,
                     footprint: footprint(),
+                    normal: None,
                 };
                 // The same resolve without selective AA.
                 let plain = CpuResolve {

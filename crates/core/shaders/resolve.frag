@@ -33,6 +33,13 @@
 //   SELECT_FLAG_SAMPLER, SELECT_FLAG_COMPONENT
 //                          selective AA: a pixel none of whose samples has this
 //                          attachment component >= 0.5 takes one sample
+//   CLUSTER_NORMALS, NORMAL_SAMPLER, NORMAL_ENCODING
+//                          two layers with a normal attachment: samples whose
+//                          normals' cosine is below u_normal_threshold are
+//                          different surfaces (cpu.rs's same_normal)
+//   SECOND_LAYER_OUTPUT    write the second layer (cpu.rs's
+//                          resolve_second_layer_at) and its coverage to
+//                          o_coverage, instead of the first
 
 #define RULE_BLEND 0
 #define RULE_BLEND_NORMAL 1
@@ -70,6 +77,9 @@ uniform vec4 u_region;           // rect (x0, y0, x1, y1); ellipse (cx, cy, 1/rx
 #ifdef SELECT_MAX_DEPTH
 uniform float u_max_depth;
 #endif
+#ifdef CLUSTER_NORMALS
+uniform float u_normal_threshold;
+#endif
 
 // uniform ATTk_SAMPLER u_attk; out ATTk_VEC o_attk; for every attachment k.
 ATTACHMENT_DECLARATIONS
@@ -78,6 +88,9 @@ out float o_complex;
 #endif
 #ifdef REFERENCE_OUTPUT
 out uint o_reference;
+#endif
+#ifdef SECOND_LAYER_OUTPUT
+out float o_coverage;
 #endif
 
 // Per-pixel state shared by the attachment blocks below.
@@ -262,6 +275,44 @@ float closeness(float z, bool bg, bool is_ref, float z_r, bool bg_r) {
     // Background only with background, geometry only with geometry.
     w = bg || bg_r ? (bg && bg_r ? 1.0 : 0.0) : w;
     return is_ref ? 1.0 : w;
+#endif
+}
+
+#define NORMAL_XYZ 0
+#define NORMAL_UNORM 1
+#define NORMAL_OCTAHEDRAL 2
+#define NORMAL_OCTAHEDRAL_UNORM 3
+
+// A stored normal as a vector (cpu.rs: NormalEncoding::decode).
+vec3 decode_normal(vec4 v) {
+#if !defined(NORMAL_ENCODING) || NORMAL_ENCODING == NORMAL_XYZ
+    return v.xyz;
+#elif NORMAL_ENCODING == NORMAL_UNORM
+    return v.xyz * 2.0 - 1.0;
+#else
+#if NORMAL_ENCODING == NORMAL_OCTAHEDRAL
+    vec2 e = v.xy;
+#else
+    vec2 e = v.xy * 2.0 - 1.0;
+#endif
+    float z = 1.0 - abs(e.x) - abs(e.y);
+    vec2 s = vec2(e.x >= 0.0 ? 1.0 : -1.0, e.y >= 0.0 ? 1.0 : -1.0);
+    vec2 folded = (1.0 - abs(e.yx)) * s;
+    return vec3(z < 0.0 ? folded : e, z);
+#endif
+}
+
+// Samples with normals a and b (background flags bg_a, bg_b) may be one
+// surface: background, a normal that is not finite or is shorter than 1e-6,
+// or a cosine of at least the threshold (cpu.rs's same_normal).
+bool same_normal(vec3 a, vec3 b, bool bg_a, bool bg_b) {
+#ifdef CLUSTER_NORMALS
+    float la = length(a);
+    float lb = length(b);
+    bool unusable = !(la >= 1e-6) || !(lb >= 1e-6) || isinf(la) || isinf(lb);
+    return bg_a || bg_b || unusable || dot(a, b) / (la * lb) >= u_normal_threshold;
+#else
+    return true;
 #endif
 }
 
@@ -539,6 +590,83 @@ void main() {
         bg_r = i == r ? g_bg[i] : bg_r;
         reference_depth = i == r ? g_raw_depth[i] : reference_depth;
     }
+#ifdef CLUSTER_NORMALS
+    vec3 n_r = decode_normal(vec4(FETCH(NORMAL_SAMPLER, p, r)));
+#else
+    vec3 n_r = vec3(0.0);
+#endif
+
+#ifdef SECOND_LAYER_OUTPUT
+    // The second layer (cpu.rs's resolve_second_layer_at). The first
+    // layer's cluster: the samples its blend weighs.
+    bool in_first[NUM_SAMPLES];
+    vec3 normals[NUM_SAMPLES];
+    for (int k = 0; k < NUM_SAMPLES; ++k) {
+        in_first[k] = true;
+        normals[k] = vec3(0.0);
+    }
+    for (int i = g_zero; i < NUM_SAMPLES; ++i) {
+        if (g_one) break;
+        float z_i;
+        bool bg_i;
+        PICK(z_i, g_key, i)
+        PICK(bg_i, g_bg, i)
+#ifdef CLUSTER_NORMALS
+        vec3 n_i = decode_normal(vec4(FETCH(NORMAL_SAMPLER, p, i)));
+#else
+        vec3 n_i = vec3(0.0);
+#endif
+        float w = closeness(z_i, bg_i, i == r, z_r, bg_r);
+        w = same_normal(n_i, n_r, bg_i, bg_r) ? w : 0.0;
+        for (int k = 0; k < NUM_SAMPLES; ++k) {
+            in_first[k] = k == i ? w > 0.0 : in_first[k];
+            normals[k] = k == i ? n_i : normals[k];
+        }
+    }
+    // The seed of the largest cluster outside it: each candidate's cluster
+    // is the outside samples within its window and of its orientation; ties
+    // go to the nearer seed (candidates come in index order).
+    int seed = -1;
+    int second_size = 0;
+    float seed_sort = 0.0;
+    for (int s = g_zero; s < NUM_SAMPLES; ++s) {
+        if (g_one) break;
+        bool in_s;
+        float z_s;
+        bool bg_s;
+        float sort_s;
+        vec3 n_s;
+        PICK(in_s, in_first, s)
+        PICK(z_s, g_key, s)
+        PICK(bg_s, g_bg, s)
+        PICK(sort_s, g_sort, s)
+        PICK(n_s, normals, s)
+        int size = 0;
+        for (int j = 0; j < NUM_SAMPLES; ++j) {
+            bool member = !in_first[j] && closeness(g_key[j], g_bg[j], j == s, z_s, bg_s) > 0.0
+                && same_normal(normals[j], n_s, g_bg[j], bg_s);
+            size += member ? 1 : 0;
+        }
+        bool better = !in_s && (seed < 0 || size > second_size || (size == second_size && sort_s < seed_sort));
+        seed = better ? s : seed;
+        second_size = better ? size : second_size;
+        seed_sort = better ? sort_s : seed_sort;
+    }
+    bool has_second = seed >= 0;
+    int first_size = 0;
+    for (int k = 0; k < NUM_SAMPLES; ++k) first_size += in_first[k] ? 1 : 0;
+    float coverage = has_second ? float(second_size) / float(first_size + second_size) : 0.0;
+    // From here on the seed is the reference; a pixel without a second
+    // cluster writes sample 0's values, as a one-sample pixel does.
+    r = has_second ? seed : 0;
+    for (int i = 0; i < NUM_SAMPLES; ++i) {
+        z_r = i == r ? g_key[i] : z_r;
+        bg_r = i == r ? g_bg[i] : bg_r;
+        reference_depth = i == r ? g_raw_depth[i] : reference_depth;
+        n_r = i == r ? normals[i] : n_r;
+    }
+    g_one = g_one || !has_second;
+#endif
 
     // Sample 0 of everything, then samples 1.. in one loop that a group of
     // one-sample pixels leaves at the top of its first iteration.
@@ -557,6 +685,14 @@ void main() {
         PICK(key_i, g_key_vals, i)
 #endif
         float w = closeness(z_i, bg_i, i == r, z_r, bg_r);
+#ifdef CLUSTER_NORMALS
+        w = same_normal(decode_normal(vec4(FETCH(NORMAL_SAMPLER, p, i))), n_r, bg_i, bg_r) ? w : 0.0;
+#endif
+#ifdef SECOND_LAYER_OUTPUT
+        bool in_first_i;
+        PICK(in_first_i, in_first, i)
+        w = in_first_i ? 0.0 : w;
+#endif
         depth_sum += w * depth_i;
         depth_weight += w;
         ATTACHMENT_STEPS
@@ -571,6 +707,13 @@ void main() {
 #else
     gl_FragDepth = reference_depth;
 #endif
+#ifdef SECOND_LAYER_OUTPUT
+    // No second cluster: the background's depth, which host lighting skips.
+    gl_FragDepth = has_second ? gl_FragDepth : u_clear_depth;
+#endif
+#endif
+#ifdef SECOND_LAYER_OUTPUT
+    o_coverage = coverage;
 #endif
 #ifdef COMPLEX_OUTPUT
     o_complex = g_one ? 0.0 : 1.0;

@@ -102,10 +102,12 @@ pub mod gl;
 pub mod readback;
 pub mod resolve;
 pub mod retrofit;
+pub mod second_layer;
 
 pub use error::{Error, Result};
 pub use frame::{DepthMode, Frame, Projection};
 pub use gl::ColorAttachment;
 /// The GL bindings the crate is written against; hosts use the same version.
 pub use glow;
-pub use retrofit::{MsaaRetrofit, PositionSpace, RetrofitOptions};
+pub use retrofit::{MsaaRetrofit, NormalAttachment, PositionSpace, RetrofitOptions};
+pub use second_layer::LayerMix;

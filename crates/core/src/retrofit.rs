@@ -17,9 +17,10 @@ use crate::gl::{
     SetupState, TextureRef, check_error,
 };
 use crate::resolve::{
-    ExtraOutputs, KeySource, ResolveInputs, ResolveParams, ResolveRule, ResolveSettings,
-    ResolveSlot, Resolver, StencilCopy, StencilPass,
+    ExtraOutputs, KeySource, NormalEncoding, ResolveInputs, ResolveParams, ResolveRule,
+    ResolveSettings, ResolveSlot, Resolver, StencilCopy, StencilPass,
 };
+use crate::second_layer::{LayerMix, SecondLayer};
 use crate::{Error, Result};
 use glow::HasContext;
 
@@ -53,6 +54,21 @@ pub struct RetrofitOptions {
     /// (with a line in [`MsaaRetrofit::warnings`]) or, strict, the retrofit
     /// refuses with [`Error::MemoryBudget`].
     pub memory_budget: Option<MemoryBudget>,
+    /// The colour attachment holding normals, and how: with
+    /// [`ResolveSettings::layers`] = 2, samples whose normals differ are
+    /// different surfaces even when close in depth (`None`: by depth alone).
+    pub normal_attachment: Option<NormalAttachment>,
+    /// How [`MsaaRetrofit::finish_second_layer`] mixes the two lit layers.
+    pub layer_mix: LayerMix,
+}
+
+/// A host's normal attachment and its encoding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NormalAttachment {
+    /// The attachment.
+    pub attachment: ColorAttachment,
+    /// How it stores a normal.
+    pub encoding: NormalEncoding,
 }
 
 impl Default for RetrofitOptions {
@@ -65,6 +81,8 @@ impl Default for RetrofitOptions {
             resolve: ResolveSettings::default(),
             stencil: StencilCopy::Auto,
             memory_budget: None,
+            normal_attachment: None,
+            layer_mix: LayerMix::Auto,
         }
     }
 }
@@ -118,7 +136,7 @@ pub struct HostAttachment {
 impl HostAttachment {
     /// A description for the framebuffer wrapper: the format and size, and
     /// the texture where the image is a whole 2D texture.
-    fn texture_ref(&self) -> TextureRef {
+    pub(crate) fn texture_ref(&self) -> TextureRef {
         let (raw, target) = match self.image {
             HostImageKind::Texture2d(t) => (t, glow::TEXTURE_2D),
             HostImageKind::TextureLayer { texture, .. } => (texture, glow::TEXTURE_2D_ARRAY),
@@ -136,7 +154,7 @@ impl HostAttachment {
     }
 
     /// How the framebuffer wrapper must attach it, when not as a 2D texture.
-    fn host_image(&self) -> Option<HostImage> {
+    pub(crate) fn host_image(&self) -> Option<HostImage> {
         match self.image {
             HostImageKind::Texture2d(_) => None,
             HostImageKind::TextureLayer { texture, layer } => {
@@ -235,7 +253,10 @@ fn target_name(target: u32) -> &'static str {
     }
 }
 
-fn introspect_point(gl: &glow::Context, point: Attachment) -> Result<Option<HostAttachment>> {
+pub(crate) fn introspect_point(
+    gl: &glow::Context,
+    point: Attachment,
+) -> Result<Option<HostAttachment>> {
     let name = point.name();
     let e = point.gl_enum();
     let refuse = |reason: String| Error::Retrofit {
@@ -483,6 +504,10 @@ pub struct MsaaRetrofit {
     warnings: Vec<String>,
     /// The stencil copy, for a depth-stencil host.
     stencil: Option<StencilCopyTargets>,
+    /// The normal attachment's slot, for the second layer's clusters.
+    normal: Option<(ResolveSlot, NormalEncoding)>,
+    /// The second layer, with two layers.
+    second: Option<SecondLayer>,
 }
 
 /// What [`MsaaRetrofit::build`] makes from the host's framebuffer.
@@ -494,6 +519,8 @@ struct Built {
     key: KeySource,
     warnings: Vec<String>,
     stencil: Option<StencilCopyTargets>,
+    normal: Option<(ResolveSlot, NormalEncoding)>,
+    second: Option<SecondLayer>,
 }
 
 impl Built {
@@ -501,6 +528,9 @@ impl Built {
         self.twin.destroy(gl);
         self.target.destroy(gl);
         if let Some(s) = self.stencil {
+            s.destroy(gl);
+        }
+        if let Some(s) = self.second {
             s.destroy(gl);
         }
     }
@@ -675,6 +705,8 @@ impl MsaaRetrofit {
             resolver,
             warnings: built.warnings,
             stencil: built.stencil,
+            normal: built.normal,
+            second: built.second,
         };
         if let Err(e) = retrofit.prepare(gl) {
             retrofit.destroy(gl);
@@ -771,6 +803,29 @@ impl MsaaRetrofit {
                 }
             }
         };
+        let normal = match options.normal_attachment {
+            None => None,
+            Some(n) => {
+                let k = host
+                    .colors
+                    .iter()
+                    .position(|a| a.point == Attachment::from(n.attachment))
+                    .ok_or_else(|| Error::Retrofit {
+                        attachment: n.attachment.name(),
+                        reason: "named as the normal attachment but nothing is attached there"
+                            .into(),
+                    })?;
+                if ResolveRule::default_for(host.colors[k].format) == ResolveRule::Select {
+                    return Err(Error::UnsupportedFormat {
+                        attachment: n.attachment.name(),
+                        format: host.colors[k].format.name().into(),
+                        reason: "the normal test needs a float or normalised normal attachment"
+                            .into(),
+                    });
+                }
+                Some((ResolveSlot(k), n.encoding))
+            }
+        };
         let mut samples = options.samples;
         let mut warnings = Vec::new();
         if let Some(budget) = &options.memory_budget {
@@ -792,7 +847,7 @@ impl MsaaRetrofit {
             name: host.depth.point.name(),
         });
         let (w, h) = host.size();
-        let (twin, stencil, target) = Made::build(gl, |made| {
+        let (twin, stencil, target, second) = Made::build(gl, |made| {
             let twin = made.keep(MultisampleTwin::new(
                 gl,
                 &specs,
@@ -826,14 +881,19 @@ impl MsaaRetrofit {
                 attachments.push((Attachment::Color(n), TextureRef::from(&s.reference)));
                 draw.push(Some(n));
             }
-            let target = Framebuffer::with_host_images(
+            let target = made.keep(Framebuffer::with_host_images(
                 gl,
                 "resolve target (host images)",
                 &attachments,
                 &images,
                 &draw,
-            )?;
-            Ok::<_, Error>((twin, stencil, target))
+            )?);
+            let second = if options.resolve.layers == 2 {
+                Some(made.keep(SecondLayer::new(gl, &host, &options.layer_mix)?))
+            } else {
+                None
+            };
+            Ok::<_, Error>((twin, stencil, target, second))
         })?;
         Ok(Built {
             stencil,
@@ -843,13 +903,49 @@ impl MsaaRetrofit {
             rules,
             key,
             warnings,
+            normal,
+            second,
         })
     }
 
     /// Compile the programs the options' resolve uses.
     fn prepare(&mut self, gl: &glow::Context) -> Result<()> {
         let extra = self.extra_outputs();
-        self.run_resolver(gl, None, None, extra)
+        self.run_resolver(gl, None, None, extra)?;
+        self.run_second_layer(gl, None)
+    }
+
+    /// The second layer's resolve under `params` (or, without, only its
+    /// compilation); nothing with one layer.
+    fn run_second_layer(
+        &mut self,
+        gl: &glow::Context,
+        params: Option<&ResolveParams>,
+    ) -> Result<()> {
+        let Some(second) = &self.second else {
+            return Ok(());
+        };
+        let (depth, colors, points) = self.inputs()?;
+        let inputs = ResolveInputs {
+            depth,
+            colors: &colors,
+            attachments: &points,
+            rules: &self.rules,
+            key: self.key,
+            samples: self.twin.samples,
+            normal: self.normal,
+        };
+        match params {
+            None => self.resolver.prepare_second_layer(
+                gl,
+                &inputs,
+                second.target(),
+                &self.options.resolve,
+            ),
+            Some(params) => self
+                .resolver
+                .run_second_layer(gl, &inputs, second.target(), params),
+        }
     }
 
     /// The resolver on the twins: a resolve into `target` (the host's
@@ -870,6 +966,7 @@ impl MsaaRetrofit {
             rules: &self.rules,
             key: self.key,
             samples: self.twin.samples,
+            normal: self.normal,
         };
         let target = target.unwrap_or(&self.target);
         match params {
@@ -973,7 +1070,92 @@ impl MsaaRetrofit {
             s.pass
                 .run(gl, depth, &self.twin.fbo, &s.reference, &s.target)?;
         }
+        if self.second.as_ref().is_some_and(|s| s.lighting) {
+            return Err(Error::invalid(
+                "resolve was called between begin_second_layer and finish_second_layer",
+            ));
+        }
+        self.run_second_layer(gl, Some(&params))?;
+        if let Some(second) = &mut self.second {
+            second.resolved = true;
+        }
         Ok(())
+    }
+
+    /// With two layers ([`ResolveSettings::layers`] = 2), after the host lit
+    /// the first layer into `output` (its framebuffer; `None` for the
+    /// default framebuffer; the lit colour is its first draw buffer's, the
+    /// G-buffer's size): keep that lit image, and put the second layer into
+    /// the host's G-buffer textures and depth (the stencil stays the first
+    /// layer's). The host then runs its lighting again, unchanged, and calls
+    /// [`MsaaRetrofit::finish_second_layer`]. `false`, and nothing done, with
+    /// one layer.
+    ///
+    /// Where a pixel has no second cluster the second layer holds sample
+    /// 0's values and the clear depth, so a lighting pass that skips
+    /// background (by a depth test or its own test of the depth value)
+    /// skips it; its output there is not used.
+    pub fn begin_second_layer(
+        &mut self,
+        gl: &glow::Context,
+        output: Option<glow::Framebuffer>,
+    ) -> Result<bool> {
+        let Some(second) = &mut self.second else {
+            return Ok(false);
+        };
+        let host = SetupState::capture(gl);
+        let result = second.begin(gl, output);
+        host.restore(gl);
+        result.map(|()| true)
+    }
+
+    /// After the host lit the second layer into `output` (the one given to
+    /// [`MsaaRetrofit::begin_second_layer`]): write
+    /// `mix(first, second, α)` into it ([`RetrofitOptions::layer_mix`]; the
+    /// first layer exactly where `α` is 0) and put the first layer back into
+    /// the host's G-buffer textures and depth. The host's GL state is as it
+    /// was.
+    pub fn finish_second_layer(
+        &mut self,
+        gl: &glow::Context,
+        output: Option<glow::Framebuffer>,
+    ) -> Result<()> {
+        let Some(second) = &mut self.second else {
+            return Err(Error::invalid(
+                "finish_second_layer needs two layers (ResolveSettings::layers = 2)",
+            ));
+        };
+        let host = SetupState::capture(gl);
+        let result = second.finish(gl, output);
+        host.restore(gl);
+        result
+    }
+
+    /// The second layer's coverage `α = n2 / (n1 + n2)` per pixel (R16F, in
+    /// red; 0 where a pixel has one cluster), as of the last resolve; `None`
+    /// with one layer.
+    pub fn second_layer_coverage(&self) -> Option<TextureRef> {
+        self.second.as_ref().map(|s| TextureRef::from(s.coverage()))
+    }
+
+    /// The second layer's G-buffer as of the last resolve: its colour
+    /// textures in host colour order (the host's formats) and its depth;
+    /// `None` with one layer. For hosts that light it with a pass of their own.
+    pub fn second_layer_gbuffer(&self) -> Option<(Vec<TextureRef>, TextureRef)> {
+        self.second.as_ref().map(|s| {
+            let (colors, depth) = s.gbuffer();
+            (
+                colors.iter().map(TextureRef::from).collect(),
+                TextureRef::from(depth),
+            )
+        })
+    }
+
+    /// The bytes the second layer allocates (0 with one layer): its
+    /// G-buffer, the first layer's copy kept during the second lighting,
+    /// the coverage, and the two lit copies once an output was given.
+    pub fn second_layer_bytes(&self) -> u64 {
+        self.second.as_ref().map_or(0, SecondLayer::bytes)
     }
 
     /// Resolve into another target (its colour `k` receives host attachment
@@ -1008,7 +1190,10 @@ impl MsaaRetrofit {
             || options.rules != self.options.rules
             || options.position_attachment != self.options.position_attachment
             || options.position_space != self.options.position_space
-            || options.stencil != self.options.stencil;
+            || options.stencil != self.options.stencil
+            || options.normal_attachment != self.options.normal_attachment
+            || options.layer_mix != self.options.layer_mix
+            || options.resolve.layers != self.options.resolve.layers;
         if twins_change {
             return self.rebuild(gl, options);
         }
@@ -1056,6 +1241,8 @@ impl MsaaRetrofit {
             key: std::mem::replace(&mut self.key, built.key),
             warnings: std::mem::replace(&mut self.warnings, built.warnings),
             stencil: std::mem::replace(&mut self.stencil, built.stencil),
+            normal: std::mem::replace(&mut self.normal, built.normal),
+            second: std::mem::replace(&mut self.second, built.second),
         };
         let old_options = std::mem::replace(&mut self.options, options.clone());
         match self.prepare(gl) {
@@ -1073,6 +1260,8 @@ impl MsaaRetrofit {
                     key: std::mem::replace(&mut self.key, old.key),
                     warnings: std::mem::replace(&mut self.warnings, old.warnings),
                     stencil: std::mem::replace(&mut self.stencil, old.stencil),
+                    normal: std::mem::replace(&mut self.normal, old.normal),
+                    second: std::mem::replace(&mut self.second, old.second),
                 };
                 new.destroy(gl);
                 self.options = old_options;
@@ -1088,6 +1277,9 @@ impl MsaaRetrofit {
         if let Some(s) = self.stencil {
             s.destroy(gl);
         }
+        if let Some(s) = self.second {
+            s.destroy(gl);
+        }
         self.resolver.destroy(gl);
     }
 }
@@ -1098,6 +1290,7 @@ impl GlObject for MsaaRetrofit {
         self.twin.handles(out);
         self.target.handles(out);
         self.stencil.handles(out);
+        self.second.handles(out);
         self.resolver.handles(out);
     }
 }

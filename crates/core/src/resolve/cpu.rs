@@ -3,7 +3,7 @@
 //! selection tests of `shaders/complex.glsl`, which every shader shares).
 //! Tests compare the GLSL against it; change both together.
 
-use super::{DepthProjection, ResolveMethod, ResolveRule, ResolveSettings, Window};
+use super::{DepthProjection, NormalEncoding, ResolveMethod, ResolveRule, ResolveSettings, Window};
 
 /// Where the depth key of a sample comes from.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,6 +35,9 @@ pub struct CpuResolve {
     pub clear_depth: f64,
     /// `tan(fov_y / height_px)`: the view-space size of a pixel at distance 1.
     pub footprint: f64,
+    /// The normal attachment (index into the pixel's attachments) and its
+    /// encoding: with two layers, clusters split by normal too.
+    pub normal: Option<(usize, NormalEncoding)>,
 }
 
 /// One pixel's samples: `depth[i]` and `attachments[k][i]`.
@@ -72,6 +75,26 @@ pub struct ResolvedPixel {
     pub complex: bool,
     /// A sample sits so close to a window edge or a depth tie that `f32`
     /// arithmetic may decide it differently: compare such pixels loosely.
+    pub ambiguous: bool,
+}
+
+/// The second resolved layer of one pixel ([`ResolveSettings::layers`] = 2).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SecondLayerPixel {
+    /// Per colour attachment, the second cluster's resolved value (sample
+    /// 0's where there is no second cluster).
+    pub attachments: Vec<[f64; 4]>,
+    /// The second cluster's depth-buffer value; the clear depth where there
+    /// is none.
+    pub depth: f64,
+    /// The second cluster's seed (its reference sample), if there is one.
+    pub reference: Option<usize>,
+    /// Weights per sample (0 outside the second cluster).
+    pub weights: Vec<f64>,
+    /// `n2 / (n1 + n2)`: the second cluster's share of the two kept clusters'
+    /// samples (0 without one).
+    pub coverage: f64,
+    /// `f32` may decide a membership differently: compare loosely.
     pub ambiguous: bool,
 }
 
@@ -400,8 +423,10 @@ impl CpuResolve {
         let mut ambiguous = selection_ambiguous;
         for i in 0..n {
             let (w, near_edge) = self.closeness(&keys, i, r);
-            weights.push(w);
-            ambiguous |= near_edge;
+            // With two layers a sample of another orientation is another surface.
+            let (same, near_threshold) = self.same_normal(px, &keys, i, r);
+            weights.push(if same { w } else { 0.0 });
+            ambiguous |= near_edge || (w > 0.0 && near_threshold);
         }
         // Depths that differ by an f32 rounding may order differently on the GPU.
         for i in 0..n {
@@ -440,6 +465,127 @@ impl CpuResolve {
             reference: r,
             weights,
             complex: true,
+            ambiguous,
+        }
+    }
+}
+
+impl CpuResolve {
+    /// Whether clusters split by normal: two layers and a normal attachment.
+    fn splits_by_normal(&self) -> Option<(usize, NormalEncoding)> {
+        self.normal.filter(|_| self.settings.layers == 2)
+    }
+
+    /// Whether samples `i` and `j` may be one surface by their normals (always,
+    /// without the normal test, for background, or for a normal that is not
+    /// finite or shorter than 1e-6), and whether `f32` may decide it
+    /// differently (a cosine within 1e-5 of the threshold).
+    fn same_normal(&self, px: &PixelSamples, keys: &Keys, i: usize, j: usize) -> (bool, bool) {
+        let Some((k, encoding)) = self.splits_by_normal() else {
+            return (true, false);
+        };
+        if keys.bg[i] || keys.bg[j] || i == j {
+            return (true, false);
+        }
+        let a = encoding.decode(px.attachments[k][i]);
+        let b = encoding.decode(px.attachments[k][j]);
+        let length = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        let (la, lb) = (length(a), length(b));
+        if !(la.is_finite() && lb.is_finite() && la >= 1e-6 && lb >= 1e-6) {
+            return (true, false);
+        }
+        let cos = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (la * lb);
+        let t = self.settings.normal_threshold;
+        (cos >= t, (cos - t).abs() <= 1e-5)
+    }
+
+    /// Sample `j` belongs to the cluster seeded by `s`: within its window and
+    /// of its orientation. The second value: `f32` may decide differently.
+    fn member(&self, px: &PixelSamples, keys: &Keys, j: usize, s: usize) -> (bool, bool) {
+        let (w, near_edge) = self.closeness(keys, j, s);
+        let (same, near_threshold) = self.same_normal(px, keys, j, s);
+        (w > 0.0 && same, near_edge || (w > 0.0 && near_threshold))
+    }
+
+    /// The second layer of one pixel (see [`SecondLayerPixel`]): the samples
+    /// outside the first layer's cluster (weight 0 there), the largest
+    /// cluster among them (each candidate seed's cluster is the samples
+    /// within its window and of its orientation; ties to the nearer seed,
+    /// then the lower index), resolved by the attachments' rules with the
+    /// seed as reference. A pixel that takes one sample has none.
+    pub fn resolve_second_layer_at(
+        &self,
+        px: &PixelSamples,
+        at: Option<PixelPlace>,
+    ) -> SecondLayerPixel {
+        let n = px.depth.len();
+        let first = self.resolve_pixel_at(px, at);
+        let none = |ambiguous| SecondLayerPixel {
+            attachments: px.attachments.iter().map(|a| a[0]).collect(),
+            depth: self.clear_depth,
+            reference: None,
+            weights: vec![0.0; n],
+            coverage: 0.0,
+            ambiguous,
+        };
+        if self.settings.layers != 2 || !first.complex {
+            return none(first.ambiguous);
+        }
+        let keys = self.keys(px);
+        let outside: Vec<bool> = first.weights.iter().map(|&w| w == 0.0).collect();
+        let mut ambiguous = first.ambiguous;
+        let mut seed: Option<(usize, usize)> = None; // (sample, cluster size)
+        for s in (0..n).filter(|&s| outside[s]) {
+            let mut size = 0;
+            for j in (0..n).filter(|&j| outside[j]) {
+                let (inside, unsure) = self.member(px, &keys, j, s);
+                size += usize::from(inside);
+                ambiguous |= unsure;
+            }
+            let better = match seed {
+                None => true,
+                Some((b, best)) => size > best || (size == best && keys.less(s, b)),
+            };
+            if better {
+                seed = Some((s, size));
+            }
+        }
+        let Some((s, n2)) = seed else {
+            return none(ambiguous);
+        };
+        let weights: Vec<f64> = (0..n)
+            .map(|j| {
+                if outside[j] && self.member(px, &keys, j, s).0 {
+                    self.closeness(&keys, j, s).0
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let n1 = n - outside.iter().filter(|&&o| o).count();
+        let attachments = px
+            .attachments
+            .iter()
+            .zip(&self.rules)
+            .map(|(values, rule)| match rule {
+                ResolveRule::Select => values[s],
+                ResolveRule::Blend => blend(values, &weights, s),
+                ResolveRule::BlendNormal => blend_normal(values, &weights, s),
+                ResolveRule::BlendHdr => blend_hdr(values, &weights, s),
+            })
+            .collect();
+        let depth = if self.settings.blend_depth {
+            let sum: f64 = (0..n).map(|i| weights[i] * px.depth[i]).sum();
+            sum / weights.iter().sum::<f64>()
+        } else {
+            px.depth[s]
+        };
+        SecondLayerPixel {
+            attachments,
+            depth,
+            reference: Some(s),
+            weights,
+            coverage: n2 as f64 / (n1 + n2) as f64,
             ambiguous,
         }
     }
@@ -557,6 +703,7 @@ mod tests {
             key_source: CpuKeySource::Position(1),
             clear_depth: 1.0,
             footprint: 0.001,
+            normal: None,
         }
     }
 
@@ -718,5 +865,79 @@ mod tests {
         };
         assert!((rev.linearize(n / 10.0) - 10.0).abs() < 1e-9);
         assert!(rev.linearize(0.0).is_infinite());
+    }
+
+    #[test]
+    fn the_second_layer_is_the_largest_other_cluster_sharing_with_the_first() {
+        let inf = f64::INFINITY;
+        let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
+        cpu.settings.layers = 2;
+        // A bar (z = 10) over the sky: median takes the sky (samples 1..3),
+        // the second layer is the bar's one sample.
+        let out = cpu.resolve_second_layer_at(&pixel(&[10.0, inf, inf, inf]), None);
+        assert_eq!(out.reference, Some(0));
+        assert_eq!(out.coverage, 0.25);
+        assert_eq!(out.weights, vec![1.0, 0.0, 0.0, 0.0]);
+        // Three clusters (10, 50, 200): the median's (50, samples 1 and 2),
+        // then the largest of the rest, ties to the nearer: 10 (sample 0).
+        let px = pixel(&[10.0, 50.0, 50.0, 200.0]);
+        let first = cpu.resolve_pixel(&px);
+        assert_eq!(first.weights, vec![0.0, 1.0, 1.0, 0.0]);
+        let out = cpu.resolve_second_layer_at(&px, None);
+        assert_eq!(out.reference, Some(0));
+        // The two kept clusters share the pixel: 1 / (2 + 1).
+        assert!((out.coverage - 1.0 / 3.0).abs() < 1e-12);
+        // One cluster: no second layer, sample 0's values at the clear depth.
+        let out = cpu.resolve_second_layer_at(&pixel(&[10.0, 10.01, 10.0, 10.02]), None);
+        assert_eq!((out.reference, out.coverage, out.depth), (None, 0.0, 1.0));
+    }
+
+    #[test]
+    fn normals_split_a_crease_only_with_two_layers() {
+        let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
+        cpu.normal = Some((0, NormalEncoding::Xyz));
+        // One depth, two orientations 90 degrees apart (attachment 0 holds
+        // the normals here): samples 0, 1 face +z, samples 2, 3 face +x.
+        let mut px = pixel(&[10.0, 10.01, 10.0, 10.01]);
+        px.attachments[0] = vec![
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [1.0, 0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0, 0.0],
+        ];
+        assert_eq!(cpu.resolve_pixel(&px).weights, vec![1.0; 4]);
+        cpu.settings.layers = 2;
+        let first = cpu.resolve_pixel(&px);
+        assert_eq!(first.weights, vec![1.0, 1.0, 0.0, 0.0]);
+        let second = cpu.resolve_second_layer_at(&px, None);
+        assert_eq!(second.reference, Some(2));
+        assert_eq!(second.coverage, 0.5);
+    }
+
+    #[test]
+    fn normal_encodings_decode_to_the_stored_direction() {
+        let n = [0.48, -0.6, -0.64];
+        let unorm = [n[0] * 0.5 + 0.5, n[1] * 0.5 + 0.5, n[2] * 0.5 + 0.5, 0.0];
+        let d = NormalEncoding::Unorm.decode(unorm);
+        assert!((0..3).all(|c| (d[c] - n[c]).abs() < 1e-12));
+        // Octahedral: project onto |x| + |y| + |z| = 1, fold the lower half.
+        let l1 = n[0].abs() + n[1].abs() + n[2].abs();
+        let (px, py) = (n[0] / l1, n[1] / l1);
+        let sign = |c: f64| if c >= 0.0 { 1.0 } else { -1.0 };
+        let folded = [(1.0 - py.abs()) * sign(px), (1.0 - px.abs()) * sign(py)];
+        for (encoding, stored) in [
+            (NormalEncoding::Octahedral, [folded[0], folded[1], 0.0, 0.0]),
+            (
+                NormalEncoding::OctahedralUnorm,
+                [folded[0] * 0.5 + 0.5, folded[1] * 0.5 + 0.5, 0.0, 0.0],
+            ),
+        ] {
+            let d = encoding.decode(stored);
+            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            assert!(
+                (0..3).all(|c| (d[c] / len - n[c]).abs() < 1e-9),
+                "{encoding}: {d:?}"
+            );
+        }
     }
 }

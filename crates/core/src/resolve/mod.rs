@@ -11,8 +11,8 @@ mod settings;
 mod stencil;
 
 pub use settings::{
-    DepthProjection, Region, ResolveMethod, ResolveRule, ResolveSettings, Selection, SelectionFlag,
-    Window,
+    DEFAULT_NORMAL_THRESHOLD, DepthProjection, NormalEncoding, Region, ResolveMethod, ResolveRule,
+    ResolveSettings, Selection, SelectionFlag, Window,
 };
 pub(crate) use stencil::StencilPass;
 pub use stencil::{STENCIL_COPY_FRAG, StencilCopy};
@@ -114,6 +114,11 @@ pub(crate) struct ResolveProgramKey {
     pub reference_output: bool,
     /// Selective anti-aliasing criteria compiled in.
     pub selection: SelectionKey,
+    /// With two layers: the normal attachment's slot and encoding, whose
+    /// test splits clusters.
+    pub normal: Option<(ResolveSlot, NormalEncoding)>,
+    /// Write the second layer and its coverage instead of the first.
+    pub second_layer_output: bool,
 }
 
 /// The compiled-in shape of a [`Selection`] (its numbers are uniforms).
@@ -283,6 +288,20 @@ impl ResolveProgramKey {
             let component = ["x", "y", "z", "w"][usize::from(component.min(3))];
             def("SELECT_FLAG_COMPONENT", component.into());
         }
+        if let Some((ResolveSlot(slot), encoding)) = self.normal {
+            def("CLUSTER_NORMALS", "1".into());
+            def("NORMAL_SAMPLER", format!("u_att{slot}"));
+            let encoding = match encoding {
+                NormalEncoding::Xyz => "NORMAL_XYZ",
+                NormalEncoding::Unorm => "NORMAL_UNORM",
+                NormalEncoding::Octahedral => "NORMAL_OCTAHEDRAL",
+                NormalEncoding::OctahedralUnorm => "NORMAL_OCTAHEDRAL_UNORM",
+            };
+            def("NORMAL_ENCODING", encoding.into());
+        }
+        if self.second_layer_output {
+            def("SECOND_LAYER_OUTPUT", "1".into());
+        }
         d
     }
 }
@@ -326,6 +345,9 @@ pub struct ResolveInputs<'a> {
     pub key: KeySource,
     /// Sample count; for layer arrays, the number of layers.
     pub samples: u32,
+    /// The colour input holding normals and their encoding: with two
+    /// layers, clusters split by normal too ([`ResolveSettings::normal_threshold`]).
+    pub normal: Option<(ResolveSlot, NormalEncoding)>,
 }
 
 impl ResolveInputs<'_> {
@@ -411,6 +433,7 @@ impl Resolver {
         target: &Framebuffer,
         settings: &ResolveSettings,
         extra: ExtraOutputs,
+        second_layer_output: bool,
     ) -> Result<ResolveProgramKey> {
         settings.validate()?;
         if inputs.colors.len() != inputs.rules.len()
@@ -457,6 +480,35 @@ impl Resolver {
                 )));
             }
         }
+        let normal = match inputs.normal {
+            Some((slot, encoding)) if settings.layers == 2 => {
+                let input = inputs.colors.get(slot.0).ok_or_else(|| {
+                    Error::Layout(format!(
+                        "the normals are in colour input {}, but there are {}",
+                        slot.0,
+                        inputs.colors.len()
+                    ))
+                })?;
+                if input.format.sample_kind() != SampleKind::Float {
+                    return Err(Error::UnsupportedFormat {
+                        attachment: inputs
+                            .attachments
+                            .get(slot.0)
+                            .map_or_else(|| format!("colour input {}", slot.0), |a| a.name()),
+                        format: input.format.name().into(),
+                        reason: "the normal test needs a float or normalised normal attachment"
+                            .into(),
+                    });
+                }
+                Some((slot, encoding))
+            }
+            _ => None,
+        };
+        if second_layer_output && (extra.complex || extra.reference) {
+            return Err(Error::invalid(
+                "the second layer's resolve writes no complex mask or reference index",
+            ));
+        }
         let s = settings;
         let write_depth = target.has_depth();
         Ok(ResolveProgramKey {
@@ -480,6 +532,8 @@ impl Resolver {
             complex_output: extra.complex,
             reference_output: extra.reference,
             selection: SelectionKey::of(&s.selection, inputs)?,
+            normal,
+            second_layer_output,
         })
     }
 
@@ -494,9 +548,62 @@ impl Resolver {
         settings: &ResolveSettings,
         extra: impl Into<ExtraOutputs>,
     ) -> Result<()> {
-        let key = Self::base_key(inputs, target, settings, extra.into())?;
+        let key = Self::base_key(inputs, target, settings, extra.into(), false)?;
         self.program(gl, &key)?;
         Ok(())
+    }
+
+    /// [`Resolver::prepare`] for [`Resolver::run_second_layer`].
+    pub fn prepare_second_layer(
+        &mut self,
+        gl: &glow::Context,
+        inputs: &ResolveInputs<'_>,
+        target: &Framebuffer,
+        settings: &ResolveSettings,
+    ) -> Result<()> {
+        let key = Self::second_layer_key(inputs, target, settings)?;
+        self.program(gl, &key)?;
+        Ok(())
+    }
+
+    fn second_layer_key(
+        inputs: &ResolveInputs<'_>,
+        target: &Framebuffer,
+        settings: &ResolveSettings,
+    ) -> Result<ResolveProgramKey> {
+        if settings.layers != 2 {
+            return Err(Error::invalid(format!(
+                "a second layer needs ResolveSettings::layers = 2, not {}",
+                settings.layers
+            )));
+        }
+        Self::base_key(inputs, target, settings, ExtraOutputs::default(), true)
+    }
+
+    /// Resolve the second layer of `inputs` (the largest cluster of samples
+    /// outside the first layer's; see the README's "second layer") into
+    /// `target`: colour attachment `k` receives input `k`, colour
+    /// attachment `colors.len()` the coverage `n2 / (n1 + n2)` (0 where a
+    /// pixel has one cluster), the depth attachment the second cluster's
+    /// depth (the clear depth where there is none). Needs
+    /// `params.settings.layers == 2`. The host's GL state is kept, as
+    /// [`Resolver::run`] keeps it.
+    pub fn run_second_layer(
+        &mut self,
+        gl: &glow::Context,
+        inputs: &ResolveInputs<'_>,
+        target: &Framebuffer,
+        params: &ResolveParams,
+    ) -> Result<()> {
+        let key = Self::second_layer_key(inputs, target, &params.settings)?;
+        self.run_key(
+            gl,
+            key,
+            inputs,
+            target,
+            params,
+            "the second layer's resolve pass",
+        )
     }
     /// Resolve `inputs` into `target`, whose colour attachment `k` (draw buffer
     /// `k`) receives input `k`, whose depth attachment (if any) receives the
@@ -512,7 +619,19 @@ impl Resolver {
         params: &ResolveParams,
         extra: impl Into<ExtraOutputs>,
     ) -> Result<()> {
-        let base = Self::base_key(inputs, target, &params.settings, extra.into())?;
+        let base = Self::base_key(inputs, target, &params.settings, extra.into(), false)?;
+        self.run_key(gl, base, inputs, target, params, "the resolve pass")
+    }
+
+    fn run_key(
+        &mut self,
+        gl: &glow::Context,
+        base: ResolveProgramKey,
+        inputs: &ResolveInputs<'_>,
+        target: &Framebuffer,
+        params: &ResolveParams,
+        stage: &str,
+    ) -> Result<()> {
         if matches!(inputs.key, KeySource::WorldPosition(_)) && params.view_row.is_none() {
             return Err(Error::invalid(
                 "the depth key is a world-space position, so each frame needs the view matrix \
@@ -528,7 +647,7 @@ impl Resolver {
         let result = self.draw(gl, &base, inputs, target, params);
         state.restore(gl);
         result?;
-        check_error(gl, "the resolve pass")
+        check_error(gl, stage)
     }
 
     /// One draw of the program for `key` into `target`, a full-screen triangle.
@@ -585,6 +704,9 @@ impl Resolver {
             if let Some(d) = s.selection.max_depth {
                 program.set_f32(gl, "u_max_depth", d as f32);
             }
+            if key.normal.is_some() {
+                program.set_f32(gl, "u_normal_threshold", s.normal_threshold as f32);
+            }
             gl.bind_vertex_array(Some(vao));
             gl.draw_arrays(glow::TRIANGLES, 0, 3);
         }
@@ -622,12 +744,20 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
     if key.reference_output {
         frag_outputs.push(("o_reference".into(), next));
     }
+    if key.second_layer_output {
+        frag_outputs.push(("o_coverage".into(), key.attachments.len() as u32));
+    }
     let frag_outputs: Vec<(&str, u32)> = frag_outputs
         .iter()
         .map(|(name, k)| (name.as_str(), *k))
         .collect();
     let label = format!(
-        "resolve {}x {} {} ({} attachments)",
+        "resolve{} {}x {} {} ({} attachments)",
+        if key.second_layer_output {
+            " (second layer)"
+        } else {
+            ""
+        },
         key.samples,
         key.method,
         key.window,

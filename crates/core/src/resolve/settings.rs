@@ -115,7 +115,32 @@ pub struct ResolveSettings {
     /// Selective anti-aliasing: which pixels are resolved at all; the others
     /// take one sample, as a uniform pixel does (default: every pixel).
     pub selection: Selection,
+    /// Resolved layers per pixel: 1 (the default) is the resolve of
+    /// DESIGN.md section 3; 2 also resolves the largest cluster of samples
+    /// outside the reference's into a second G-buffer with its coverage
+    /// (the README's "second layer"), and splits clusters by normal as well
+    /// as by depth where a normal attachment is named.
+    #[cfg_attr(feature = "serde", serde(default = "one_layer"))]
+    pub layers: u32,
+    /// With two layers and a normal attachment: two geometry samples close
+    /// in depth are one surface only when the cosine between their normals
+    /// is at least this (default 0.95).
+    #[cfg_attr(feature = "serde", serde(default = "default_normal_threshold"))]
+    pub normal_threshold: f64,
 }
+
+#[cfg(feature = "serde")]
+fn one_layer() -> u32 {
+    1
+}
+
+#[cfg(feature = "serde")]
+fn default_normal_threshold() -> f64 {
+    DEFAULT_NORMAL_THRESHOLD
+}
+
+/// [`ResolveSettings::normal_threshold`]'s default: the cosine of about 18°.
+pub const DEFAULT_NORMAL_THRESHOLD: f64 = 0.95;
 
 /// Selective anti-aliasing (issue 7): outside the selection a pixel takes one
 /// sample — sample 0 of every attachment and of depth, exactly as a uniform
@@ -321,6 +346,8 @@ impl Default for ResolveSettings {
             plane_uniformity: false,
             position_uniformity: false,
             selection: Selection::default(),
+            layers: 1,
+            normal_threshold: DEFAULT_NORMAL_THRESHOLD,
         }
     }
 }
@@ -338,6 +365,18 @@ impl ResolveSettings {
             return Err(crate::Error::invalid(format!(
                 "the inner window width c_in must be at least 0 and below c ({}), got {}",
                 self.c, self.c_in
+            )));
+        }
+        if !(1..=2).contains(&self.layers) {
+            return Err(crate::Error::invalid(format!(
+                "layers must be 1 or 2, got {}",
+                self.layers
+            )));
+        }
+        if !(self.normal_threshold.is_finite() && (-1.0..=1.0).contains(&self.normal_threshold)) {
+            return Err(crate::Error::invalid(format!(
+                "the normal threshold is a cosine, from -1 to 1, got {}",
+                self.normal_threshold
             )));
         }
         self.selection.validate()
@@ -420,6 +459,56 @@ name_table!(ResolveRule, "resolve rule",
     ResolveRule::BlendNormal => "blend-normal",
     ResolveRule::BlendHdr => "blend-hdr",
     ResolveRule::Select => "select",
+);
+
+/// How a host's normal attachment stores a unit normal: what the second
+/// layer's normal test decodes before comparing two samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
+pub enum NormalEncoding {
+    /// xyz as they are (a float or snorm attachment).
+    #[default]
+    Xyz,
+    /// xyz packed into `[0, 1]` as `n * 0.5 + 0.5` (an RGBA8 attachment).
+    Unorm,
+    /// Octahedral: x and y in `[-1, 1]` (Cigolle et al. 2014's mapping).
+    Octahedral,
+    /// Octahedral packed into `[0, 1]`.
+    OctahedralUnorm,
+}
+
+impl NormalEncoding {
+    /// The unit-length-or-not normal a stored value decodes to (the CPU
+    /// mirror of `resolve.frag`'s `decode_normal`).
+    pub fn decode(self, v: [f64; 4]) -> [f64; 3] {
+        let unpack = |c: f64| c * 2.0 - 1.0;
+        match self {
+            NormalEncoding::Xyz => [v[0], v[1], v[2]],
+            NormalEncoding::Unorm => [unpack(v[0]), unpack(v[1]), unpack(v[2])],
+            NormalEncoding::Octahedral | NormalEncoding::OctahedralUnorm => {
+                let (x, y) = if self == NormalEncoding::Octahedral {
+                    (v[0], v[1])
+                } else {
+                    (unpack(v[0]), unpack(v[1]))
+                };
+                let z = 1.0 - x.abs() - y.abs();
+                let sign = |c: f64| if c >= 0.0 { 1.0 } else { -1.0 };
+                if z < 0.0 {
+                    [(1.0 - y.abs()) * sign(x), (1.0 - x.abs()) * sign(y), z]
+                } else {
+                    [x, y, z]
+                }
+            }
+        }
+    }
+}
+
+name_table!(NormalEncoding, "normal encoding",
+    NormalEncoding::Xyz => "xyz",
+    NormalEncoding::Unorm => "unorm",
+    NormalEncoding::Octahedral => "octahedral",
+    NormalEncoding::OctahedralUnorm => "octahedral-unorm",
 );
 
 #[cfg(test)]

@@ -1,0 +1,668 @@
+//! The second resolved layer ([`ResolveSettings::layers`](crate::resolve::ResolveSettings::layers)
+//! = 2): the crate's own single-sample G-buffer that the second cluster of
+//! each pixel is resolved into, its coverage, and the passes around the
+//! host's second lighting — copies of the host's G-buffer in and out, and
+//! the mix of the two lit layers (`shaders/second_layer.frag`).
+//!
+//! The host's lighting runs twice, unchanged:
+//! [`MsaaRetrofit::begin_second_layer`](crate::MsaaRetrofit::begin_second_layer)
+//! keeps the lit first layer and puts the second layer into the host's
+//! textures, and [`MsaaRetrofit::finish_second_layer`](crate::MsaaRetrofit::finish_second_layer)
+//! mixes the two by coverage and puts the first layer back.
+
+use crate::gl::format::ComponentType;
+use crate::gl::{
+    Attachment, Format, Framebuffer, FullscreenPass, GlObject, Handle, HostImage, Made,
+    ShaderSource, Texture2d, TextureRef, VertexArray, check_error,
+};
+use crate::retrofit::{HostAttachment, HostFramebuffer, introspect_point};
+use crate::{Error, Result};
+use glow::HasContext;
+
+/// The mix pass's fragment shader: `shaders/second_layer.frag`.
+pub const SECOND_LAYER_FRAG: &str = include_str!("../shaders/second_layer.frag");
+
+/// How the two lit layers are mixed by the second layer's coverage `α`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum LayerMix {
+    /// [`LayerMix::Tonemapped`] for a floating-point (HDR) output,
+    /// [`LayerMix::Linear`] for any other (default).
+    #[default]
+    Auto,
+    /// `mix(first, second, α)` as the output stores it (an LDR output,
+    /// already display-referred).
+    Linear,
+    /// In the domain of `T(x) = x / (1 + max3(x))`, mapped back with
+    /// `T⁻¹(y) = y / (1 − max3(y))`: a bright layer cannot swamp a dark one,
+    /// as after a tonemap (the resolve's `BlendHdr` domain).
+    Tonemapped,
+    /// In the domain of the host's own tonemap curve: GLSL defining
+    /// `vec3 dmsaa_curve(vec3 hdr)` and its inverse
+    /// `vec3 dmsaa_curve_inverse(vec3 display)`, with no uniforms.
+    Curve(String),
+}
+
+/// The mix pass's program variants.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum MixKind {
+    Linear,
+    Tonemapped,
+    Curve,
+}
+
+impl MixKind {
+    fn define(self) -> &'static str {
+        match self {
+            MixKind::Linear => "MIX_LINEAR",
+            MixKind::Tonemapped => "MIX_TONEMAPPED",
+            MixKind::Curve => "MIX_CURVE",
+        }
+    }
+}
+
+/// The lit output's colour image, as the second layer reads and writes it.
+#[derive(Debug)]
+struct OutputTarget {
+    /// The host's framebuffer (`None`: the default framebuffer).
+    host: Option<glow::Framebuffer>,
+    /// A framebuffer of that image alone, for the mix (the host's may have
+    /// other draw buffers); `None` for the default framebuffer.
+    target: Option<Framebuffer>,
+    /// The lit first layer, and the lit second layer: copies of the output.
+    lit_first: Texture2d,
+    lit_second: Texture2d,
+    lit_first_fbo: Framebuffer,
+    lit_second_fbo: Framebuffer,
+    format: Format,
+}
+
+impl GlObject for OutputTarget {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.target.handles(out);
+        self.lit_first.handles(out);
+        self.lit_second.handles(out);
+        self.lit_first_fbo.handles(out);
+        self.lit_second_fbo.handles(out);
+    }
+}
+
+impl OutputTarget {
+    fn destroy(self, gl: &glow::Context) {
+        if let Some(t) = self.target {
+            t.destroy(gl);
+        }
+        self.lit_first_fbo.destroy(gl);
+        self.lit_second_fbo.destroy(gl);
+        self.lit_first.destroy(gl);
+        self.lit_second.destroy(gl);
+    }
+}
+
+/// The second layer's textures, copies and passes (see the module).
+#[derive(Debug)]
+pub(crate) struct SecondLayer {
+    /// Layer 2, in the host's formats, colour `k` for host colour `k`.
+    gbuffer: Vec<Texture2d>,
+    /// Its coverage `α` (R16F).
+    coverage: Texture2d,
+    /// Its depth, in the host's depth format.
+    depth: Texture2d,
+    /// All of the above: the second layer's resolve target.
+    target: Framebuffer,
+    /// The first layer, kept while the host lights the second.
+    saved: Vec<Texture2d>,
+    saved_depth: Texture2d,
+    saved_target: Framebuffer,
+    /// The host's images, to copy into and out of.
+    host_target: Framebuffer,
+    colors: usize,
+    depth_bits: u32,
+    width: u32,
+    height: u32,
+    mix_linear: FullscreenPass,
+    mix_tonemapped: FullscreenPass,
+    mix_curve: Option<FullscreenPass>,
+    mix: LayerMix,
+    vao: VertexArray,
+    output: Option<OutputTarget>,
+    /// `begin_second_layer` ran and `finish_second_layer` has not.
+    pub(crate) lighting: bool,
+    /// The second layer was resolved since the last `finish_second_layer`.
+    pub(crate) resolved: bool,
+}
+
+impl GlObject for SecondLayer {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.gbuffer.handles(out);
+        self.coverage.handles(out);
+        self.depth.handles(out);
+        self.target.handles(out);
+        self.saved.handles(out);
+        self.saved_depth.handles(out);
+        self.saved_target.handles(out);
+        self.host_target.handles(out);
+        self.mix_linear.handles(out);
+        self.mix_tonemapped.handles(out);
+        self.mix_curve.handles(out);
+        self.vao.handles(out);
+        self.output.handles(out);
+    }
+}
+
+fn mix_pass(gl: &glow::Context, kind: MixKind, curve: Option<&str>) -> Result<FullscreenPass> {
+    let mut fragment = ShaderSource::new().define(kind.define(), "1");
+    if let Some(curve) = curve {
+        fragment = fragment.part("LayerMix::Curve", curve);
+    }
+    let fragment = fragment.part("second_layer.frag", SECOND_LAYER_FRAG);
+    let pass = FullscreenPass::new(
+        gl,
+        &format!("second layer mix ({})", kind.define()),
+        &fragment,
+        &[("o_color", 0)],
+    )?;
+    unsafe {
+        let previous = gl.get_parameter_i32(glow::CURRENT_PROGRAM);
+        let p = pass.program();
+        p.bind(gl);
+        p.set_i32(gl, "u_first", 0);
+        p.set_i32(gl, "u_second", 1);
+        p.set_i32(gl, "u_coverage", 2);
+        gl.use_program(
+            u32::try_from(previous)
+                .ok()
+                .and_then(std::num::NonZeroU32::new)
+                .map(glow::NativeProgram),
+        );
+    }
+    Ok(pass)
+}
+
+/// A framebuffer over the host's colour images at `Color(k)` and its depth
+/// image, for the copies.
+fn host_images_target(gl: &glow::Context, host: &HostFramebuffer) -> Result<Framebuffer> {
+    let mut attachments: Vec<(Attachment, TextureRef)> = Vec::new();
+    let mut images: Vec<(Attachment, HostImage)> = Vec::new();
+    for (point, a) in host
+        .colors
+        .iter()
+        .enumerate()
+        .map(|(k, a)| (Attachment::Color(k as u32), a))
+        .chain([(host.depth.point, &host.depth)])
+    {
+        attachments.push((point, a.texture_ref()));
+        images.extend(a.host_image().map(|image| (point, image)));
+    }
+    let draw: Vec<Option<u32>> = (0..host.colors.len() as u32).map(Some).collect();
+    Framebuffer::with_host_images(
+        gl,
+        "second layer copies (host images)",
+        &attachments,
+        &images,
+        &draw,
+    )
+}
+
+/// Textures of the host's formats and a framebuffer over them (`extra`
+/// colour attachments after the host's).
+fn twin_set(
+    gl: &glow::Context,
+    made: &mut Made,
+    host: &HostFramebuffer,
+    what: &str,
+    extra: &[(Attachment, TextureRef)],
+) -> Result<(Vec<Texture2d>, Texture2d, Framebuffer)> {
+    let (w, h) = host.size();
+    let mut textures = Vec::with_capacity(host.colors.len());
+    for a in &host.colors {
+        textures.push(made.keep(Texture2d::new(
+            gl,
+            &format!("{what} {}", a.point.name()),
+            a.format,
+            w,
+            h,
+        )?));
+    }
+    let depth = made.keep(Texture2d::new(
+        gl,
+        &format!("{what} depth"),
+        host.depth.format,
+        w,
+        h,
+    )?);
+    let mut attachments: Vec<(Attachment, TextureRef)> = textures
+        .iter()
+        .enumerate()
+        .map(|(k, t)| (Attachment::Color(k as u32), TextureRef::from(t)))
+        .collect();
+    attachments.extend_from_slice(extra);
+    attachments.push((host.depth.point, TextureRef::from(&depth)));
+    let draw: Vec<Option<u32>> = (0..(host.colors.len() + extra.len()) as u32)
+        .map(Some)
+        .collect();
+    let fbo = made.keep(Framebuffer::new(gl, what, &attachments, &draw)?);
+    Ok((textures, depth, fbo))
+}
+
+impl SecondLayer {
+    /// Make the second layer of `host`'s G-buffer and compile its passes.
+    pub(crate) fn new(gl: &glow::Context, host: &HostFramebuffer, mix: &LayerMix) -> Result<Self> {
+        let (w, h) = host.size();
+        Made::build(gl, |made| {
+            let coverage = made.keep(Texture2d::new(
+                gl,
+                "second layer coverage",
+                Format::R16f,
+                w,
+                h,
+            )?);
+            let n = host.colors.len() as u32;
+            let (gbuffer, depth, target) = twin_set(
+                gl,
+                made,
+                host,
+                "second layer",
+                &[(Attachment::Color(n), TextureRef::from(&coverage))],
+            )?;
+            let (saved, saved_depth, saved_target) =
+                twin_set(gl, made, host, "second layer: first layer kept", &[])?;
+            let host_target = made.keep(host_images_target(gl, host)?);
+            let mix_linear = made.keep(mix_pass(gl, MixKind::Linear, None)?);
+            let mix_tonemapped = made.keep(mix_pass(gl, MixKind::Tonemapped, None)?);
+            let mix_curve = match mix {
+                LayerMix::Curve(source) => {
+                    Some(made.keep(mix_pass(gl, MixKind::Curve, Some(source))?))
+                }
+                _ => None,
+            };
+            let vao = made.keep(VertexArray::new(gl, "second layer mix")?);
+            Ok(SecondLayer {
+                gbuffer,
+                coverage,
+                depth,
+                target,
+                saved,
+                saved_depth,
+                saved_target,
+                host_target,
+                colors: host.colors.len(),
+                depth_bits: host.depth.format.properties().depth_bits,
+                width: w,
+                height: h,
+                mix_linear,
+                mix_tonemapped,
+                mix_curve,
+                mix: mix.clone(),
+                vao,
+                output: None,
+                lighting: false,
+                resolved: false,
+            })
+        })
+    }
+
+    /// The second layer's resolve target: layer 2's colours at `Color(k)`,
+    /// the coverage after them, its depth.
+    pub(crate) fn target(&self) -> &Framebuffer {
+        &self.target
+    }
+
+    /// The coverage texture (R16F, `α` in red).
+    pub(crate) fn coverage(&self) -> &Texture2d {
+        &self.coverage
+    }
+
+    /// Layer 2's colour textures, in host colour order, and its depth.
+    pub(crate) fn gbuffer(&self) -> (&[Texture2d], &Texture2d) {
+        (&self.gbuffer, &self.depth)
+    }
+
+    /// The bytes the second layer allocates (both G-buffer copies, the
+    /// coverage, and the lit copies once an output is known).
+    pub(crate) fn bytes(&self) -> u64 {
+        let texels = u64::from(self.width) * u64::from(self.height);
+        let layer: u64 = self
+            .gbuffer
+            .iter()
+            .map(|t| u64::from(t.format.bytes_per_texel()))
+            .sum::<u64>()
+            + u64::from(self.depth.format.bytes_per_texel());
+        let lit = self
+            .output
+            .as_ref()
+            .map_or(0, |o| 2 * u64::from(o.format.bytes_per_texel()));
+        texels * (2 * layer + u64::from(self.coverage.format.bytes_per_texel()) + lit)
+    }
+
+    /// Copy colour attachment `k` (or depth, for `None`) of `from` into `to`.
+    fn copy(&self, gl: &glow::Context, from: &Framebuffer, to: &Framebuffer, k: Option<usize>) {
+        let (w, h) = (self.width as i32, self.height as i32);
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(from.raw()));
+            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(to.raw()));
+            match k {
+                Some(k) => {
+                    gl.read_buffer(glow::COLOR_ATTACHMENT0 + k as u32);
+                    let mut draw = vec![glow::NONE; k + 1];
+                    draw[k] = glow::COLOR_ATTACHMENT0 + k as u32;
+                    gl.draw_buffers(&draw);
+                    gl.blit_framebuffer(
+                        0,
+                        0,
+                        w,
+                        h,
+                        0,
+                        0,
+                        w,
+                        h,
+                        glow::COLOR_BUFFER_BIT,
+                        glow::NEAREST,
+                    );
+                }
+                None => gl.blit_framebuffer(
+                    0,
+                    0,
+                    w,
+                    h,
+                    0,
+                    0,
+                    w,
+                    h,
+                    glow::DEPTH_BUFFER_BIT,
+                    glow::NEAREST,
+                ),
+            }
+        }
+    }
+
+    /// Copy every colour attachment and the depth (never the stencil) of
+    /// `from` into `to`, bit for bit.
+    fn copy_gbuffer(&self, gl: &glow::Context, from: &Framebuffer, to: &Framebuffer) {
+        unsafe {
+            // Bits, not colours: no sRGB decode or encode on the way.
+            gl.disable(glow::FRAMEBUFFER_SRGB);
+            gl.disable(glow::SCISSOR_TEST);
+            gl.color_mask(true, true, true, true);
+            gl.depth_mask(true);
+        }
+        for k in 0..self.colors {
+            self.copy(gl, from, to, Some(k));
+        }
+        if self.depth_bits > 0 {
+            self.copy(gl, from, to, None);
+        }
+        unsafe {
+            // The copies' own framebuffers draw to every colour again.
+            let all: Vec<u32> = (0..self.colors as u32)
+                .map(|k| glow::COLOR_ATTACHMENT0 + k)
+                .collect();
+            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(to.raw()));
+            gl.draw_buffers(&all);
+        }
+    }
+
+    /// The output's colour image and the lit copies, made again when the
+    /// output changed.
+    fn output_for(&mut self, gl: &glow::Context, host: Option<glow::Framebuffer>) -> Result<()> {
+        if self.output.as_ref().is_some_and(|o| o.host == host) {
+            return Ok(());
+        }
+        if let Some(old) = self.output.take() {
+            old.destroy(gl);
+        }
+        let (image, format) = match host {
+            Some(fbo) => {
+                let image = output_image(gl, fbo)?;
+                let format = image.format;
+                (Some(image), format)
+            }
+            None => (None, default_framebuffer_format(gl)),
+        };
+        if let Some(image) = &image {
+            if (image.width, image.height) != (self.width, self.height) {
+                return Err(Error::Retrofit {
+                    attachment: image.point.name(),
+                    reason: format!(
+                        "the lit output is {}x{}, the G-buffer {}x{}: the second layer mixes them pixel for pixel",
+                        image.width, image.height, self.width, self.height
+                    ),
+                });
+            }
+        }
+        let (w, h) = (self.width, self.height);
+        let output = Made::build(gl, |made| {
+            let target = match &image {
+                Some(image) => {
+                    let images: Vec<(Attachment, HostImage)> = image
+                        .host_image()
+                        .map(|i| (Attachment::Color(0), i))
+                        .into_iter()
+                        .collect();
+                    Some(made.keep(Framebuffer::with_host_images(
+                        gl,
+                        "second layer mix target (host output)",
+                        &[(Attachment::Color(0), image.texture_ref())],
+                        &images,
+                        &[Some(0)],
+                    )?))
+                }
+                None => None,
+            };
+            let lit_first = made.keep(Texture2d::new(gl, "lit first layer", format, w, h)?);
+            let lit_second = made.keep(Texture2d::new(gl, "lit second layer", format, w, h)?);
+            let fbo = |t: &Texture2d, label: &str| {
+                Framebuffer::new(
+                    gl,
+                    label,
+                    &[(Attachment::Color(0), TextureRef::from(t))],
+                    &[Some(0)],
+                )
+            };
+            let lit_first_fbo = made.keep(fbo(&lit_first, "lit first layer")?);
+            let lit_second_fbo = made.keep(fbo(&lit_second, "lit second layer")?);
+            Ok::<_, Error>(OutputTarget {
+                host,
+                target,
+                lit_first,
+                lit_second,
+                lit_first_fbo,
+                lit_second_fbo,
+                format,
+            })
+        })?;
+        self.output = Some(output);
+        Ok(())
+    }
+
+    /// Copy the output's lit colour into `first` (or the second copy).
+    fn keep_lit(&self, gl: &glow::Context, first: bool) {
+        let Some(o) = &self.output else {
+            return;
+        };
+        let (w, h) = (self.width as i32, self.height as i32);
+        let to = if first {
+            &o.lit_first_fbo
+        } else {
+            &o.lit_second_fbo
+        };
+        unsafe {
+            gl.disable(glow::FRAMEBUFFER_SRGB);
+            gl.disable(glow::SCISSOR_TEST);
+            gl.color_mask(true, true, true, true);
+            gl.bind_framebuffer(
+                glow::READ_FRAMEBUFFER,
+                o.target.as_ref().map(Framebuffer::raw),
+            );
+            if o.target.is_some() {
+                gl.read_buffer(glow::COLOR_ATTACHMENT0);
+            }
+            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(to.raw()));
+            gl.blit_framebuffer(
+                0,
+                0,
+                w,
+                h,
+                0,
+                0,
+                w,
+                h,
+                glow::COLOR_BUFFER_BIT,
+                glow::NEAREST,
+            );
+        }
+    }
+
+    /// Keep the lit first layer from `output` and put the second layer into
+    /// the host's textures (the caller saves the host's state).
+    pub(crate) fn begin(
+        &mut self,
+        gl: &glow::Context,
+        output: Option<glow::Framebuffer>,
+    ) -> Result<()> {
+        if self.lighting {
+            return Err(Error::invalid(
+                "begin_second_layer was called twice: call finish_second_layer after the second lighting",
+            ));
+        }
+        if !self.resolved {
+            return Err(Error::invalid(
+                "begin_second_layer needs this frame's resolve first (MsaaRetrofit::resolve)",
+            ));
+        }
+        self.output_for(gl, output)?;
+        self.keep_lit(gl, true);
+        self.copy_gbuffer(gl, &self.host_target, &self.saved_target);
+        self.copy_gbuffer(gl, &self.target, &self.host_target);
+        check_error(gl, "keeping the first layer and copying in the second")?;
+        self.lighting = true;
+        Ok(())
+    }
+
+    /// Mix the two lit layers into the output and put the first layer back
+    /// into the host's textures (the caller saves the host's state).
+    pub(crate) fn finish(
+        &mut self,
+        gl: &glow::Context,
+        output: Option<glow::Framebuffer>,
+    ) -> Result<()> {
+        if !self.lighting {
+            return Err(Error::invalid(
+                "finish_second_layer without begin_second_layer",
+            ));
+        }
+        if self.output.as_ref().map(|o| o.host) != Some(output) {
+            return Err(Error::invalid(
+                "finish_second_layer was given another output than begin_second_layer",
+            ));
+        }
+        self.lighting = false;
+        self.resolved = false;
+        self.keep_lit(gl, false);
+        self.draw_mix(gl)?;
+        self.copy_gbuffer(gl, &self.saved_target, &self.host_target);
+        check_error(gl, "mixing the two lit layers")
+    }
+
+    fn draw_mix(&self, gl: &glow::Context) -> Result<()> {
+        let Some(o) = &self.output else {
+            return Ok(());
+        };
+        let float = matches!(o.format.properties().component, ComponentType::Float);
+        let pass = match (&self.mix, &self.mix_curve) {
+            (LayerMix::Curve(_), Some(curve)) => curve,
+            (LayerMix::Tonemapped, _) => &self.mix_tonemapped,
+            (LayerMix::Auto, _) if float => &self.mix_tonemapped,
+            _ => &self.mix_linear,
+        };
+        unsafe {
+            match &o.target {
+                Some(t) => {
+                    pass.begin(gl, t);
+                }
+                None => {
+                    gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+                    crate::gl::SavedState::prepare_fullscreen_pass(gl);
+                    gl.disable(glow::DEPTH_TEST);
+                    gl.viewport(0, 0, self.width as i32, self.height as i32);
+                    pass.program().bind(gl);
+                }
+            }
+            gl.disable(glow::STENCIL_TEST);
+            // sRGB outputs: read decoded, mixed in linear light, encoded again.
+            gl.enable(glow::FRAMEBUFFER_SRGB);
+            TextureRef::from(&o.lit_first).bind(gl, 0);
+            TextureRef::from(&o.lit_second).bind(gl, 1);
+            TextureRef::from(&self.coverage).bind(gl, 2);
+        }
+        pass.draw(gl, &self.vao);
+        Ok(())
+    }
+
+    /// Free everything.
+    pub(crate) fn destroy(self, gl: &glow::Context) {
+        for t in self.gbuffer.into_iter().chain(self.saved) {
+            t.destroy(gl);
+        }
+        self.coverage.destroy(gl);
+        self.depth.destroy(gl);
+        self.saved_depth.destroy(gl);
+        self.target.destroy(gl);
+        self.saved_target.destroy(gl);
+        self.host_target.destroy(gl);
+        self.mix_linear.destroy(gl);
+        self.mix_tonemapped.destroy(gl);
+        if let Some(p) = self.mix_curve {
+            p.destroy(gl);
+        }
+        self.vao.destroy(gl);
+        if let Some(o) = self.output {
+            o.destroy(gl);
+        }
+    }
+}
+
+/// The image a host framebuffer lights into: its first draw buffer's.
+fn output_image(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostAttachment> {
+    unsafe {
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+        let draw = gl.get_parameter_i32(glow::DRAW_BUFFER0) as u32;
+        let point = match draw.checked_sub(glow::COLOR_ATTACHMENT0) {
+            Some(k) if k < 32 => Attachment::Color(k),
+            _ => {
+                return Err(Error::Retrofit {
+                    attachment: "GL_DRAW_BUFFER0".into(),
+                    reason: "the lit output's first draw buffer is GL_NONE; the second layer mixes into it".into(),
+                });
+            }
+        };
+        introspect_point(gl, point)?.ok_or_else(|| Error::Retrofit {
+            attachment: point.name(),
+            reason: "the lit output's first draw buffer has nothing attached".into(),
+        })
+    }
+}
+
+/// The default framebuffer's colour format, as far as the driver says.
+fn default_framebuffer_format(gl: &glow::Context) -> Format {
+    unsafe {
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        let draw = gl.get_parameter_i32(glow::DRAW_BUFFER) as u32;
+        let point = if draw == glow::FRONT || draw == glow::FRONT_LEFT {
+            glow::FRONT_LEFT
+        } else {
+            glow::BACK_LEFT
+        };
+        let p = |pname| {
+            gl.get_framebuffer_attachment_parameter_i32(glow::FRAMEBUFFER, point, pname)
+                .max(0) as u32
+        };
+        let srgb = p(glow::FRAMEBUFFER_ATTACHMENT_COLOR_ENCODING) == glow::SRGB;
+        let float = p(glow::FRAMEBUFFER_ATTACHMENT_COMPONENT_TYPE) == glow::FLOAT;
+        let _ = gl.get_error();
+        match (float, srgb) {
+            (true, _) => Format::Rgba16f,
+            (false, true) => Format::Srgb8Alpha8,
+            (false, false) => Format::Rgba8,
+        }
+    }
+}
