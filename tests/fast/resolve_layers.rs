@@ -447,7 +447,7 @@ impl Harness {
             normal: self.normal.map(|(k, e)| (ResolveSlot(k), e)),
         };
         resolver
-            .run_second_layer(gl, &inputs, &target, &params)
+            .run_second_layer(gl, &inputs, &target, &params, false)
             .unwrap();
         let gpu: Vec<_> = outputs
             .iter()

@@ -113,31 +113,57 @@ fn an_already_multisampled_gbuffer_is_refused_in_one_line() {
     assert_eq!(deferred_msaa::gl::live_objects().total(), 0);
 }
 
-/// No host's retrofitted image has a halo pixel (luminance over the
-/// supersampled reference by more than the threshold) that its own image
-/// without MSAA does not have. Not met yet, so not run by default: on
-/// silhouettes against the brighter sky, a pixel whose samples are half
-/// background takes the median reference's surface whole, which is the
-/// background, while the host's own pixel centre hits the geometry. Run it
-/// with `cargo test --test fast -- --ignored zoo::`.
+/// With the second layer, no host's retrofitted image has a halo pixel
+/// (luminance over the supersampled reference by more than the threshold)
+/// that its own image without MSAA does not have, and every other check of
+/// the harness holds around the three second-layer calls. With one layer
+/// it does not hold: on silhouettes against the brighter sky, a pixel whose
+/// samples are half background takes the median reference's surface whole,
+/// the background, where the host's own pixel centre hits the geometry
+/// (`one_layer_gains_halo_pixels` shows it).
 #[test]
-#[ignore = "silhouette pixels half covered take the background whole (the median reference); needs a second resolved layer"]
-fn no_host_gains_halo_pixels() {
+fn no_host_gains_halo_pixels_with_two_layers() {
     let Some(ctx) = common::egl_context() else {
         return;
     };
     let outcomes = [
-        zoo::learnopengl::outcome_world_key(&ctx),
-        zoo::learnopengl::outcome_depth_key(&ctx),
-        zoo::stencil::outcome(&ctx),
-        zoo::pbr::outcome(&ctx),
-        zoo::layered::outcome(&ctx),
-        zoo::picking::outcome(&ctx),
-        zoo::holes::outcome(&ctx),
+        zoo::learnopengl::outcome_world_key(&ctx, 2),
+        zoo::learnopengl::outcome_depth_key(&ctx, 2),
+        zoo::stencil::outcome(&ctx, 2),
+        zoo::pbr::outcome(&ctx, 2),
+        zoo::layered::outcome(&ctx, 2),
+        zoo::picking::outcome(&ctx, 2),
+        zoo::holes::outcome(&ctx, 2),
     ];
+    for outcome in &outcomes {
+        outcome.assert_ok();
+    }
     let failures: Vec<String> = outcomes
         .iter()
         .filter_map(|o| o.halo_failure.clone().map(|f| format!("{}: {f}", o.host)))
         .collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// What the second layer mends: with one layer, silhouette pixels whose
+/// samples are half background take the median reference's surface whole,
+/// and some host's image gains halo pixels its own image does not have.
+/// (Were this to stop holding, the halo check above would test nothing.)
+#[test]
+fn one_layer_gains_halo_pixels() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let outcomes = [
+        zoo::learnopengl::outcome_world_key(&ctx, 1),
+        zoo::stencil::outcome(&ctx, 1),
+        zoo::pbr::outcome(&ctx, 1),
+        zoo::layered::outcome(&ctx, 1),
+        zoo::picking::outcome(&ctx, 1),
+        zoo::holes::outcome(&ctx, 1),
+    ];
+    for o in &outcomes {
+        eprintln!("{}: {} new halo pixels with one layer", o.host, o.new_halos);
+    }
+    assert!(outcomes.iter().any(|o| o.new_halos > 0));
 }

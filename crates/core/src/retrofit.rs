@@ -889,7 +889,13 @@ impl MsaaRetrofit {
                 &draw,
             )?);
             let second = if options.resolve.layers == 2 {
-                Some(made.keep(SecondLayer::new(gl, &host, &options.layer_mix)?))
+                let with_stencil = stencil.is_some();
+                Some(made.keep(SecondLayer::new(
+                    gl,
+                    &host,
+                    &options.layer_mix,
+                    with_stencil,
+                )?))
             } else {
                 None
             };
@@ -941,10 +947,15 @@ impl MsaaRetrofit {
                 &inputs,
                 second.target(),
                 &self.options.resolve,
+                second.has_reference(),
             ),
-            Some(params) => self
-                .resolver
-                .run_second_layer(gl, &inputs, second.target(), params),
+            Some(params) => self.resolver.run_second_layer(
+                gl,
+                &inputs,
+                second.target(),
+                params,
+                second.has_reference(),
+            ),
         }
     }
 
@@ -1104,7 +1115,17 @@ impl MsaaRetrofit {
             return Ok(false);
         };
         let host = SetupState::capture(gl);
-        let result = second.begin(gl, output);
+        let mut result = second.begin(gl, output);
+        // The host's stencil, for its lighting's tests: the second
+        // cluster's seed sample's (the first layer's comes back in finish).
+        if let (Ok(()), Some(s), Some(depth), Some(reference)) = (
+            &result,
+            &self.stencil,
+            self.twin.depth(),
+            second.reference(),
+        ) {
+            result = s.pass.run(gl, depth, &self.twin.fbo, reference, &s.target);
+        }
         host.restore(gl);
         result.map(|()| true)
     }

@@ -15,7 +15,7 @@ use crate::gl::{
     Attachment, Format, Framebuffer, FullscreenPass, GlObject, Handle, HostImage, Made,
     ShaderSource, Texture2d, TextureRef, VertexArray, check_error,
 };
-use crate::retrofit::{HostAttachment, HostFramebuffer, introspect_point};
+use crate::retrofit::{HostAttachment, HostFramebuffer, HostImageKind, introspect_point};
 use crate::{Error, Result};
 use glow::HasContext;
 
@@ -98,6 +98,50 @@ impl OutputTarget {
     }
 }
 
+/// A set of G-buffer images the second layer copies between.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Set {
+    /// The host's textures.
+    Host,
+    /// The first layer, kept during the second lighting.
+    Saved,
+    /// The second layer.
+    Second,
+}
+
+/// One image for `glCopyImageSubData`: its name, target and layer.
+#[derive(Clone, Copy, Debug)]
+struct CopyImage {
+    name: glow::Texture,
+    target: u32,
+    layer: i32,
+}
+
+impl CopyImage {
+    fn of_host(a: &HostAttachment) -> Self {
+        let (name, target, layer) = match a.image {
+            HostImageKind::Texture2d(t) => (t, glow::TEXTURE_2D, 0),
+            HostImageKind::TextureLayer { texture, layer } => {
+                (texture, glow::TEXTURE_2D_ARRAY, layer as i32)
+            }
+            HostImageKind::Renderbuffer(rb) => (glow::NativeTexture(rb.0), glow::RENDERBUFFER, 0),
+        };
+        CopyImage {
+            name,
+            target,
+            layer,
+        }
+    }
+
+    fn of(t: &Texture2d) -> Self {
+        CopyImage {
+            name: TextureRef::from(t).raw,
+            target: glow::TEXTURE_2D,
+            layer: 0,
+        }
+    }
+}
+
 /// The second layer's textures, copies and passes (see the module).
 #[derive(Debug)]
 pub(crate) struct SecondLayer {
@@ -105,6 +149,9 @@ pub(crate) struct SecondLayer {
     gbuffer: Vec<Texture2d>,
     /// Its coverage `α` (R16F).
     coverage: Texture2d,
+    /// Its seed sample per pixel (R8UI), for a host whose stencil is copied
+    /// from the reference sample: the second lighting sees the seed's.
+    reference: Option<Texture2d>,
     /// Its depth, in the host's depth format.
     depth: Texture2d,
     /// All of the above: the second layer's resolve target.
@@ -115,6 +162,13 @@ pub(crate) struct SecondLayer {
     saved_target: Framebuffer,
     /// The host's images, to copy into and out of.
     host_target: Framebuffer,
+    /// The same images for `glCopyImageSubData` (colours, then depth),
+    /// where the context has it (GL 4.3 or `GL_ARB_copy_image`): a bit-exact
+    /// copy of every format; a blit may round a packed depth by a step.
+    host_images: Option<Vec<Option<CopyImage>>>,
+    /// The host's depth format has stencil, which the second layer's
+    /// depth must not overwrite.
+    host_stencil: bool,
     colors: usize,
     depth_bits: u32,
     width: u32,
@@ -135,6 +189,7 @@ impl GlObject for SecondLayer {
     fn handles(&self, out: &mut Vec<Handle>) {
         self.gbuffer.handles(out);
         self.coverage.handles(out);
+        self.reference.handles(out);
         self.depth.handles(out);
         self.target.handles(out);
         self.saved.handles(out);
@@ -246,7 +301,12 @@ fn twin_set(
 
 impl SecondLayer {
     /// Make the second layer of `host`'s G-buffer and compile its passes.
-    pub(crate) fn new(gl: &glow::Context, host: &HostFramebuffer, mix: &LayerMix) -> Result<Self> {
+    pub(crate) fn new(
+        gl: &glow::Context,
+        host: &HostFramebuffer,
+        mix: &LayerMix,
+        with_reference: bool,
+    ) -> Result<Self> {
         let (w, h) = host.size();
         Made::build(gl, |made| {
             let coverage = made.keep(Texture2d::new(
@@ -257,16 +317,40 @@ impl SecondLayer {
                 h,
             )?);
             let n = host.colors.len() as u32;
-            let (gbuffer, depth, target) = twin_set(
-                gl,
-                made,
-                host,
-                "second layer",
-                &[(Attachment::Color(n), TextureRef::from(&coverage))],
-            )?;
+            let reference = if with_reference {
+                Some(made.keep(Texture2d::new(
+                    gl,
+                    "second layer seed sample",
+                    Format::R8ui,
+                    w,
+                    h,
+                )?))
+            } else {
+                None
+            };
+            let mut extra = vec![(Attachment::Color(n), TextureRef::from(&coverage))];
+            if let Some(r) = &reference {
+                extra.push((Attachment::Color(n + 1), TextureRef::from(r)));
+            }
+            let (gbuffer, depth, target) = twin_set(gl, made, host, "second layer", &extra)?;
             let (saved, saved_depth, saved_target) =
                 twin_set(gl, made, host, "second layer: first layer kept", &[])?;
             let host_target = made.keep(host_images_target(gl, host)?);
+            let version = gl.version();
+            let copy_image = (version.major, version.minor) >= (4, 3)
+                || gl.supported_extensions().contains("GL_ARB_copy_image");
+            // An unsized host format (GL_RGBA, GL_DEPTH_COMPONENT) need not
+            // be the sized one ours has, which the copy requires: blit those.
+            let host_images = copy_image.then(|| {
+                host.colors
+                    .iter()
+                    .chain([&host.depth])
+                    .map(|a| {
+                        (a.requested_format == format!("GL_{}", a.format.name()))
+                            .then(|| CopyImage::of_host(a))
+                    })
+                    .collect()
+            });
             let mix_linear = made.keep(mix_pass(gl, MixKind::Linear, None)?);
             let mix_tonemapped = made.keep(mix_pass(gl, MixKind::Tonemapped, None)?);
             let mix_curve = match mix {
@@ -279,12 +363,15 @@ impl SecondLayer {
             Ok(SecondLayer {
                 gbuffer,
                 coverage,
+                reference,
                 depth,
                 target,
                 saved,
                 saved_depth,
                 saved_target,
                 host_target,
+                host_images,
+                host_stencil: host.depth.format.has_stencil(),
                 colors: host.colors.len(),
                 depth_bits: host.depth.format.properties().depth_bits,
                 width: w,
@@ -312,6 +399,16 @@ impl SecondLayer {
         &self.coverage
     }
 
+    /// Whether the second layer's resolve writes its seed sample.
+    pub(crate) fn has_reference(&self) -> bool {
+        self.reference.is_some()
+    }
+
+    /// The seed sample per pixel, for the host's stencil.
+    pub(crate) fn reference(&self) -> Option<&Texture2d> {
+        self.reference.as_ref()
+    }
+
     /// Layer 2's colour textures, in host colour order, and its depth.
     pub(crate) fn gbuffer(&self) -> (&[Texture2d], &Texture2d) {
         (&self.gbuffer, &self.depth)
@@ -334,8 +431,21 @@ impl SecondLayer {
         texels * (2 * layer + u64::from(self.coverage.format.bytes_per_texel()) + lit)
     }
 
-    /// Copy colour attachment `k` (or depth, for `None`) of `from` into `to`.
-    fn copy(&self, gl: &glow::Context, from: &Framebuffer, to: &Framebuffer, k: Option<usize>) {
+    /// Copy colour attachment `k` (or depth, for `None`, with the stencil
+    /// when `with_stencil`) of `from` into `to`.
+    fn copy(
+        &self,
+        gl: &glow::Context,
+        from: &Framebuffer,
+        to: &Framebuffer,
+        k: Option<usize>,
+        with_stencil: bool,
+    ) {
+        let depth_bits = if with_stencil && self.host_stencil {
+            glow::DEPTH_BUFFER_BIT | glow::STENCIL_BUFFER_BIT
+        } else {
+            glow::DEPTH_BUFFER_BIT
+        };
         let (w, h) = (self.width as i32, self.height as i32);
         unsafe {
             gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(from.raw()));
@@ -359,25 +469,108 @@ impl SecondLayer {
                         glow::NEAREST,
                     );
                 }
-                None => gl.blit_framebuffer(
-                    0,
-                    0,
-                    w,
-                    h,
-                    0,
-                    0,
-                    w,
-                    h,
-                    glow::DEPTH_BUFFER_BIT,
-                    glow::NEAREST,
-                ),
+                None => gl.blit_framebuffer(0, 0, w, h, 0, 0, w, h, depth_bits, glow::NEAREST),
             }
         }
     }
 
-    /// Copy every colour attachment and the depth (never the stencil) of
-    /// `from` into `to`, bit for bit.
-    fn copy_gbuffer(&self, gl: &glow::Context, from: &Framebuffer, to: &Framebuffer) {
+    /// The images of a set: the host's (`None`), or one of ours.
+    fn images(&self, set: Set) -> Option<Vec<Option<CopyImage>>> {
+        let ours = |textures: &[Texture2d], depth: &Texture2d| {
+            textures
+                .iter()
+                .chain([depth])
+                .map(|t| Some(CopyImage::of(t)))
+                .collect()
+        };
+        match set {
+            Set::Host => self.host_images.clone(),
+            Set::Saved => self
+                .host_images
+                .as_ref()
+                .map(|_| ours(&self.saved, &self.saved_depth)),
+            Set::Second => self
+                .host_images
+                .as_ref()
+                .map(|_| ours(&self.gbuffer, &self.depth)),
+        }
+    }
+
+    fn framebuffer(&self, set: Set) -> &Framebuffer {
+        match set {
+            Set::Host => &self.host_target,
+            Set::Saved => &self.saved_target,
+            Set::Second => &self.target,
+        }
+    }
+
+    /// Copy the colours and depth of `from` into `to`: with
+    /// `glCopyImageSubData` where the context has it, bit for bit (a
+    /// packed depth-stencil's stencil with its depth, unless `keep_stencil`,
+    /// when its depth alone is blitted), else by blits (the depth alone).
+    fn copy_set(&self, gl: &glow::Context, from: Set, to: Set, keep_stencil: bool) {
+        let (Some(src), Some(dst)) = (self.images(from), self.images(to)) else {
+            self.copy_gbuffer(
+                gl,
+                self.framebuffer(from),
+                self.framebuffer(to),
+                keep_stencil,
+            );
+            return;
+        };
+        let (w, h) = (self.width as i32, self.height as i32);
+        unsafe {
+            gl.disable(glow::FRAMEBUFFER_SRGB);
+            gl.disable(glow::SCISSOR_TEST);
+            gl.color_mask(true, true, true, true);
+            gl.depth_mask(true);
+        }
+        let mut blitted = false;
+        for (k, (s, d)) in src.iter().zip(&dst).enumerate() {
+            let depth = k == self.colors;
+            if depth && self.depth_bits == 0 {
+                continue;
+            }
+            match (s, d) {
+                (Some(s), Some(d)) if !(depth && keep_stencil && self.host_stencil) => unsafe {
+                    gl.copy_image_sub_data(
+                        s.name, s.target, 0, 0, 0, s.layer, d.name, d.target, 0, 0, 0, d.layer, w,
+                        h, 1,
+                    );
+                },
+                _ => {
+                    let attachment = (!depth).then_some(k);
+                    let (a, b) = (self.framebuffer(from), self.framebuffer(to));
+                    self.copy(gl, a, b, attachment, !keep_stencil);
+                    blitted |= !depth;
+                }
+            }
+        }
+        if blitted {
+            self.restore_draw_buffers(gl, to);
+        }
+    }
+
+    /// A copy target's framebuffer draws to every colour again.
+    fn restore_draw_buffers(&self, gl: &glow::Context, to: Set) {
+        let all: Vec<u32> = (0..self.colors as u32)
+            .map(|k| glow::COLOR_ATTACHMENT0 + k)
+            .collect();
+        unsafe {
+            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(self.framebuffer(to).raw()));
+            gl.draw_buffers(&all);
+        }
+    }
+
+    /// Copy every colour attachment and the depth (and the stencil, unless
+    /// `keep_stencil`) of `from` into `to` by blits.
+    fn copy_gbuffer(
+        &self,
+        gl: &glow::Context,
+        from: &Framebuffer,
+        to: &Framebuffer,
+        keep_stencil: bool,
+    ) {
         unsafe {
             // Bits, not colours: no sRGB decode or encode on the way.
             gl.disable(glow::FRAMEBUFFER_SRGB);
@@ -386,10 +579,10 @@ impl SecondLayer {
             gl.depth_mask(true);
         }
         for k in 0..self.colors {
-            self.copy(gl, from, to, Some(k));
+            self.copy(gl, from, to, Some(k), false);
         }
         if self.depth_bits > 0 {
-            self.copy(gl, from, to, None);
+            self.copy(gl, from, to, None, !keep_stencil);
         }
         unsafe {
             // The copies' own framebuffers draw to every colour again.
@@ -531,8 +724,9 @@ impl SecondLayer {
         }
         self.output_for(gl, output)?;
         self.keep_lit(gl, true);
-        self.copy_gbuffer(gl, &self.host_target, &self.saved_target);
-        self.copy_gbuffer(gl, &self.target, &self.host_target);
+        self.copy_set(gl, Set::Host, Set::Saved, false);
+        // The host's stencil stays: its lighting may test it.
+        self.copy_set(gl, Set::Second, Set::Host, true);
         check_error(gl, "keeping the first layer and copying in the second")?;
         self.lighting = true;
         Ok(())
@@ -559,7 +753,8 @@ impl SecondLayer {
         self.resolved = false;
         self.keep_lit(gl, false);
         self.draw_mix(gl)?;
-        self.copy_gbuffer(gl, &self.saved_target, &self.host_target);
+        // Depth and stencil as they were before the second lighting.
+        self.copy_set(gl, Set::Saved, Set::Host, false);
         check_error(gl, "mixing the two lit layers")
     }
 
@@ -604,6 +799,9 @@ impl SecondLayer {
             t.destroy(gl);
         }
         self.coverage.destroy(gl);
+        if let Some(r) = self.reference {
+            r.destroy(gl);
+        }
         self.depth.destroy(gl);
         self.saved_depth.destroy(gl);
         self.target.destroy(gl);

@@ -8,7 +8,7 @@
 //! them through [`ZooHost`].
 
 use deferred_msaa::gl::live_objects;
-use deferred_msaa::{Frame, MsaaRetrofit, RetrofitOptions};
+use deferred_msaa::{Frame, MsaaRetrofit, NormalAttachment, RetrofitOptions};
 use deferred_msaa_lab::bench::{HALO_THRESHOLD, downsample_srgb};
 use deferred_msaa_lab::compare::{flip, halo_pixels, luminance};
 use deferred_msaa_lab::context::HeadlessContext;
@@ -354,6 +354,31 @@ pub fn program_with_locations(
             gl.delete_shader(s);
         }
         program
+    }
+}
+
+/// `options` with `layers` resolved layers; with two, clusters split by
+/// the host's normal attachment `normal` (its integrator names it, as a
+/// host names its position attachment).
+pub fn with_layers(
+    options: RetrofitOptions,
+    layers: u32,
+    normal: NormalAttachment,
+) -> RetrofitOptions {
+    let mut options = options;
+    options.resolve.layers = layers;
+    if layers == 2 {
+        options.normal_attachment = Some(normal);
+    }
+    options
+}
+
+/// A run's name: the host's, with the layer count when it is not 1.
+pub fn name(host: &str, layers: u32) -> String {
+    if layers == 1 {
+        host.to_string()
+    } else {
+        format!("{host} ({layers} layers)")
     }
 }
 
@@ -908,8 +933,11 @@ pub fn run<T: ZooHost>(
     }
     let planes = host.read_gbuffer(gl);
     host.lighting_pass(gl);
+    let mut image = read_image(gl, host.screen(), W, H);
+    if options.resolve.layers == 2 {
+        image = second_lighting(ctx, &host, &mut msaa, &planes, &image, &mut failures);
+    }
     clutter.reset(gl);
-    let image = read_image(gl, host.screen(), W, H);
     msaa.destroy(gl);
     let live = live_objects();
     if live.total() != 0 {
@@ -981,6 +1009,96 @@ pub fn run<T: ZooHost>(
         faces,
         failures,
     }
+}
+
+/// The three lines of the second layer around the host's unchanged
+/// lighting, called a second time: the host's state around each call, its
+/// G-buffer after them (the first layer's again, bit for bit), and the lit
+/// image where a pixel has one cluster (the first lighting's, bit for bit).
+/// Returns the mixed image.
+fn second_lighting<T: ZooHost>(
+    ctx: &HeadlessContext,
+    host: &T,
+    msaa: &mut MsaaRetrofit,
+    first_planes: &[Plane],
+    first_image: &RgbaImage,
+    failures: &mut Vec<String>,
+) -> RgbaImage {
+    let gl = ctx.gl();
+    let before = GlState::capture(gl);
+    match msaa.begin_second_layer(gl, Some(host.screen())) {
+        Ok(true) => {}
+        Ok(false) => failures.push("begin_second_layer did nothing with two layers".into()),
+        Err(e) => failures.push(format!("begin_second_layer failed: {e}")),
+    }
+    for d in before.differences(&GlState::capture(gl)) {
+        failures.push(format!("begin_second_layer changed the host's state: {d}"));
+    }
+    host.lighting_pass(gl);
+    let before = GlState::capture(gl);
+    if let Err(e) = msaa.finish_second_layer(gl, Some(host.screen())) {
+        failures.push(format!("finish_second_layer failed: {e}"));
+    }
+    for d in before.differences(&GlState::capture(gl)) {
+        failures.push(format!("finish_second_layer changed the host's state: {d}"));
+    }
+    for (first, now) in first_planes.iter().zip(host.read_gbuffer(gl)) {
+        if first.raw != now.raw {
+            let bpp = first.raw.len() / (first.width * first.height) as usize;
+            let differing: Vec<usize> = (0..first.raw.len() / bpp)
+                .filter(|&i| first.raw[i * bpp..(i + 1) * bpp] != now.raw[i * bpp..(i + 1) * bpp])
+                .collect();
+            let at = differing[0];
+            failures.push(format!(
+                "{}: the first layer is not back in the host's G-buffer after finish_second_layer ({} texels differ; at ({}, {}) {:?} was {:?})",
+                first.name,
+                differing.len(),
+                at as u32 % first.width,
+                at as u32 / first.width,
+                first.values(at as u32 % first.width, at as u32 / first.width),
+                now.values(at as u32 % first.width, at as u32 / first.width)
+            ));
+        }
+    }
+    let image = read_image(gl, host.screen(), W, H);
+    let Some(coverage) = msaa.second_layer_coverage() else {
+        failures.push("no second layer coverage with two layers".into());
+        return image;
+    };
+    let coverage = read_texture(
+        gl,
+        coverage.raw,
+        W,
+        H,
+        Read {
+            name: "second layer coverage",
+            format: glow::RED,
+            channels: 1,
+            channel: Channel::F32,
+            check: Check::Smooth,
+        },
+    );
+    let mut two = 0;
+    for y in 0..H {
+        for x in 0..W {
+            // Coverage rows go bottom up, images top down.
+            let alpha = coverage.values(x, y)[0];
+            let (xi, yi) = (x, H - 1 - y);
+            if alpha > 0.0 {
+                two += 1;
+            } else if image.get_pixel(xi, yi) != first_image.get_pixel(xi, yi) {
+                failures.push(format!(
+                    "pixel ({xi}, {yi}) has one cluster but the mix changed it: {:?} vs {:?}",
+                    image.get_pixel(xi, yi),
+                    first_image.get_pixel(xi, yi)
+                ));
+            }
+        }
+    }
+    if two == 0 {
+        failures.push("no pixel has a second layer: the scene does not test it".into());
+    }
+    image
 }
 
 /// Assert a refusal is the one-line typed error the brief asks for: it names

@@ -15,7 +15,8 @@
 
 use super::harness::{self, Channel, Check, Plane, Read, ZooHost};
 use super::scene;
-use deferred_msaa::{Frame, RetrofitOptions};
+use deferred_msaa::resolve::NormalEncoding;
+use deferred_msaa::{ColorAttachment, Frame, NormalAttachment, RetrofitOptions};
 use glow::HasContext;
 
 const MODEL_VS: &str = r#"#version 330 core
@@ -400,8 +401,16 @@ impl ZooHost for Holes {
 }
 
 /// The host run through the harness, with the options it needs.
-pub fn outcome(ctx: &deferred_msaa_lab::context::HeadlessContext) -> harness::Outcome {
-    harness::run::<Holes>(ctx, "holes", &RetrofitOptions::default(), Holes::frame)
+pub fn outcome(ctx: &deferred_msaa_lab::context::HeadlessContext, layers: u32) -> harness::Outcome {
+    let options = harness::with_layers(
+        RetrofitOptions::default(),
+        layers,
+        NormalAttachment {
+            attachment: ColorAttachment(2),
+            encoding: NormalEncoding::Unorm,
+        },
+    );
+    harness::run::<Holes>(ctx, &harness::name("holes", layers), &options, Holes::frame)
 }
 
 #[test]
@@ -409,5 +418,5 @@ fn a_hole_in_the_draw_buffers_leaves_the_attachment_behind_it_alone() {
     let Some(ctx) = crate::common::egl_context() else {
         return;
     };
-    outcome(&ctx).assert_ok();
+    outcome(&ctx, 1).assert_ok();
 }

@@ -11,7 +11,8 @@
 
 use super::harness::{self, Channel, Check, Plane, Read, ZooHost};
 use super::scene;
-use deferred_msaa::{Frame, RetrofitOptions};
+use deferred_msaa::resolve::NormalEncoding;
+use deferred_msaa::{ColorAttachment, Frame, NormalAttachment, RetrofitOptions};
 use glow::HasContext;
 
 const MODEL_VS: &str = r#"#version 330 core
@@ -378,8 +379,21 @@ impl ZooHost for Layered {
 }
 
 /// The host run through the harness, with the options it needs.
-pub fn outcome(ctx: &deferred_msaa_lab::context::HeadlessContext) -> harness::Outcome {
-    harness::run::<Layered>(ctx, "layered", &RetrofitOptions::default(), Layered::frame)
+pub fn outcome(ctx: &deferred_msaa_lab::context::HeadlessContext, layers: u32) -> harness::Outcome {
+    let options = harness::with_layers(
+        RetrofitOptions::default(),
+        layers,
+        NormalAttachment {
+            attachment: ColorAttachment(1),
+            encoding: NormalEncoding::Unorm,
+        },
+    );
+    harness::run::<Layered>(
+        ctx,
+        &harness::name("layered", layers),
+        &options,
+        Layered::frame,
+    )
 }
 
 #[test]
@@ -387,5 +401,5 @@ fn a_layered_array_texture_gbuffer_is_resolved_layer_by_layer() {
     let Some(ctx) = crate::common::egl_context() else {
         return;
     };
-    outcome(&ctx).assert_ok();
+    outcome(&ctx, 1).assert_ok();
 }

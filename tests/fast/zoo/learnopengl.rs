@@ -22,7 +22,8 @@
 
 use super::harness::{self, Channel, Check, Plane, Read, W, ZooHost};
 use super::scene;
-use deferred_msaa::{ColorAttachment, Frame, PositionSpace, RetrofitOptions};
+use deferred_msaa::resolve::NormalEncoding;
+use deferred_msaa::{ColorAttachment, Frame, NormalAttachment, PositionSpace, RetrofitOptions};
 use glow::HasContext;
 
 const GBUFFER_VS: &str = r#"#version 330 core
@@ -646,21 +647,43 @@ fn world_key_options() -> RetrofitOptions {
 }
 
 /// The host run through the harness with its world-space position as the key.
-pub fn outcome_world_key(ctx: &deferred_msaa_lab::context::HeadlessContext) -> harness::Outcome {
+pub fn outcome_world_key(
+    ctx: &deferred_msaa_lab::context::HeadlessContext,
+    layers: u32,
+) -> harness::Outcome {
+    let options = harness::with_layers(
+        world_key_options(),
+        layers,
+        NormalAttachment {
+            attachment: ColorAttachment(1),
+            encoding: NormalEncoding::Xyz,
+        },
+    );
     harness::run::<LearnOpenGl>(
         ctx,
-        "learnopengl-world-key",
-        &world_key_options(),
+        &harness::name("learnopengl-world-key", layers),
+        &options,
         LearnOpenGl::frame_with_view,
     )
 }
 
 /// The host run through the harness with the default depth key.
-pub fn outcome_depth_key(ctx: &deferred_msaa_lab::context::HeadlessContext) -> harness::Outcome {
+pub fn outcome_depth_key(
+    ctx: &deferred_msaa_lab::context::HeadlessContext,
+    layers: u32,
+) -> harness::Outcome {
+    let options = harness::with_layers(
+        RetrofitOptions::default(),
+        layers,
+        NormalAttachment {
+            attachment: ColorAttachment(1),
+            encoding: NormalEncoding::Xyz,
+        },
+    );
     harness::run::<LearnOpenGl>(
         ctx,
-        "learnopengl-depth-key",
-        &RetrofitOptions::default(),
+        &harness::name("learnopengl-depth-key", layers),
+        &options,
         LearnOpenGl::frame,
     )
 }
@@ -670,7 +693,7 @@ fn the_tutorial_layout_with_its_world_space_position_as_the_key() {
     let Some(ctx) = crate::common::egl_context() else {
         return;
     };
-    outcome_world_key(&ctx).assert_ok();
+    outcome_world_key(&ctx, 1).assert_ok();
 }
 
 #[test]
@@ -678,7 +701,7 @@ fn the_tutorial_layout_with_the_default_depth_key() {
     let Some(ctx) = crate::common::egl_context() else {
         return;
     };
-    outcome_depth_key(&ctx).assert_ok();
+    outcome_depth_key(&ctx, 1).assert_ok();
 }
 
 #[test]

@@ -11,8 +11,8 @@
 
 use super::harness::{self, Channel, Check, Plane, Read, ZooHost};
 use super::scene;
-use deferred_msaa::resolve::ResolveRule;
-use deferred_msaa::{ColorAttachment, Frame, RetrofitOptions};
+use deferred_msaa::resolve::{NormalEncoding, ResolveRule};
+use deferred_msaa::{ColorAttachment, Frame, NormalAttachment, RetrofitOptions};
 use glow::HasContext;
 
 const MODEL_VS: &str = r#"#version 330 core
@@ -421,12 +421,25 @@ impl ZooHost for PbrEngine {
 /// The host run through the harness, with the options it needs: its
 /// octahedral normals are selected from the reference sample, since a
 /// blend of two octahedral encodings is not the encoding of a blended normal.
-pub fn outcome(ctx: &deferred_msaa_lab::context::HeadlessContext) -> harness::Outcome {
+pub fn outcome(ctx: &deferred_msaa_lab::context::HeadlessContext, layers: u32) -> harness::Outcome {
     let options = RetrofitOptions {
         rules: vec![(ColorAttachment(1), ResolveRule::Select)],
         ..RetrofitOptions::default()
     };
-    harness::run::<PbrEngine>(ctx, "pbr", &options, PbrEngine::frame)
+    let options = harness::with_layers(
+        options,
+        layers,
+        NormalAttachment {
+            attachment: ColorAttachment(1),
+            encoding: NormalEncoding::Octahedral,
+        },
+    );
+    harness::run::<PbrEngine>(
+        ctx,
+        &harness::name("pbr", layers),
+        &options,
+        PbrEngine::frame,
+    )
 }
 
 #[test]
@@ -434,5 +447,5 @@ fn a_pbr_engine_with_srgb_snorm_and_integer_attachments() {
     let Some(ctx) = crate::common::egl_context() else {
         return;
     };
-    outcome(&ctx).assert_ok();
+    outcome(&ctx, 1).assert_ok();
 }

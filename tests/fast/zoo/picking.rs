@@ -8,7 +8,8 @@
 
 use super::harness::{self, Channel, Check, Plane, Read, ZooHost};
 use super::scene;
-use deferred_msaa::{Frame, RetrofitOptions};
+use deferred_msaa::resolve::NormalEncoding;
+use deferred_msaa::{ColorAttachment, Frame, NormalAttachment, RetrofitOptions};
 use glow::HasContext;
 
 const MODEL_VS: &str = r#"#version 330 core
@@ -391,8 +392,21 @@ impl ZooHost for Picking {
 }
 
 /// The host run through the harness, with the options it needs.
-pub fn outcome(ctx: &deferred_msaa_lab::context::HeadlessContext) -> harness::Outcome {
-    harness::run::<Picking>(ctx, "picking", &RetrofitOptions::default(), Picking::frame)
+pub fn outcome(ctx: &deferred_msaa_lab::context::HeadlessContext, layers: u32) -> harness::Outcome {
+    let options = harness::with_layers(
+        RetrofitOptions::default(),
+        layers,
+        NormalAttachment {
+            attachment: ColorAttachment(1),
+            encoding: NormalEncoding::Xyz,
+        },
+    );
+    harness::run::<Picking>(
+        ctx,
+        &harness::name("picking", layers),
+        &options,
+        Picking::frame,
+    )
 }
 
 #[test]
@@ -400,5 +414,5 @@ fn a_picking_renderbuffer_beside_the_lit_textures() {
     let Some(ctx) = crate::common::egl_context() else {
         return;
     };
-    outcome(&ctx).assert_ok();
+    outcome(&ctx, 1).assert_ok();
 }

@@ -14,8 +14,8 @@
 
 use super::harness::{self, Channel, Check, Plane, Read, ZooHost};
 use super::scene;
-use deferred_msaa::resolve::StencilCopy;
-use deferred_msaa::{Frame, RetrofitOptions};
+use deferred_msaa::resolve::{NormalEncoding, StencilCopy};
+use deferred_msaa::{ColorAttachment, Frame, NormalAttachment, RetrofitOptions};
 use glow::HasContext;
 
 const MODEL_VS: &str = r#"#version 150
@@ -455,11 +455,19 @@ impl ZooHost for StencilEngine {
 }
 
 /// The host run through the harness, with the options it needs.
-pub fn outcome(ctx: &deferred_msaa_lab::context::HeadlessContext) -> harness::Outcome {
+pub fn outcome(ctx: &deferred_msaa_lab::context::HeadlessContext, layers: u32) -> harness::Outcome {
+    let options = harness::with_layers(
+        RetrofitOptions::default(),
+        layers,
+        NormalAttachment {
+            attachment: ColorAttachment(1),
+            encoding: NormalEncoding::Xyz,
+        },
+    );
     harness::run::<StencilEngine>(
         ctx,
-        "stencil",
-        &RetrofitOptions::default(),
+        &harness::name("stencil", layers),
+        &options,
         StencilEngine::frame,
     )
 }
@@ -469,7 +477,7 @@ fn a_stencil_marking_engine_keeps_its_stencil_through_the_resolve() {
     let Some(ctx) = crate::common::egl_context() else {
         return;
     };
-    outcome(&ctx).assert_ok();
+    outcome(&ctx, 1).assert_ok();
 }
 
 /// The same engine where the driver cannot export stencil from a shader:

@@ -504,9 +504,9 @@ impl Resolver {
             }
             _ => None,
         };
-        if second_layer_output && (extra.complex || extra.reference) {
+        if second_layer_output && extra.complex {
             return Err(Error::invalid(
-                "the second layer's resolve writes no complex mask or reference index",
+                "the second layer's resolve writes no complex mask",
             ));
         }
         let s = settings;
@@ -560,8 +560,9 @@ impl Resolver {
         inputs: &ResolveInputs<'_>,
         target: &Framebuffer,
         settings: &ResolveSettings,
+        reference_output: bool,
     ) -> Result<()> {
-        let key = Self::second_layer_key(inputs, target, settings)?;
+        let key = Self::second_layer_key(inputs, target, settings, reference_output)?;
         self.program(gl, &key)?;
         Ok(())
     }
@@ -570,6 +571,7 @@ impl Resolver {
         inputs: &ResolveInputs<'_>,
         target: &Framebuffer,
         settings: &ResolveSettings,
+        reference_output: bool,
     ) -> Result<ResolveProgramKey> {
         if settings.layers != 2 {
             return Err(Error::invalid(format!(
@@ -577,7 +579,11 @@ impl Resolver {
                 settings.layers
             )));
         }
-        Self::base_key(inputs, target, settings, ExtraOutputs::default(), true)
+        let extra = ExtraOutputs {
+            complex: false,
+            reference: reference_output,
+        };
+        Self::base_key(inputs, target, settings, extra, true)
     }
 
     /// Resolve the second layer of `inputs` (the largest cluster of samples
@@ -585,7 +591,10 @@ impl Resolver {
     /// `target`: colour attachment `k` receives input `k`, colour
     /// attachment `colors.len()` the coverage `n2 / (n1 + n2)` (0 where a
     /// pixel has one cluster), the depth attachment the second cluster's
-    /// depth (the clear depth where there is none). Needs
+    /// depth (the clear depth where there is none) and, with
+    /// `reference_output`, colour attachment `colors.len() + 1` the second
+    /// cluster's seed sample (0 where there is none; an unsigned-integer
+    /// target, as [`ExtraOutputs::reference`]). Needs
     /// `params.settings.layers == 2`. The host's GL state is kept, as
     /// [`Resolver::run`] keeps it.
     pub fn run_second_layer(
@@ -594,8 +603,9 @@ impl Resolver {
         inputs: &ResolveInputs<'_>,
         target: &Framebuffer,
         params: &ResolveParams,
+        reference_output: bool,
     ) -> Result<()> {
-        let key = Self::second_layer_key(inputs, target, &params.settings)?;
+        let key = Self::second_layer_key(inputs, target, &params.settings, reference_output)?;
         self.run_key(
             gl,
             key,
@@ -741,11 +751,12 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
         frag_outputs.push(("o_complex".into(), next));
         next += 1;
     }
+    if key.second_layer_output {
+        frag_outputs.push(("o_coverage".into(), next));
+        next += 1;
+    }
     if key.reference_output {
         frag_outputs.push(("o_reference".into(), next));
-    }
-    if key.second_layer_output {
-        frag_outputs.push(("o_coverage".into(), key.attachments.len() as u32));
     }
     let frag_outputs: Vec<(&str, u32)> = frag_outputs
         .iter()
