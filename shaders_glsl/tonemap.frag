@@ -8,8 +8,15 @@
 // TONEMAP_FUNCTIONS_ONLY defined to average its samples as this pass will
 // see them (lighting_per_sample.frag).
 
+#ifdef TONEMAP_CONSTANTS
+// The retrofit's layer mix compiles the curve without uniforms (tonemap.rs's
+// layer_mix_curve): the renderer's exposure and white point as constants.
+const float u_exposure = TONEMAP_EXPOSURE;
+const float u_white = TONEMAP_WHITE;
+#else
 uniform float u_exposure;
 uniform float u_white;
+#endif
 
 vec3 reinhard_extended(vec3 x, float white) {
     return x * (1.0 + x / (white * white)) / (1.0 + x);

@@ -21,6 +21,6 @@ pub mod error;
 pub mod renderer;
 pub mod scene;
 
-pub use deferred_msaa::{frame, gbuffer, gl, readback, resolve, retrofit};
+pub use deferred_msaa::{frame, gbuffer, gl, readback, resolve, retrofit, second_layer};
 pub use deferred_msaa_headless as context;
 pub use error::{Error, Result};

@@ -17,7 +17,10 @@
 //! `min(2.5, c/2)`), `:c_in=F` (also spelt `c-in`), `:nofast` (no
 //! uniform-pixel fast path), `:position-uniformity` and `:plane-uniformity`
 //! (the fast path's opt-in tests, `ResolveSettings::position_uniformity` and
-//! `plane_uniformity`). `+fxaa` after any entry runs the crate's FXAA
+//! `plane_uniformity`), `:layers=2` (the second resolved layer, lit by the
+//! same lighting pass and mixed in by coverage; front, median and back) and
+//! `:normal-threshold=F` (with two layers: the cosine below which two close
+//! samples are different surfaces, default 0.95). `+fxaa` after any entry runs the crate's FXAA
 //! after tonemapping: `median:hard+fxaa`, `none+fxaa`. `:full` after any
 //! method renders with every attachment of the layout instead of the
 //! scene-adaptive plan (see [`crate::renderer::plan`]): `median` against
@@ -68,7 +71,7 @@ pub const METHOD_NAMES: &[&str] = &[
 
 /// What the accepted entries look like, for error messages.
 const ACCEPTED: &str = "accepted: none, average, front, median, back, per-sample, complex, gbaa, sparse; \
-resolve options after colons (:hard, :smooth, :c=F, :c_in=F, :nofast, :position-uniformity, :plane-uniformity); sparse's :pool=N; :full (the full G-buffer layout) \
+resolve options after colons (:hard, :smooth, :c=F, :c_in=F, :nofast, :position-uniformity, :plane-uniformity, :layers=2, :normal-threshold=F); sparse's :pool=N; :full (the full G-buffer layout) \
 and +fxaa after any entry";
 
 /// Whether the method's G-buffer pass does more than `none`'s (its
@@ -204,6 +207,25 @@ impl FromStr for MethodEntry {
                         }
                         None if matches!(*option, "plane-uniformity" | "plane_uniformity") => {
                             settings.plane_uniformity = true
+                        }
+                        Some(("layers", v)) => {
+                            settings.layers = match v.trim() {
+                                "1" => 1,
+                                "2" => 2,
+                                _ => {
+                                    return Err(Error::invalid(format!(
+                                        "method `{label}`: `layers={v}`: 1 or 2 resolved layers are accepted"
+                                    )));
+                                }
+                            };
+                            if settings.layers == 2 && method == ResolveMethod::Average {
+                                return Err(Error::invalid(format!(
+                                    "method `{label}`: average weighs every sample, so it has one cluster and no second layer; use front, median or back"
+                                )));
+                            }
+                        }
+                        Some(("normal-threshold" | "normal_threshold", v)) => {
+                            settings.normal_threshold = parse_number(label, "normal-threshold", v)?
                         }
                         Some(("c", v)) => settings.c = parse_number(label, "c", v)?,
                         Some(("c_in" | "c-in", v)) => {

@@ -743,7 +743,12 @@ fn time_scene(
                     } else {
                         0.0
                     };
-                    t.resolve_ms + t.fxaa_ms + t.gbaa_ms + extra + extra_geometry
+                    t.resolve_ms
+                        + t.second_layer_ms
+                        + t.fxaa_ms
+                        + t.gbaa_ms
+                        + extra
+                        + extra_geometry
                 })
                 .collect(),
         );
@@ -768,6 +773,7 @@ fn time_scene(
             ms_resolve: median(job.frames.iter().map(|t| t.resolve_ms).collect()),
             ms_fxaa: median(job.frames.iter().map(|t| t.fxaa_ms).collect()),
             ms_lighting: median(job.frames.iter().map(|t| t.lighting_ms).collect()),
+            ms_second_layer: median(job.frames.iter().map(|t| t.second_layer_ms).collect()),
             flip_p95: flip.p95 as f64,
             complex_fraction: job.complex_fraction,
             sparse_overflow_pixels: job.sparse_overflow_pixels,

@@ -75,6 +75,12 @@ pub struct Run {
     pub ms_fxaa: f64,
     /// Median lighting time in ms (extra key).
     pub ms_lighting: f64,
+    /// Median time of the resolve's second layer in ms, 0 with one layer:
+    /// the retrofit's copies around the second lighting, its stencil mask,
+    /// the second lighting and the mix (the second layer's resolve is in
+    /// `ms_resolve`; both are in `ms_aa`).
+    #[serde(default)]
+    pub ms_second_layer: f64,
     /// 95th percentile of the per-pixel FLIP error (extra key).
     pub flip_p95: f64,
     /// Fraction of pixels the method treated as complex in its last frame

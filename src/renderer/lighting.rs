@@ -3,8 +3,7 @@
 //! Its source and defines do not depend on MSAA.
 
 use super::GBufferSlots;
-use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
-use super::targets::ColorTarget;
+use super::pass::{LightTarget, draw_fullscreen, fullscreen_program};
 use crate::Result;
 use crate::gbuffer::GBuffer;
 use crate::gl::{GlObject, Handle, Program, ShaderSource, Texture2d, VertexArray, check_error};
@@ -206,7 +205,7 @@ impl LightingPass {
     pub(crate) fn draw(
         &self,
         gl: &glow::Context,
-        target: &ColorTarget,
+        target: LightTarget,
         vao: &VertexArray,
         gbuffer: &GBuffer,
         slots: GBufferSlots,
@@ -214,13 +213,7 @@ impl LightingPass {
         clear_depth: f32,
         stand_ins: StandIns<'_>,
     ) -> Result<()> {
-        bind_target(
-            gl,
-            target.fbo.raw(),
-            target.texture.width,
-            target.texture.height,
-        );
-        fullscreen_state(gl);
+        target.bind(gl);
         let p = &self.program;
         p.bind(gl);
         let mut inputs = vec![
@@ -258,6 +251,7 @@ impl LightingPass {
                 gl.bind_texture(glow::TEXTURE_2D, None);
             }
         }
+        unsafe { gl.disable(glow::STENCIL_TEST) };
         Ok(check_error(gl, "the lighting pass")?)
     }
 

@@ -80,6 +80,7 @@ mod mesh;
 mod options;
 mod pass;
 pub mod plan;
+mod second_layer_mask;
 mod slow_path;
 mod sparse;
 mod targets;
@@ -207,6 +208,10 @@ pub struct FrameTimings {
     /// lighting, with [`AaMode::Complex`] the complex-pixel detection and
     /// both lighting passes.
     pub lighting_ms: f64,
+    /// The resolve's second layer (with two layers): the retrofit's copies
+    /// around the second lighting, its mask, the second lighting and the
+    /// mix (the second layer's resolve is in `resolve_ms`).
+    pub second_layer_ms: f64,
     /// Forward transparent objects.
     pub transparent_ms: f64,
     /// Tonemapping.
@@ -683,6 +688,7 @@ impl Renderer {
             resolve_ms: 0.0,
             decal_ms: 0.0,
             lighting_ms: 0.0,
+            second_layer_ms: 0.0,
             transparent_ms: 0.0,
             tonemap_ms: 0.0,
             fxaa_ms: 0.0,
@@ -731,7 +737,8 @@ impl Renderer {
             gbuffer,
             retrofit,
             targets,
-        } = &self.frame;
+        } = &mut self.frame;
+        let (gbuffer, targets) = (&*gbuffer, &*targets);
         if let Some(hook) = self.decal_hook.as_mut() {
             t.decal_ms = timed(gl, timer, || {
                 gbuffer.fbo.bind(gl);
@@ -740,27 +747,36 @@ impl Renderer {
             })?;
         }
 
-        let frame = FrameParts {
-            aa,
-            gbuffer,
-            retrofit: retrofit.as_ref(),
-            targets,
-        };
-        let step = LightingStep {
-            frame,
-            lighting,
-            fullscreen,
-            slots,
-            batches: &batches,
-            clear_depth,
-            stand_ins: StandIns {
-                background: &targets.background.texture,
-                specular: specular_constant,
-            },
-            projection: &projection,
-            footprint,
-        };
+        // One step per lighting call: the second lends the retrofit apart.
+        macro_rules! lighting_step {
+            ($retrofit:expr) => {
+                LightingStep {
+                    frame: FrameParts {
+                        aa,
+                        gbuffer,
+                        retrofit: $retrofit,
+                        targets,
+                    },
+                    lighting,
+                    fullscreen,
+                    slots,
+                    batches: &batches,
+                    clear_depth,
+                    stand_ins: StandIns {
+                        background: &targets.background.texture,
+                        specular: specular_constant,
+                    },
+                    projection: &projection,
+                    footprint,
+                }
+            };
+        }
+        let step = lighting_step!(retrofit.as_ref());
         t.lighting_ms = timed(gl, timer, || technique.light(gl, &step))?;
+        // The retrofit is lent mutably for its second-layer calls, so this
+        // step does not lend it again.
+        let step = lighting_step!(None);
+        t.second_layer_ms = technique.second_lighting(gl, retrofit.as_mut(), &step, timer)?;
         if runs_transparent {
             t.transparent_ms = timed(gl, timer, || {
                 transparent.draw(
@@ -793,6 +809,7 @@ impl Renderer {
             + t.resolve_ms
             + t.decal_ms
             + t.lighting_ms
+            + t.second_layer_ms
             + t.transparent_ms
             + t.tonemap_ms
             + t.gbaa_ms

@@ -5,7 +5,9 @@ use super::{DepthMode, GBufferSlots, SparseOptions};
 use crate::gbuffer::{GBufferLayout, MemoryBudget};
 use crate::gl::ColorAttachment;
 use crate::resolve::{KeySource, ResolveSettings, ResolveSlot, SelectionFlag};
-use crate::retrofit::{PositionSpace, RetrofitOptions};
+use crate::resolve::NormalEncoding;
+use crate::retrofit::{NormalAttachment, PositionSpace, RetrofitOptions};
+use crate::second_layer::LayerMix;
 use crate::{Error, Result};
 
 /// How the frame is anti-aliased.
@@ -244,6 +246,15 @@ impl RenderOptions {
             position_attachment,
             position_space,
             resolve,
+            // The layouts' normals are xyz; with two layers, clusters split by them.
+            normal_attachment: GBufferSlots::of(&self.layout)
+                .ok()
+                .filter(|_| resolve.layers == 2)
+                .map(|slots| NormalAttachment {
+                    attachment: ColorAttachment(slots.normal),
+                    encoding: NormalEncoding::Xyz,
+                }),
+            layer_mix: LayerMix::Curve(super::tonemap::layer_mix_curve()),
             ..RetrofitOptions::default()
         }
     }

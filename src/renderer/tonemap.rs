@@ -17,6 +17,20 @@ pub(crate) const EXPOSURE: f32 = 1.0;
 /// The HDR value the curve maps to 1.0.
 pub(crate) const WHITE: f32 = 8.0;
 
+/// The curve's part of `tonemap.frag` as the retrofit's
+/// [`LayerMix::Curve`](crate::second_layer::LayerMix::Curve): the two lit
+/// layers are mixed after the tonemap curve, as the per-sample lighting
+/// averages its samples, so the tonemapped pixel is the coverage-weighted
+/// mix of its tonemapped layers.
+pub(crate) fn layer_mix_curve() -> String {
+    format!(
+        "#define TONEMAP_FUNCTIONS_ONLY 1\n#define TONEMAP_CONSTANTS 1\n\
+         #define TONEMAP_EXPOSURE {EXPOSURE:?}\n#define TONEMAP_WHITE {WHITE:?}\n{TONEMAP_FRAG}\n\
+         vec3 dmsaa_curve(vec3 hdr) {{ return tonemap_linear(hdr); }}\n\
+         vec3 dmsaa_curve_inverse(vec3 y) {{ return tonemap_linear_inverse(y); }}\n"
+    )
+}
+
 /// The tonemap program.
 #[derive(Debug)]
 pub(crate) struct TonemapPass {

@@ -623,6 +623,11 @@ void main() {
             normals[k] = k == i ? n_i : normals[k];
         }
     }
+    // A pixel all of whose samples are in the first cluster has no second
+    // one: its group leaves the loops below after their first iteration.
+    int first_size = 0;
+    for (int k = 0; k < NUM_SAMPLES; ++k) first_size += in_first[k] ? 1 : 0;
+    bool one_cluster = g_one || first_size == NUM_SAMPLES;
     // The seed of the largest cluster outside it: each candidate's cluster
     // is the outside samples within its window and of its orientation; ties
     // go to the nearer seed (candidates come in index order).
@@ -630,7 +635,7 @@ void main() {
     int second_size = 0;
     float seed_sort = 0.0;
     for (int s = g_zero; s < NUM_SAMPLES; ++s) {
-        if (g_one) break;
+        if (one_cluster) break;
         bool in_s;
         float z_s;
         bool bg_s;
@@ -652,9 +657,7 @@ void main() {
         second_size = better ? size : second_size;
         seed_sort = better ? sort_s : seed_sort;
     }
-    bool has_second = seed >= 0;
-    int first_size = 0;
-    for (int k = 0; k < NUM_SAMPLES; ++k) first_size += in_first[k] ? 1 : 0;
+    bool has_second = seed >= 0 && !one_cluster;
     float coverage = has_second ? float(second_size) / float(first_size + second_size) : 0.0;
     // From here on the seed is the reference; a pixel without a second
     // cluster writes sample 0's values, as a one-sample pixel does.

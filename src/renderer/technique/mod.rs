@@ -30,6 +30,7 @@ use super::background_copy::{BackgroundCopyPass, CopyTarget};
 use super::geometry::{GeometryPass, GeometryTarget};
 use super::lighting::{LightBatch, LightingPass, StandIns};
 use super::mesh::GpuScene;
+use super::pass::{LightTarget, StencilSelect};
 use super::targets::{ColorTarget, Targets};
 use super::{AaMode, GBufferSlots, RenderOptions, timed};
 use crate::Result;
@@ -49,7 +50,7 @@ use std::any::Any;
 pub(crate) fn registry() -> Vec<Box<dyn Technique>> {
     vec![
         Box::new(none::NoAntialiasing),
-        Box::new(resolve::Resolve),
+        Box::new(resolve::Resolve::default()),
         Box::new(PerSample::default()),
         Box::new(Complex::default()),
         Box::new(Gbaa::default()),
@@ -208,9 +209,28 @@ pub(crate) struct LightingStep<'a> {
 impl LightingStep<'_> {
     /// Light every pixel once from the resolved G-buffer.
     pub(crate) fn light_per_pixel(&self, gl: &glow::Context) -> Result<()> {
+        let hdr = &self.frame.targets.hdr;
+        self.light_per_pixel_into(
+            gl,
+            LightTarget {
+                fbo: hdr.fbo.raw(),
+                width: hdr.texture.width,
+                height: hdr.texture.height,
+                stencil: StencilSelect::All,
+            },
+        )
+    }
+
+    /// [`LightingStep::light_per_pixel`] into `target` (the HDR texture,
+    /// perhaps with a stencil mask).
+    pub(crate) fn light_per_pixel_into(
+        &self,
+        gl: &glow::Context,
+        target: LightTarget,
+    ) -> Result<()> {
         self.lighting.draw(
             gl,
-            &self.frame.targets.hdr,
+            target,
             self.fullscreen,
             self.frame.gbuffer,
             self.slots,
@@ -299,6 +319,19 @@ pub(crate) trait Technique: std::fmt::Debug {
     /// Light the HDR target (the renderer times it).
     fn light(&mut self, gl: &glow::Context, step: &LightingStep<'_>) -> Result<()> {
         step.light_per_pixel(gl)
+    }
+
+    /// After [`Technique::light`]: the resolve's second layer, lit by the
+    /// same pass and mixed in, timed; the milliseconds it took (0 when
+    /// there is none, untimed).
+    fn second_lighting(
+        &mut self,
+        _gl: &glow::Context,
+        _retrofit: Option<&mut MsaaRetrofit>,
+        _step: &LightingStep<'_>,
+        _timer: &mut GpuTimer,
+    ) -> Result<f64> {
+        Ok(0.0)
     }
 
     /// Where the tonemap writes: the LDR image unless a post pass follows.

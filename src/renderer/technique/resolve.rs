@@ -1,23 +1,122 @@
 //! The resolve methods (`average`, `front`, `median`, `back`;
 //! [`AaMode::Resolve`]): the G-buffer pass draws into the retrofit's
 //! multisampled twins, which [`MsaaRetrofit::resolve`] writes back into the
-//! G-buffer; lighting is per pixel.
+//! G-buffer; lighting is per pixel. With two layers
+//! ([`ResolveSettings::layers`](crate::resolve::ResolveSettings::layers))
+//! the renderer, as a host of the retrofit, lights the second layer with the
+//! same lighting pass, only where the layer's coverage is above 0 (a stencil
+//! mask on the HDR target, `second_layer_mask.frag`), and the retrofit
+//! mixes the two lit layers after the tonemap curve.
 
-use super::{ComplexPixelsInput, Technique, resolve_twins};
-use crate::Result;
+use super::{ComplexPixelsInput, FrameParts, LightingStep, Setup, Technique, resolve_twins};
 use crate::frame::Frame as ResolveFrame;
-use crate::gl::GpuTimer;
-use crate::renderer::{AaMode, slow_path};
+use crate::gl::{
+    Attachment, Format, Framebuffer, GlObject, GpuTimer, Handle, Made, Texture2d, TextureRef,
+};
+use crate::renderer::pass::{LightTarget, StencilSelect};
+use crate::renderer::second_layer_mask::SecondLayerMaskPass;
+use crate::renderer::{AaMode, RenderOptions, slow_path, timed};
 use crate::retrofit::MsaaRetrofit;
+use crate::{Error, Result};
 use std::any::Any;
 
 /// The depth-aware resolve of the multisampled G-buffer.
+#[derive(Debug, Default)]
+pub(crate) struct Resolve {
+    /// The second layer's mask program, built when two layers are first used.
+    mask: Option<SecondLayerMaskPass>,
+    /// The HDR texture with a stencil mask, for the second lighting; made by
+    /// the first frame after a change of options.
+    targets: Option<MaskedHdr>,
+}
+
+/// The HDR texture with a stencil attachment of its own.
 #[derive(Debug)]
-pub(crate) struct Resolve;
+struct MaskedHdr {
+    stencil: Texture2d,
+    fbo: Framebuffer,
+}
+
+impl GlObject for MaskedHdr {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.stencil.handles(out);
+        self.fbo.handles(out);
+    }
+}
+
+impl MaskedHdr {
+    fn new(gl: &glow::Context, hdr: &Texture2d) -> Result<Self> {
+        Made::build(gl, |made| {
+            let stencil = made.keep(Texture2d::new(
+                gl,
+                "second layer stencil mask",
+                Format::Depth24Stencil8,
+                hdr.width,
+                hdr.height,
+            )?);
+            let fbo = made.keep(Framebuffer::new(
+                gl,
+                "hdr with the second layer's stencil mask",
+                &[
+                    (Attachment::Color(0), TextureRef::from(hdr)),
+                    (Attachment::DepthStencil, TextureRef::from(&stencil)),
+                ],
+                &[Some(0)],
+            )?);
+            Ok(MaskedHdr { stencil, fbo })
+        })
+    }
+
+    fn destroy(self, gl: &glow::Context) {
+        self.fbo.destroy(gl);
+        self.stencil.destroy(gl);
+    }
+}
+
+fn two_layers(aa: &AaMode) -> bool {
+    matches!(aa, AaMode::Resolve(s) if s.layers == 2)
+}
+
+/// The bytes two layers add for `options`: the retrofit's second layer
+/// (its G-buffer, the first layer's copy, the coverage, the seed sample
+/// where depth has stencil, two lit RGBA16F copies) and the stencil mask.
+pub(crate) fn second_layer_bytes(options: &RenderOptions) -> u64 {
+    if !two_layers(&options.aa) {
+        return 0;
+    }
+    let layer = options.layout.bytes_per_sample();
+    let seed = u64::from(options.layout.depth.has_stencil());
+    let per_pixel = 2 * layer + 2 + seed + 2 * 8 + 4;
+    per_pixel * u64::from(options.width) * u64::from(options.height)
+}
 
 impl Technique for Resolve {
     fn renders(&self, aa: &AaMode) -> bool {
         matches!(aa, AaMode::Resolve(_))
+    }
+
+    fn prepare(
+        &mut self,
+        gl: &glow::Context,
+        setup: &Setup<'_>,
+        frame: Option<FrameParts<'_>>,
+    ) -> Result<()> {
+        if !two_layers(&setup.options.aa) {
+            return Ok(());
+        }
+        if self.mask.is_none() {
+            self.mask = Some(SecondLayerMaskPass::new(gl)?);
+        }
+        if let (None, Some(frame)) = (&self.targets, frame) {
+            self.targets = Some(MaskedHdr::new(gl, &frame.targets.hdr.texture)?);
+        }
+        Ok(())
+    }
+
+    fn options_changed(&mut self, gl: &glow::Context, _active: bool) {
+        if let Some(t) = self.targets.take() {
+            t.destroy(gl);
+        }
     }
 
     fn after_geometry(
@@ -28,6 +127,48 @@ impl Technique for Resolve {
         timer: &mut GpuTimer,
     ) -> Result<f64> {
         resolve_twins(gl, retrofit, resolve_frame, timer)
+    }
+
+    /// With two layers: the retrofit's three calls around the same
+    /// lighting pass, masked to the pixels the second layer covers.
+    fn second_lighting(
+        &mut self,
+        gl: &glow::Context,
+        retrofit: Option<&mut MsaaRetrofit>,
+        step: &LightingStep<'_>,
+        timer: &mut GpuTimer,
+    ) -> Result<f64> {
+        let Some(retrofit) = retrofit.filter(|_| two_layers(&step.frame.aa)) else {
+            return Ok(0.0);
+        };
+        let (Some(mask), Some(targets)) = (&self.mask, &self.targets) else {
+            return Err(Error::invalid(
+                "the second layer's mask was not prepared for this frame",
+            ));
+        };
+        let hdr = &step.frame.targets.hdr;
+        let output = Some(hdr.fbo.raw());
+        timed(gl, timer, || {
+            if !retrofit.begin_second_layer(gl, output)? {
+                return Ok(());
+            }
+            let coverage = retrofit.second_layer_coverage().ok_or_else(|| {
+                Error::invalid("two layers, but the retrofit has no second layer")
+            })?;
+            let target = LightTarget {
+                fbo: targets.fbo.raw(),
+                width: hdr.texture.width,
+                height: hdr.texture.height,
+                stencil: StencilSelect::All,
+            };
+            let masked = mask.draw(gl, target, step.fullscreen, coverage)?;
+            step.light_per_pixel_into(gl, masked)?;
+            Ok(retrofit.finish_second_layer(gl, output)?)
+        })
+    }
+
+    fn memory(&self, options: &RenderOptions) -> u64 {
+        second_layer_bytes(options)
     }
 
     /// The pixels the resolve took its slow path on, found by running the
@@ -47,5 +188,12 @@ impl Technique for Resolve {
         self
     }
 
-    fn destroy(self: Box<Self>, _gl: &glow::Context) {}
+    fn destroy(self: Box<Self>, gl: &glow::Context) {
+        if let Some(t) = self.targets {
+            t.destroy(gl);
+        }
+        if let Some(m) = self.mask {
+            m.destroy(gl);
+        }
+    }
 }
