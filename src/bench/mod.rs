@@ -29,6 +29,7 @@
 //! # Ok::<(), deferred_msaa_lab::Error>(())
 //! ```
 
+pub mod bar_width;
 mod crops;
 pub mod methods;
 mod plot;

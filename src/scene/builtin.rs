@@ -18,7 +18,8 @@ use glam::{Mat4, Quat, Vec3};
 
 use super::geometry::{Geometry, face_normal};
 use super::{
-    AlphaMode, Background, Camera, Light, Material, Object, Scene, TextureData, camera::look_at,
+    AlphaMode, Background, Bar, Camera, Light, Material, Object, Scene, TextureData,
+    camera::look_at,
 };
 
 /// The built-in names, the default first.
@@ -228,6 +229,7 @@ struct SceneBuilder {
     materials: Vec<Material>,
     textures: Vec<TextureData>,
     lights: Vec<Light>,
+    bars: Vec<Bar>,
 }
 
 impl SceneBuilder {
@@ -238,6 +240,7 @@ impl SceneBuilder {
             materials: Vec::new(),
             textures: Vec::new(),
             lights: Vec::new(),
+            bars: Vec::new(),
         }
     }
 
@@ -280,6 +283,7 @@ impl SceneBuilder {
             background,
             warnings: Vec::new(),
             bounds: super::Aabb::EMPTY,
+            bars: self.bars,
         };
         scene.recompute_bounds();
         scene.camera = camera(&scene);
