@@ -1,5 +1,5 @@
 //! Image error measures: FLIP (NVIDIA's perceptual metric, through nv-flip),
-//! PSNR, and the paper's halo count.
+//! its mean split by a pixel mask, PSNR, and the paper's halo count.
 
 use image::RgbaImage;
 
@@ -23,20 +23,27 @@ fn rgb8(img: &RgbaImage) -> nv_flip::FlipImageRgb8 {
     nv_flip::FlipImageRgb8::with_data(img.width(), img.height(), &data)
 }
 
-/// FLIP of `test` against `reference` at the default viewing distance.
-/// `None` when the sizes differ.
-pub fn flip(reference: &RgbaImage, test: &RgbaImage) -> Option<FlipStats> {
+/// The per-pixel FLIP errors of `test` against `reference` at the default
+/// viewing distance, which every FLIP measure here pools; `None` when the
+/// sizes differ or are empty.
+fn flip_errors(reference: &RgbaImage, test: &RgbaImage) -> Option<nv_flip::FlipImageFloat> {
     if reference.dimensions() != test.dimensions()
         || reference.width() == 0
         || reference.height() == 0
     {
         return None;
     }
-    let error = nv_flip::flip(
+    Some(nv_flip::flip(
         rgb8(reference),
         rgb8(test),
         nv_flip::DEFAULT_PIXELS_PER_DEGREE,
-    );
+    ))
+}
+
+/// FLIP of `test` against `reference` at the default viewing distance.
+/// `None` when the sizes differ.
+pub fn flip(reference: &RgbaImage, test: &RgbaImage) -> Option<FlipStats> {
+    let error = flip_errors(reference, test)?;
     let mut pool = nv_flip::FlipPool::from_image(&error);
     let coloured = error.apply_color_lut(&nv_flip::magma_lut()).to_vec();
     let map = RgbaImage::from_fn(reference.width(), reference.height(), |x, y| {
@@ -49,6 +56,46 @@ pub fn flip(reference: &RgbaImage, test: &RgbaImage) -> Option<FlipStats> {
         p99: pool.get_percentile(0.99, false),
         max: pool.max_value(),
         map,
+    })
+}
+
+/// Mean FLIP over the pixels a mask marks and over the rest, see
+/// [`flip_by_mask`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlipByMask {
+    /// Mean FLIP over the marked pixels (`None` when none is marked).
+    pub marked: Option<f64>,
+    /// Mean FLIP over the unmarked pixels (`None` when all are marked).
+    pub unmarked: Option<f64>,
+    /// The marked pixels' share of the image, 0 to 1.
+    pub marked_share: f64,
+}
+
+/// FLIP of `test` against `reference`, its mean split by `mask`: a pixel
+/// is marked when its mask value is non-zero (masks are 255 or 0). The
+/// per-pixel errors are those [`flip`]'s mean pools, so the two means,
+/// weighted by their shares, give that mean. `None` when the three sizes
+/// differ.
+pub fn flip_by_mask(
+    reference: &RgbaImage,
+    test: &RgbaImage,
+    mask: &image::GrayImage,
+) -> Option<FlipByMask> {
+    if mask.dimensions() != reference.dimensions() {
+        return None;
+    }
+    let errors = flip_errors(reference, test)?.to_vec();
+    let (mut sums, mut counts) = ([0f64; 2], [0usize; 2]);
+    for (error, m) in errors.iter().zip(mask.pixels()) {
+        let k = usize::from(m[0] != 0);
+        sums[k] += f64::from(*error);
+        counts[k] += 1;
+    }
+    let mean = |k: usize| (counts[k] > 0).then(|| sums[k] / counts[k] as f64);
+    Some(FlipByMask {
+        marked: mean(1),
+        unmarked: mean(0),
+        marked_share: counts[1] as f64 / (counts[0] + counts[1]).max(1) as f64,
     })
 }
 
@@ -110,5 +157,52 @@ mod tests {
         assert!(psnr(&a, &b) < 40.0);
         assert_eq!(halo_pixels(&a, &b, 0.1), 1);
         assert!(flip(&a, &RgbaImage::new(8, 8)).is_none());
+    }
+
+    /// The error of a changed corner lands in the mask's marked pixels
+    /// when the mask marks that corner, and in the unmarked ones when it
+    /// marks the opposite one; either way the shares weight the two means
+    /// back to FLIP's mean.
+    #[test]
+    fn flip_splits_by_the_mask_and_keeps_the_mean() {
+        let a = RgbaImage::from_fn(32, 24, |x, y| {
+            image::Rgba([(x * 7) as u8, (y * 9) as u8, 90, 255])
+        });
+        let mut b = a.clone();
+        for y in 0..4 {
+            for x in 0..4 {
+                b.put_pixel(x, y, image::Rgba([255, 255, 255, 255]));
+            }
+        }
+        let corner = |x0: u32, y0: u32| {
+            image::GrayImage::from_fn(32, 24, |x, y| {
+                let inside = (x0..x0 + 8).contains(&x) && (y0..y0 + 8).contains(&y);
+                image::Luma([if inside { 255 } else { 0 }])
+            })
+        };
+        let mean = f64::from(flip(&a, &b).unwrap().mean);
+        let near = flip_by_mask(&a, &b, &corner(0, 0)).unwrap();
+        let far = flip_by_mask(&a, &b, &corner(24, 16)).unwrap();
+        assert_eq!(near.marked_share, 64.0 / (32.0 * 24.0));
+        assert_eq!(far.marked_share, near.marked_share);
+        let (near_marked, near_unmarked) = (near.marked.unwrap(), near.unmarked.unwrap());
+        let (far_marked, far_unmarked) = (far.marked.unwrap(), far.unmarked.unwrap());
+        assert!(near_marked > 10.0 * near_unmarked, "{near:?}");
+        assert!(far_unmarked > 10.0 * far_marked, "{far:?}");
+        for s in [near, far] {
+            let weighted =
+                s.marked.unwrap() * s.marked_share + s.unmarked.unwrap() * (1.0 - s.marked_share);
+            assert!(
+                (weighted - mean).abs() < 1e-5 * mean.max(1e-3),
+                "{s:?} {mean}"
+            );
+        }
+
+        let nothing = image::GrayImage::new(32, 24);
+        let none_marked = flip_by_mask(&a, &b, &nothing).unwrap();
+        assert_eq!(none_marked.marked, None);
+        assert_eq!(none_marked.marked_share, 0.0);
+        assert!((none_marked.unmarked.unwrap() - mean).abs() < 1e-5 * mean);
+        assert!(flip_by_mask(&a, &b, &image::GrayImage::new(8, 8)).is_none());
     }
 }

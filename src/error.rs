@@ -36,6 +36,10 @@ pub enum Error {
     #[error("invalid G-buffer layout: {0}")]
     Layout(String),
 
+    /// A bar's width could not be measured (the bench's bar width error).
+    #[error(transparent)]
+    BarWidth(#[from] crate::bench::bar_width::BarWidthError),
+
     /// A file could not be read or written.
     #[error("{}: {source}", path.display())]
     Io {

@@ -6,7 +6,11 @@
 //! every requested sample count, interleaved round-robin frame by frame so
 //! that machine noise hits all methods alike: `warmup` untimed rounds, then
 //! `frames` timed ones, whose median is reported. The last frame of each
-//! method is compared with the reference (FLIP mean, PSNR, halo pixels).
+//! method is compared with the reference (FLIP mean, PSNR, halo pixels),
+//! its FLIP also split into the mean over the scene's edge pixels (those
+//! holding two or more surface clusters, a mask made once per scene) and
+//! over the rest, and, for a scene that declares thin bars, the error of
+//! the bars' drawn width ([`bar_width`]).
 //!
 //! Methods whose switch changes nothing on the GPU (the resolve methods and
 //! their options) share one [`Renderer`]; `none`, `+fxaa` and each sample
@@ -29,6 +33,7 @@
 //! # Ok::<(), deferred_msaa_lab::Error>(())
 //! ```
 
+pub mod bar_width;
 mod crops;
 pub mod methods;
 mod plot;
@@ -44,11 +49,13 @@ use crate::gbuffer::GBufferLayout;
 use crate::gl::TimerKind;
 use crate::renderer::technique::Sparse;
 use crate::renderer::{AaMode, FrameTimings, RenderOptions, Renderer};
+use crate::resolve::{ResolveMethod, ResolveSettings};
 use crate::scene::{Aabb, Light, Scene};
 use crate::{Error, Result};
+use bar_width::BarGauge;
 use glam::Vec3;
 use glow::HasContext;
-use image::RgbaImage;
+use image::{GrayImage, RgbaImage};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::Path;
 
@@ -444,6 +451,16 @@ pub fn run(config: &BenchConfig) -> Result<BenchOutput> {
     })
 }
 
+/// What each run of a scene is measured against: the reference, and what
+/// the scene gives beyond it.
+struct SceneMeasures {
+    reference: RgbaImage,
+    /// The scene's bars as the reference shows them ([`bar_width`]).
+    bars: Option<BarGauge>,
+    /// The pixels [`cluster_mask`] marks.
+    cluster_mask: Option<GrayImage>,
+}
+
 /// One scene's results.
 struct SceneResult {
     reference: RgbaImage,
@@ -562,6 +579,57 @@ fn render_reference(
     downsample_srgb(&image?, REFERENCE_SCALE)
 }
 
+/// The pixels of `scene` at the bench's size that hold two or more surface
+/// clusters (silhouettes, creases), 255 where marked and 0 elsewhere: the
+/// mask each run's FLIP is split by (`flip_edges` over the marked pixels,
+/// `flip_interior` over the rest), made once per scene and shared by all
+/// its runs. For now it is the pixels the `median` resolve treats as
+/// complex in one frame at the first requested sample count (those whose
+/// samples' depth keys are not all equal); `None` when that count gives no
+/// multisampling.
+fn cluster_mask(
+    ctx: &HeadlessContext,
+    config: &BenchConfig,
+    scene: &Scene,
+) -> Result<Option<GrayImage>> {
+    let gl = ctx.gl();
+    let median = AaMode::Resolve(ResolveSettings {
+        method: ResolveMethod::Median,
+        ..ResolveSettings::default()
+    });
+    let samples = config.samples.first().copied().unwrap_or(1);
+    let options = render_options(config, median, false, samples);
+    let mut renderer = Renderer::new(gl, |name| ctx.get_proc_address(name), scene, &options)?;
+    let mask = renderer
+        .render(gl)
+        .and_then(|_| renderer.read_complex_pixels(gl));
+    renderer.destroy(gl);
+    mask
+}
+
+/// The scene's bars as `reference` shows them; `None` for a scene without
+/// bars, and, with a warning, when a bar cannot be measured at this size
+/// (its runs then have no `bar_width_error_px`).
+fn bar_gauge(
+    spec: &str,
+    scene: &Scene,
+    config: &BenchConfig,
+    reference: &RgbaImage,
+) -> Option<BarGauge> {
+    if scene.bars.is_empty() {
+        return None;
+    }
+    let gauge = bar_width::image_bars(&scene.bars, &scene.camera, config.width, config.height)
+        .and_then(|bars| BarGauge::new(reference, &bars));
+    match gauge {
+        Ok(gauge) => Some(gauge),
+        Err(e) => {
+            log::warn!("{spec}: no bar width error: {e}");
+            None
+        }
+    }
+}
+
 fn bench_scene(
     ctx: &HeadlessContext,
     config: &BenchConfig,
@@ -579,13 +647,22 @@ fn bench_scene(
     pb.set_message(format!("{spec}: ssaa reference"));
     let reference = render_reference(ctx, &scene, config)?;
     pb.inc(1);
+    pb.set_message(format!("{spec}: cluster mask"));
+    let measures = SceneMeasures {
+        bars: bar_gauge(spec, &scene, config, &reference),
+        cluster_mask: cluster_mask(ctx, config, &scene)?,
+        reference,
+    };
 
     let mut pool = Pool::default();
-    let result = time_scene(ctx, config, spec, &scene, &reference, &mut pool, pb, rounds);
+    let result = time_scene(ctx, config, spec, &scene, &measures, &mut pool, pb, rounds);
     pool.destroy(ctx.gl());
     let runs = result?;
     pb.inc(1);
-    Ok(SceneResult { reference, runs })
+    Ok(SceneResult {
+        reference: measures.reference,
+        runs,
+    })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -594,7 +671,7 @@ fn time_scene(
     config: &BenchConfig,
     spec: &str,
     scene: &Scene,
-    reference: &RgbaImage,
+    measures: &SceneMeasures,
     pool: &mut Pool,
     pb: &ProgressBar,
     rounds: u64,
@@ -720,6 +797,7 @@ fn time_scene(
             .collect(),
     );
     pb.set_message(format!("{spec}: measuring error"));
+    let reference = &measures.reference;
     let mut runs = Vec::new();
     for job in jobs.into_iter().filter(|j| j.reported) {
         let image = job
@@ -728,6 +806,16 @@ fn time_scene(
         let flip = compare::flip(reference, &image)
             .ok_or_else(|| Error::invalid("bench: the reference and the run differ in size"))?;
         let psnr = compare::psnr(reference, &image);
+        let by_mask = match &measures.cluster_mask {
+            Some(mask) => Some(compare::flip_by_mask(reference, &image, mask).ok_or_else(
+                || Error::invalid("bench: the cluster mask and the run differ in size"),
+            )?),
+            None => None,
+        };
+        let bar_width_error_px = match &measures.bars {
+            Some(gauge) => Some(gauge.width_error(&image)?),
+            None => None,
+        };
         let adds = adds_lighting(&job.entry.method);
         let ms_aa = median(
             job.frames
@@ -784,6 +872,10 @@ fn time_scene(
             }),
             samples_requested: job.samples_requested,
             lights: scene.lights.len() as u32,
+            bar_width_error_px,
+            flip_edges: by_mask.and_then(|m| m.marked),
+            flip_interior: by_mask.and_then(|m| m.unmarked),
+            edge_pixel_share: by_mask.map(|m| m.marked_share),
         };
         runs.push((run, image));
     }

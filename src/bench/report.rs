@@ -102,6 +102,25 @@ pub struct Run {
     pub samples_requested: u32,
     /// Lights in the scene as rendered, `--lights` included (extra key).
     pub lights: u32,
+    /// For a scene that declares thin bars: the mean signed error of the
+    /// bars' drawn width against the reference's, in pixels, negative when
+    /// drawn thinner ([`bar_width`](super::bar_width); extra key, `null`
+    /// for other scenes).
+    #[serde(default)]
+    pub bar_width_error_px: Option<f64>,
+    /// Mean FLIP over the scene's pixels with two or more surface clusters
+    /// (silhouettes, creases: the bench's cluster mask; extra key, `null`
+    /// without the mask or when it marks no pixel).
+    #[serde(default)]
+    pub flip_edges: Option<f64>,
+    /// Mean FLIP over the other pixels (extra key, `null` without the
+    /// mask or when it marks every pixel).
+    #[serde(default)]
+    pub flip_interior: Option<f64>,
+    /// The share of the image the cluster mask marks, 0 to 1: the same for
+    /// every run of a scene (extra key, `null` without the mask).
+    #[serde(default)]
+    pub edge_pixel_share: Option<f64>,
 }
 
 impl Report {
@@ -192,37 +211,76 @@ impl Report {
                  (`:full`: every attachment of the layout, else the scene-adaptive plan's).\n",
                 runs.first().map_or(0, |r| r.lights)
             );
-            let _ = writeln!(
-                md,
-                "| method | samples | ms total | × none | ms AA | FLIP mean | × none | PSNR dB | halo px | complex % | G-buffer MiB | × none |"
-            );
-            let _ = writeln!(
-                md,
-                "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-            );
-            for (run, on_front) in runs.iter().zip(&front) {
-                let psnr = run.psnr_db.map_or("∞".to_string(), |p| format!("{p:.2}"));
+            // The edge split and the bar width get columns only where a run
+            // of the scene has them: old reports and scenes without bars have none.
+            let edge_columns = runs
+                .iter()
+                .any(|r| r.flip_edges.is_some() || r.flip_interior.is_some());
+            let bar_column = runs.iter().any(|r| r.bar_width_error_px.is_some());
+            if let Some(share) = runs.iter().find_map(|r| r.edge_pixel_share) {
                 let _ = writeln!(
                     md,
-                    "| `{}`{} | {} | {:.2} | {} | {:.2} | {:.4} | {} | {} | {} | {} | {:.1} | {} |",
-                    run.method,
-                    if *on_front { " ★" } else { "" },
-                    run.samples,
-                    run.ms_total,
+                    "FLIP edges, FLIP interior: mean FLIP over the pixels the bench's cluster mask \
+                     marks as holding two or more surface clusters (silhouettes, creases), \
+                     {:.1} % of this scene's, and over the rest.\n",
+                    share * 100.0
+                );
+            }
+            if bar_column {
+                let _ = writeln!(
+                    md,
+                    "Bar width error: the mean signed error of the drawn width of the scene's thin \
+                     bars against the reference, in pixels (negative: drawn thinner).\n"
+                );
+            }
+            let mut header = vec![
+                "method",
+                "samples",
+                "ms total",
+                "× none",
+                "ms AA",
+                "FLIP mean",
+                "× none",
+            ];
+            if edge_columns {
+                header.extend(["FLIP edges", "FLIP interior"]);
+            }
+            if bar_column {
+                header.push("bar width error px");
+            }
+            header.extend(["PSNR dB", "halo px", "complex %", "G-buffer MiB", "× none"]);
+            let mut align = vec!["---"];
+            align.resize(header.len(), "---:");
+            let _ = writeln!(md, "| {} |", header.join(" | "));
+            let _ = writeln!(md, "|{}|", align.join("|"));
+            for (run, on_front) in runs.iter().zip(&front) {
+                let mut cells = vec![
+                    format!("`{}`{}", run.method, if *on_front { " ★" } else { "" }),
+                    run.samples.to_string(),
+                    format!("{:.2}", run.ms_total),
                     ratio(run.ms_total, base.map(|b| b.ms_total)),
-                    run.ms_aa,
-                    run.flip_mean,
+                    format!("{:.2}", run.ms_aa),
+                    format!("{:.4}", run.flip_mean),
                     ratio(run.flip_mean, base.map(|b| b.flip_mean)),
-                    psnr,
-                    run.halo_pixels,
-                    run.complex_fraction
-                        .map_or("–".to_string(), |c| format!("{:.1}", c * 100.0)),
-                    run.gbuffer_bytes as f64 / (1024.0 * 1024.0),
+                ];
+                if edge_columns {
+                    cells.push(cell(run.flip_edges, |v| format!("{v:.4}")));
+                    cells.push(cell(run.flip_interior, |v| format!("{v:.4}")));
+                }
+                if bar_column {
+                    cells.push(cell(run.bar_width_error_px, |v| format!("{v:+.3}")));
+                }
+                cells.extend([
+                    run.psnr_db.map_or("∞".to_string(), |p| format!("{p:.2}")),
+                    run.halo_pixels.to_string(),
+                    cell(run.complex_fraction, |c| format!("{:.1}", c * 100.0)),
+                    format!("{:.1}", run.gbuffer_bytes as f64 / (1024.0 * 1024.0)),
                     ratio(
                         run.gbuffer_bytes as f64,
-                        base.map(|b| b.gbuffer_bytes as f64)
+                        base.map(|b| b.gbuffer_bytes as f64),
                     ),
-                );
+                ]);
+                let _ = writeln!(md, "| {} |", cells.join(" | "));
             }
             let _ = writeln!(md);
             if let Some(line) = lighting_orderings(&runs) {
@@ -289,6 +347,11 @@ pub fn lighting_orderings(runs: &[&Run]) -> Option<String> {
     Some(line)
 }
 
+/// A table cell: the formatted value, or a dash without one.
+fn cell(value: Option<f64>, format: impl Fn(f64) -> String) -> String {
+    value.map_or("–".to_string(), format)
+}
+
 /// Which points of (time, error) pairs are on the Pareto front: no other
 /// point is at least as fast and at least as good and better in one of the
 /// two. Points with a non-finite coordinate are never on it.
@@ -345,6 +408,84 @@ mod tests {
             full_ms_gbuffer_bytes: None,
             samples_requested: 4,
             lights: 7,
+            bar_width_error_px: None,
+            flip_edges: None,
+            flip_interior: None,
+            edge_pixel_share: None,
+        }
+    }
+
+    fn report(runs: Vec<Run>) -> Report {
+        Report {
+            renderer: "llvmpipe".into(),
+            gl_version: "4.5".into(),
+            reference: Reference {
+                method: "ssaa".into(),
+                spp: 16,
+            },
+            runs,
+            backend: "egl".into(),
+            frames: 3,
+            warmup: 1,
+            extra_lights: 0,
+            layout: "recommended".into(),
+        }
+    }
+
+    /// A report written before the edge split and the bar width loads,
+    /// with those keys `null`, and its Markdown has no columns for them;
+    /// a run that has them gets its columns, and the scene its share line.
+    #[test]
+    fn edge_and_bar_columns_appear_only_where_runs_have_them() {
+        let old = report(vec![run("none", 1.0), run("median", 1.0)]);
+        let mut json: serde_json::Value = serde_json::from_str(&old.to_json().unwrap()).unwrap();
+        for r in json["runs"].as_array_mut().unwrap() {
+            let r = r.as_object_mut().unwrap();
+            for key in [
+                "bar_width_error_px",
+                "flip_edges",
+                "flip_interior",
+                "edge_pixel_share",
+            ] {
+                assert!(r.remove(key).is_some(), "{key}");
+            }
+        }
+        let loaded: Report = serde_json::from_value(json).expect("an old report loads");
+        assert_eq!(loaded, old);
+        let md = old.to_markdown();
+        assert!(
+            !md.contains("FLIP edges") && !md.contains("bar width"),
+            "{md}"
+        );
+        let header = md.lines().find(|l| l.starts_with("| method")).unwrap();
+        let align = md.lines().find(|l| l.starts_with("|---")).unwrap();
+        assert_eq!(header.matches('|').count(), align.matches('|').count());
+
+        let mut new = old.clone();
+        for r in &mut new.runs {
+            r.flip_edges = Some(0.25);
+            r.flip_interior = Some(0.0125);
+            r.edge_pixel_share = Some(0.034);
+        }
+        new.runs[1].bar_width_error_px = Some(-0.4321);
+        let md = new.to_markdown();
+        assert!(
+            md.contains("| FLIP edges | FLIP interior | bar width error px |"),
+            "{md}"
+        );
+        assert!(md.contains("3.4 % of this scene's"), "{md}");
+        let median = md.lines().find(|l| l.starts_with("| `median`")).unwrap();
+        assert!(median.contains("| 0.2500 | 0.0125 | -0.432 |"), "{median}");
+        let none = md.lines().find(|l| l.starts_with("| `none`")).unwrap();
+        assert!(none.contains("| 0.0125 | – |"), "{none}");
+        let header = md.lines().find(|l| l.starts_with("| method")).unwrap();
+        let align = md.lines().find(|l| l.starts_with("|---")).unwrap();
+        for row in md.lines().filter(|l| l.starts_with("| `")).chain([align]) {
+            assert_eq!(
+                row.matches('|').count(),
+                header.matches('|').count(),
+                "{row}"
+            );
         }
     }
 

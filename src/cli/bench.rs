@@ -106,10 +106,18 @@ pub fn run(cmd: &BenchCmd) -> Result<()> {
         bench::write_images(&output, &dir)?;
     }
     for r in &output.report.runs {
-        println!(
-            "{} {} {}x: {:.2} ms (AA {:.2} ms), FLIP {:.4}, halo {}",
-            r.scene, r.method, r.samples, r.ms_total, r.ms_aa, r.flip_mean, r.halo_pixels
+        let mut line = format!(
+            "{} {} {}x: {:.2} ms (AA {:.2} ms), FLIP {:.4}",
+            r.scene, r.method, r.samples, r.ms_total, r.ms_aa, r.flip_mean
         );
+        if let (Some(edges), Some(interior)) = (r.flip_edges, r.flip_interior) {
+            line.push_str(&format!(" (edges {edges:.4}, interior {interior:.4})"));
+        }
+        line.push_str(&format!(", halo {}", r.halo_pixels));
+        if let Some(error) = r.bar_width_error_px {
+            line.push_str(&format!(", bar width {error:+.3} px"));
+        }
+        println!("{line}");
     }
     println!(
         "report -> {} (report.json, report.md, error_vs_time.png, crops.png)",

@@ -13,12 +13,14 @@
 //! | `transparent` | opaque models behind alpha-blended panes, and an alpha-tested grille |
 //! | `hull`        | FreeSpace Open's case: a hull filling the view, covered in detail close to it in depth (plates and seams, painted strips, pipes, low greebles), coloured point lights, dark space |
 //! | `halo`        | the paper's Figure 4: point lights just behind a box's edges, a far wall out of their range; averaging positions across the edge lights it |
+//! | `bars`        | thin silhouettes: bright slanted bars 1.3 to 3.4 pixels wide at 640x360 in front of a dark far wall, beside a plate of shallow ridges (creases: close in depth, different normals); the scene declares the bars, so the bench measures how wide each method draws them |
 
 use glam::{Mat4, Quat, Vec3};
 
 use super::geometry::{Geometry, face_normal};
 use super::{
-    AlphaMode, Background, Camera, Light, Material, Object, Scene, TextureData, camera::look_at,
+    AlphaMode, Background, Bar, Camera, Light, Material, Object, Scene, TextureData,
+    camera::look_at,
 };
 
 /// The built-in names, the default first.
@@ -32,6 +34,7 @@ pub(crate) const NAMES: &[&str] = &[
     "transparent",
     "hull",
     "halo",
+    "bars",
 ];
 
 /// Builds the built-in scene `name`, or `None` when there is none so named.
@@ -46,6 +49,7 @@ pub(crate) fn build(name: &str) -> Option<Scene> {
         "transparent" => transparent(),
         "hull" => hull(),
         "halo" => halo(),
+        "bars" => bars(),
         _ => return None,
     };
     Some(scene)
@@ -228,6 +232,7 @@ struct SceneBuilder {
     materials: Vec<Material>,
     textures: Vec<TextureData>,
     lights: Vec<Light>,
+    bars: Vec<Bar>,
 }
 
 impl SceneBuilder {
@@ -238,6 +243,7 @@ impl SceneBuilder {
             materials: Vec::new(),
             textures: Vec::new(),
             lights: Vec::new(),
+            bars: Vec::new(),
         }
     }
 
@@ -280,6 +286,7 @@ impl SceneBuilder {
             background,
             warnings: Vec::new(),
             bounds: super::Aabb::EMPTY,
+            bars: self.bars,
         };
         scene.recompute_bounds();
         scene.camera = camera(&scene);
@@ -1452,10 +1459,243 @@ fn hull() -> Scene {
     )
 }
 
+/// The view height the `bars` scene's widths are chosen for: the bench's
+/// default size, 640x360.
+const BARS_VIEW_HEIGHT_PX: f32 = 360.0;
+
+/// The `bars` scene's bars: (width in pixels at 640x360, slant from the
+/// vertical in degrees; positive leans right). Widths span thin silhouettes
+/// from barely over a pixel to a few; the slants cover both image axes,
+/// since a bar nearer horizontal is measured down the columns.
+const BARS: [(f32, f32); 6] = [
+    (1.3, 8.0),
+    (1.7, -17.0),
+    (2.1, 27.0),
+    (2.6, -36.0),
+    (3.0, 58.0),
+    (3.4, -71.0),
+];
+
+/// Thin silhouettes: bright bars, flat and facing the camera, slanted at
+/// several angles and [`BARS`] wide, in front of a dark wall at twice their
+/// distance (far outside any resolve window around them, so a pixel on a
+/// bar's edge has two depth clusters), beside a plate of shallow ridges
+/// whose facets are close in depth but differ in normal (creases). Only
+/// directional lights, so each bar and the wall behind it are lit evenly
+/// and the bench can measure a bar's drawn width from its luminance; the
+/// scene declares each bar's central stretch ([`Scene::bars`]), with
+/// nothing but wall around it.
+fn bars() -> Scene {
+    let mut sb = SceneBuilder::new("bars");
+    let bar_mat = sb.material(Material::solid("bars", [0.8, 0.78, 0.74], 0.0, 0.8));
+    let plate_mat = sb.material(Material::solid("plate", [0.45, 0.46, 0.5], 0.0, 0.6));
+    let wall_mat = sb.material(Material::solid("wall", [0.03, 0.03, 0.035], 0.0, 0.9));
+
+    let eye = Vec3::new(0.0, 0.0, 10.0);
+    let fov_y = 30f32.to_radians();
+    // Bars lie in z = 0; world units per pixel there at the design height.
+    let unit_per_px = 2.0 * eye.z * (fov_y * 0.5).tan() / BARS_VIEW_HEIGHT_PX;
+
+    // One bar per cell of a 3x2 grid on the left of the view, centred in
+    // its cell and four fifths as long as the cell lets it be.
+    let mut bar_mesh = MeshBuilder::default();
+    let (cell_w, cell_h, grid_left, grid_top) = (1.5f32, 2.4f32, -4.5f32, 2.4f32);
+    for (k, &(width_px, slant_deg)) in BARS.iter().enumerate() {
+        let centre = Vec3::new(
+            grid_left + cell_w * ((k % 3) as f32 + 0.5),
+            grid_top - cell_h * ((k / 3) as f32 + 0.5),
+            0.0,
+        );
+        let slant = slant_deg.to_radians();
+        let along = Vec3::new(slant.sin(), slant.cos(), 0.0);
+        let across = Vec3::new(along.y, -along.x, 0.0);
+        let half_length =
+            0.4 * (cell_w / slant.sin().abs().max(1e-3)).min(cell_h / slant.cos().abs().max(1e-3));
+        let half_width = across * (0.5 * width_px * unit_per_px);
+        let (bottom, top) = (centre - along * half_length, centre + along * half_length);
+        bar_mesh.quad([
+            bottom - half_width,
+            bottom + half_width,
+            top + half_width,
+            top - half_width,
+        ]);
+        // The central 70 %: the ends stay out of every scanline across it.
+        sb.bars.push(Bar {
+            from: centre - along * (0.7 * half_length),
+            to: centre + along * (0.7 * half_length),
+            half_width,
+        });
+    }
+    sb.object("bars", bar_mesh, bar_mat, Mat4::IDENTITY);
+
+    // The plate: ridges along its y, facets 21° either side of facing the
+    // camera, 5 cm from valley to crest; turned in the image plane so that
+    // no crease runs along a pixel row or column.
+    let mut plate = MeshBuilder::default();
+    let (half_w, half_h, ridges, height) = (1.3f32, 1.9f32, 10, 0.05f32);
+    let pitch = 2.0 * half_w / ridges as f32;
+    for r in 0..ridges {
+        let x0 = -half_w + r as f32 * pitch;
+        let (x1, x2) = (x0 + 0.5 * pitch, x0 + pitch);
+        for (a, za, b, zb) in [(x0, 0.0, x1, height), (x1, height, x2, 0.0)] {
+            plate.quad([
+                Vec3::new(a, -half_h, za),
+                Vec3::new(b, -half_h, zb),
+                Vec3::new(b, half_h, zb),
+                Vec3::new(a, half_h, za),
+            ]);
+        }
+    }
+    let plate_at = Mat4::from_translation(Vec3::new(2.6, 0.0, 0.0)) * Mat4::from_rotation_z(0.35);
+    sb.object("ridged plate", plate, plate_mat, plate_at);
+
+    // The wall: two triangles whose shared edge runs below the view, so
+    // that no triangle edge crosses the wall anywhere the camera sees.
+    let (wall_z, w, h) = (-10.0f32, 12.0f32, 7.0f32);
+    let mut wall = MeshBuilder::default();
+    let normal = Vec3::Z;
+    wall.triangle(
+        [
+            Vec3::new(-3.0 * w, -h, wall_z),
+            Vec3::new(3.0 * w, -h, wall_z),
+            Vec3::new(0.0, 3.0 * h, wall_z),
+        ],
+        normal,
+    );
+    wall.triangle(
+        [
+            Vec3::new(3.0 * w, -h, wall_z),
+            Vec3::new(-3.0 * w, -h, wall_z),
+            Vec3::new(0.0, -3.0 * h, wall_z),
+        ],
+        normal,
+    );
+    sb.object("wall", wall, wall_mat, Mat4::IDENTITY);
+
+    // A key low from the left, so that the plate's two facet directions
+    // differ clearly in light, and a weak fill from the right.
+    sb.lights.push(Light::directional(
+        Vec3::new(0.8, -0.3, -1.0),
+        rgb(1.0, 0.97, 0.92),
+        3.0,
+    ));
+    sb.lights.push(Light::directional(
+        Vec3::new(-0.6, 0.1, -1.0),
+        rgb(0.75, 0.8, 1.0),
+        0.4,
+    ));
+    sb.finish(Background::Black, |_| {
+        Camera::look_at(eye, Vec3::ZERO, fov_y, 0.1, Some(40.0))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::scene::{Aabb, LightKind};
+
+    /// `bars` holds what the bench's bar width error needs: at 640x360
+    /// the declared bars are as wide as [`BARS`] says (1.3 to 3.4 pixels),
+    /// slanted at distinct angles clear of both image axes, wholly in view
+    /// with room for their bands, clear of each other and of the plate, and
+    /// in front of a wall twice as far away; and the bars are drawn where
+    /// they are declared.
+    #[test]
+    fn bars_are_thin_slanted_and_only_wall_is_behind_them() {
+        let scene = bars();
+        let (w, h) = (640, 360);
+        let image: Vec<_> = scene
+            .bars
+            .iter()
+            .map(|b| b.in_image(&scene.camera, w, h).expect("in view"))
+            .collect();
+        assert_eq!(image.len(), BARS.len());
+        let widths: Vec<f64> = image.iter().map(|b| b.width).collect();
+        for (got, &(want, _)) in widths.iter().zip(&BARS) {
+            assert!((got - f64::from(want)).abs() < 1e-3, "{widths:?}");
+        }
+        let (thinnest, widest) = widths
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(lo, hi), &w| (lo.min(w), hi.max(w)));
+        assert!(thinnest <= 1.3 + 1e-3 && widest >= 3.4 - 1e-3, "{widths:?}");
+        let mut angles: Vec<f64> = image
+            .iter()
+            .map(|b| {
+                let d = b.to - b.from;
+                d.y.atan2(d.x).to_degrees().rem_euclid(180.0)
+            })
+            .collect();
+        for a in &angles {
+            let off_axis = (a % 90.0).min(90.0 - a % 90.0);
+            assert!(off_axis > 5.0, "{angles:?}");
+        }
+        angles.sort_by(f64::total_cmp);
+        assert!(angles.windows(2).all(|p| p[1] - p[0] > 5.0), "{angles:?}");
+
+        // Each bar's surroundings as a box in pixels, padded by its band.
+        let pad = |b: &crate::scene::ImageBar| b.width + 4.0;
+        let boxes: Vec<_> = image
+            .iter()
+            .map(|b| (b.from.min(b.to) - pad(b), b.from.max(b.to) + pad(b)))
+            .collect();
+        for (lo, hi) in &boxes {
+            assert!(lo.x >= 0.0 && lo.y >= 0.0 && hi.x <= 640.0 && hi.y <= 360.0);
+        }
+        let overlap = |a: &(glam::DVec2, glam::DVec2), b: &(glam::DVec2, glam::DVec2)| {
+            a.0.x < b.1.x && b.0.x < a.1.x && a.0.y < b.1.y && b.0.y < a.1.y
+        };
+        for (i, a) in boxes.iter().enumerate() {
+            for b in &boxes[i + 1..] {
+                assert!(!overlap(a, b), "{a:?} {b:?}");
+            }
+        }
+        let view = scene.camera.projection(16.0 / 9.0) * scene.camera.view;
+        let pixel = |p: Vec3| {
+            let c = view * p.extend(1.0);
+            glam::DVec2::new(
+                f64::from((c.x / c.w + 1.0) * 320.0),
+                f64::from((1.0 - c.y / c.w) * 180.0),
+            )
+        };
+        let object = |name: &str| {
+            scene
+                .objects
+                .iter()
+                .find(|o| o.name == name)
+                .unwrap_or_else(|| panic!("no {name}"))
+        };
+        let plate = object("ridged plate");
+        let plate_box =
+            plate
+                .positions
+                .iter()
+                .fold((glam::DVec2::MAX, glam::DVec2::MIN), |(lo, hi), &p| {
+                    let q = pixel(plate.transform.transform_point3(Vec3::from(p)));
+                    (lo.min(q), hi.max(q))
+                });
+        for b in &boxes {
+            assert!(!overlap(b, &plate_box), "{b:?} {plate_box:?}");
+        }
+
+        let eye = scene.camera.position();
+        let wall = object("wall").world_bounds();
+        let bars_far = object("bars").world_bounds().min.z;
+        assert!(eye.z - wall.max.z >= 2.0 * (eye.z - bars_far));
+        // The declared stretch lies on the drawn bar: its ends are inside
+        // one of the bar quads (in z = 0, so the xy plane tells).
+        let quads = object("bars");
+        for bar in &scene.bars {
+            for p in [bar.from, bar.to] {
+                let inside = quads.indices.chunks_exact(3).any(|t| {
+                    let v = |k: usize| Vec3::from(quads.positions[t[k] as usize]);
+                    let (a, b, c) = (v(0), v(1), v(2));
+                    let side = |u: Vec3, w: Vec3| (w - u).cross(p - u).z >= -1e-6;
+                    side(a, b) && side(b, c) && side(c, a)
+                });
+                assert!(inside, "{p} is on no bar");
+            }
+        }
+    }
 
     /// `halo` shows the Figure 4 artefact and nothing but it: no point
     /// light reaches a face the camera sees (each is behind the face's plane

@@ -1386,6 +1386,7 @@ impl Loader<'_> {
             background: GLTF_BACKGROUND,
             warnings: Vec::new(),
             bounds: super::Aabb::EMPTY,
+            bars: Vec::new(),
         };
         scene.recompute_bounds();
         scene.camera = match self.camera {

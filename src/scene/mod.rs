@@ -21,6 +21,7 @@
 //!   the loader drops or repairs whatever is not, and says so in
 //!   [`Scene::warnings`].
 
+mod bar;
 mod builtin;
 mod camera;
 mod geometry;
@@ -28,6 +29,7 @@ mod gltf_loader;
 
 use glam::{Mat4, Vec3};
 
+pub use bar::{Bar, ImageBar};
 pub use camera::Camera;
 
 /// The scene used when none is named.
@@ -54,6 +56,9 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// World-space bounds of all objects' vertices.
     pub bounds: Aabb,
+    /// Thin bars whose drawn width the bench measures (its
+    /// `bar_width_error_px`); empty for scenes that declare none.
+    pub bars: Vec<Bar>,
 }
 
 /// One drawable: an indexed triangle list with a single material.

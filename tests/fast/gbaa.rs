@@ -460,6 +460,7 @@ fn strip_scene(width: u32, height: u32, strips: &[Strip]) -> Scene {
         background: Background::Black,
         warnings: Vec::new(),
         bounds: Aabb::EMPTY,
+        bars: Vec::new(),
     };
     scene.recompute_bounds();
     scene
