@@ -583,9 +583,9 @@ fn render_reference(
 /// clusters (silhouettes, creases), 255 where marked and 0 elsewhere: the
 /// mask each run's FLIP is split by (`flip_edges` over the marked pixels,
 /// `flip_interior` over the rest), made once per scene and shared by all
-/// its runs. For now it is the pixels the `median` resolve treats as
-/// complex in one frame at the first requested sample count (those whose
-/// samples' depth keys are not all equal); `None` when that count gives no
+/// its runs: the pixels whose second resolved layer covers any of them
+/// (`median:layers=2`, clusters by depth window and normal) in one frame
+/// at the first requested sample count; `None` when that count gives no
 /// multisampling.
 fn cluster_mask(
     ctx: &HeadlessContext,
@@ -593,18 +593,24 @@ fn cluster_mask(
     scene: &Scene,
 ) -> Result<Option<GrayImage>> {
     let gl = ctx.gl();
-    let median = AaMode::Resolve(ResolveSettings {
+    let two_layers = AaMode::Resolve(ResolveSettings {
         method: ResolveMethod::Median,
+        layers: 2,
         ..ResolveSettings::default()
     });
     let samples = config.samples.first().copied().unwrap_or(1);
-    let options = render_options(config, median, false, samples);
+    let options = render_options(config, two_layers, false, samples);
     let mut renderer = Renderer::new(gl, |name| ctx.get_proc_address(name), scene, &options)?;
-    let mask = renderer
+    let coverage = renderer
         .render(gl)
-        .and_then(|_| renderer.read_complex_pixels(gl));
+        .and_then(|_| renderer.read_second_layer_coverage(gl));
     renderer.destroy(gl);
-    mask
+    // Two clusters or more: the second layer covers some of the pixel.
+    Ok(coverage?.map(|mut c| {
+        c.pixels_mut()
+            .for_each(|p| p[0] = if p[0] > 0 { 255 } else { 0 });
+        c
+    }))
 }
 
 /// The scene's bars as `reference` shows them; `None` for a scene without

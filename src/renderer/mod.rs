@@ -884,6 +884,33 @@ impl Renderer {
             .complex_pixels(gl, input)
     }
 
+    /// The last frame's second-layer coverage `α` (`median:layers=2` and
+    /// the other resolve methods with two layers) as 0..255, row 0 at the
+    /// top: 0 where a pixel has one cluster of samples, else the second
+    /// cluster's share of the two kept ones. `None` with one layer.
+    pub fn read_second_layer_coverage(
+        &mut self,
+        gl: &glow::Context,
+    ) -> Result<Option<image::GrayImage>> {
+        let Some(coverage) = self
+            .frame
+            .retrofit
+            .as_ref()
+            .and_then(MsaaRetrofit::second_layer_coverage)
+        else {
+            return Ok(None);
+        };
+        let mut readback = crate::readback::Readback::new(gl)?;
+        let read = readback.read(gl, coverage, 1);
+        readback.destroy(gl);
+        let read = read?;
+        Ok(Some(image::GrayImage::from_fn(
+            coverage.width,
+            coverage.height,
+            |x, y| image::Luma([(read.get(0, x, y)[0].clamp(0.0, 1.0) * 255.0).round() as u8]),
+        )))
+    }
+
     /// The fraction of pixels [`Renderer::read_complex_pixels`] marks.
     pub fn complex_pixel_fraction(&mut self, gl: &glow::Context) -> Result<Option<f64>> {
         Ok(self.read_complex_pixels(gl)?.map(|mask| {

@@ -4,8 +4,8 @@
 use super::{DepthMode, GBufferSlots, SparseOptions};
 use crate::gbuffer::{GBufferLayout, MemoryBudget};
 use crate::gl::ColorAttachment;
-use crate::resolve::{KeySource, ResolveSettings, ResolveSlot, SelectionFlag};
 use crate::resolve::NormalEncoding;
+use crate::resolve::{KeySource, ResolveSettings, ResolveSlot, SelectionFlag};
 use crate::retrofit::{NormalAttachment, PositionSpace, RetrofitOptions};
 use crate::second_layer::LayerMix;
 use crate::{Error, Result};

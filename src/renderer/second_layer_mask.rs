@@ -3,7 +3,9 @@
 //! where the layer's coverage is above 0, by a stencil test on the HDR
 //! target.
 
-use super::pass::{LightTarget, StencilSelect, bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
+use super::pass::{
+    LightTarget, StencilSelect, bind_target, draw_fullscreen, fullscreen_program, fullscreen_state,
+};
 use crate::Result;
 use crate::gl::{GlObject, Handle, Program, TextureRef, VertexArray, check_error};
 use glow::HasContext;
