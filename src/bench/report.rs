@@ -402,6 +402,7 @@ mod tests {
             ms_resolve: 0.1,
             ms_fxaa: 0.0,
             ms_lighting,
+            ms_second_layer: 0.0,
             flip_p95: 0.2,
             complex_fraction: None,
             sparse_overflow_pixels: None,

@@ -38,8 +38,10 @@
 //                          normals' cosine is below u_normal_threshold are
 //                          different surfaces (cpu.rs's same_normal)
 //   SECOND_LAYER_OUTPUT    write the second layer (cpu.rs's
-//                          resolve_second_layer_at) and its coverage to
-//                          o_coverage, instead of the first
+//                          resolve_second_layer_at), its coverage to
+//                          o_coverage and its depth to o_layer_depth, instead
+//                          of the first; ATTACHMENT_ZEROS zeroes the
+//                          attachments where there is no second cluster
 
 #define RULE_BLEND 0
 #define RULE_BLEND_NORMAL 1
@@ -91,6 +93,7 @@ out uint o_reference;
 #endif
 #ifdef SECOND_LAYER_OUTPUT
 out float o_coverage;
+out float o_layer_depth;
 #endif
 
 // Per-pixel state shared by the attachment blocks below.
@@ -710,12 +713,20 @@ void main() {
 #else
     gl_FragDepth = reference_depth;
 #endif
-#ifdef SECOND_LAYER_OUTPUT
-    // No second cluster: the background's depth, which host lighting skips.
-    gl_FragDepth = has_second ? gl_FragDepth : u_clear_depth;
-#endif
 #endif
 #ifdef SECOND_LAYER_OUTPUT
+    // No second cluster: zeros and the background's depth, which host
+    // lighting skips (what the retrofit clears the pixels it does not run on
+    // to). The depth goes to a colour output: a shader writing gl_FragDepth
+    // would lose the early stencil test that limits this pass to complex
+    // pixels.
+#ifdef BLEND_DEPTH
+    float layer_depth = depth_sum / depth_weight;
+#else
+    float layer_depth = reference_depth;
+#endif
+    o_layer_depth = has_second ? layer_depth : u_clear_depth;
+    ATTACHMENT_ZEROS
     o_coverage = coverage;
 #endif
 #ifdef COMPLEX_OUTPUT

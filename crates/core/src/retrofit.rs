@@ -14,7 +14,7 @@ use crate::gl::Texture2d;
 use crate::gl::format::{ComponentType, FormatProperties, internal_format_name};
 use crate::gl::{
     Attachment, ColorAttachment, Format, Framebuffer, GlObject, Handle, HostImage, Made,
-    SetupState, TextureRef, check_error,
+    SavedState, SetupState, TextureRef, check_error,
 };
 use crate::resolve::{
     ExtraOutputs, KeySource, NormalEncoding, ResolveInputs, ResolveParams, ResolveRule,
@@ -875,19 +875,6 @@ impl MsaaRetrofit {
             } else {
                 None
             };
-            if let Some(s) = &stencil {
-                // The resolve's reference index goes to the draw buffer after the colours.
-                let n = host.colors.len() as u32;
-                attachments.push((Attachment::Color(n), TextureRef::from(&s.reference)));
-                draw.push(Some(n));
-            }
-            let target = made.keep(Framebuffer::with_host_images(
-                gl,
-                "resolve target (host images)",
-                &attachments,
-                &images,
-                &draw,
-            )?);
             let second = if options.resolve.layers == 2 {
                 let with_stencil = stencil.is_some();
                 Some(made.keep(SecondLayer::new(
@@ -899,6 +886,26 @@ impl MsaaRetrofit {
             } else {
                 None
             };
+            // After the colours: the complex flag for the second layer, then
+            // the reference index for the stencil copy (the program key's
+            // order of extra outputs).
+            let mut next = host.colors.len() as u32;
+            if let Some(flag) = second.as_ref().and_then(SecondLayer::flag) {
+                attachments.push((Attachment::Color(next), TextureRef::from(flag)));
+                draw.push(Some(next));
+                next += 1;
+            }
+            if let Some(s) = &stencil {
+                attachments.push((Attachment::Color(next), TextureRef::from(&s.reference)));
+                draw.push(Some(next));
+            }
+            let target = made.keep(Framebuffer::with_host_images(
+                gl,
+                "resolve target (host images)",
+                &attachments,
+                &images,
+                &draw,
+            )?);
             Ok::<_, Error>((twin, stencil, target, second))
         })?;
         Ok(Built {
@@ -949,13 +956,19 @@ impl MsaaRetrofit {
                 &self.options.resolve,
                 second.has_reference(),
             ),
-            Some(params) => self.resolver.run_second_layer(
-                gl,
-                &inputs,
-                second.target(),
-                params,
-                second.has_reference(),
-            ),
+            Some(params) => {
+                let state = SavedState::capture(gl, 1);
+                let selected = second.select(gl, params.projection.clear_depth as f32);
+                state.restore(gl);
+                self.resolver.run_second_layer(
+                    gl,
+                    &inputs,
+                    second.target(),
+                    params,
+                    second.has_reference(),
+                    selected?,
+                )
+            }
         }
     }
 
@@ -992,7 +1005,8 @@ impl MsaaRetrofit {
     /// index, when the host's stencil is copied.
     fn extra_outputs(&self) -> ExtraOutputs {
         ExtraOutputs {
-            complex: false,
+            // The second layer's resolve runs where the first took its slow path.
+            complex: self.second.as_ref().is_some_and(|s| s.flag().is_some()),
             reference: self.stencil.is_some(),
         }
     }

@@ -10,7 +10,7 @@
 //! textures, and [`MsaaRetrofit::finish_second_layer`](crate::MsaaRetrofit::finish_second_layer)
 //! mixes the two by coverage and puts the first layer back.
 
-use crate::gl::format::ComponentType;
+use crate::gl::format::{ComponentType, SampleKind};
 use crate::gl::{
     Attachment, Format, Framebuffer, FullscreenPass, GlObject, Handle, HostImage, Made,
     ShaderSource, Texture2d, TextureRef, VertexArray, check_error,
@@ -21,6 +21,17 @@ use glow::HasContext;
 
 /// The mix pass's fragment shader: `shaders/second_layer.frag`.
 pub const SECOND_LAYER_FRAG: &str = include_str!("../shaders/second_layer.frag");
+
+/// The pass marking the pixels the second layer's resolve runs on:
+/// `shaders/second_layer_select.frag`.
+pub const SECOND_LAYER_SELECT_FRAG: &str = include_str!("../shaders/second_layer_select.frag");
+
+/// The pass writing the second layer's depth into the host's:
+/// `shaders/second_layer_depth.frag`.
+pub const SECOND_LAYER_DEPTH_FRAG: &str = include_str!("../shaders/second_layer_depth.frag");
+
+/// The stencil value of the pixels the second layer's resolve runs on.
+const SELECTED: u8 = 1;
 
 /// How the two lit layers are mixed by the second layer's coverage `α`.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -149,13 +160,19 @@ pub(crate) struct SecondLayer {
     gbuffer: Vec<Texture2d>,
     /// Its coverage `α` (R16F).
     coverage: Texture2d,
+    /// Its depth-buffer value (R32F).
+    depth: Texture2d,
     /// Its seed sample per pixel (R8UI), for a host whose stencil is copied
     /// from the reference sample: the second lighting sees the seed's.
     reference: Option<Texture2d>,
-    /// Its depth, in the host's depth format.
-    depth: Texture2d,
+    /// The pixels its resolve runs on, in a stencil (`DEPTH24_STENCIL8`).
+    stencil: Texture2d,
     /// All of the above: the second layer's resolve target.
     target: Framebuffer,
+    /// The first layer's complex flag (R8), which the first resolve writes
+    /// where the host's colours leave it a draw buffer: with it the second
+    /// resolve runs on complex pixels alone; without, on every pixel.
+    flag: Option<Texture2d>,
     /// The first layer, kept while the host lights the second.
     saved: Vec<Texture2d>,
     saved_depth: Texture2d,
@@ -173,6 +190,8 @@ pub(crate) struct SecondLayer {
     depth_bits: u32,
     width: u32,
     height: u32,
+    select: FullscreenPass,
+    write_depth: FullscreenPass,
     mix_linear: FullscreenPass,
     mix_tonemapped: FullscreenPass,
     mix_curve: Option<FullscreenPass>,
@@ -189,9 +208,13 @@ impl GlObject for SecondLayer {
     fn handles(&self, out: &mut Vec<Handle>) {
         self.gbuffer.handles(out);
         self.coverage.handles(out);
-        self.reference.handles(out);
         self.depth.handles(out);
+        self.reference.handles(out);
+        self.stencil.handles(out);
         self.target.handles(out);
+        self.flag.handles(out);
+        self.select.handles(out);
+        self.write_depth.handles(out);
         self.saved.handles(out);
         self.saved_depth.handles(out);
         self.saved_target.handles(out);
@@ -223,6 +246,31 @@ fn mix_pass(gl: &glow::Context, kind: MixKind, curve: Option<&str>) -> Result<Fu
         p.set_i32(gl, "u_first", 0);
         p.set_i32(gl, "u_second", 1);
         p.set_i32(gl, "u_coverage", 2);
+        gl.use_program(
+            u32::try_from(previous)
+                .ok()
+                .and_then(std::num::NonZeroU32::new)
+                .map(glow::NativeProgram),
+        );
+    }
+    Ok(pass)
+}
+
+/// A full-screen pass of `body` reading `sampler` from unit 0, with
+/// `outputs` bound as given.
+fn single_input_pass(
+    gl: &glow::Context,
+    label: &str,
+    name: &str,
+    body: &str,
+    sampler: &str,
+    outputs: &[(&str, u32)],
+) -> Result<FullscreenPass> {
+    let pass = FullscreenPass::new(gl, label, &ShaderSource::new().part(name, body), outputs)?;
+    unsafe {
+        let previous = gl.get_parameter_i32(glow::CURRENT_PROGRAM);
+        pass.program().bind(gl);
+        pass.program().set_i32(gl, sampler, 0);
         gl.use_program(
             u32::try_from(previous)
                 .ok()
@@ -308,31 +356,69 @@ impl SecondLayer {
         with_reference: bool,
     ) -> Result<Self> {
         let (w, h) = host.size();
+        let n = host.colors.len() as u32;
+        let max_draw_buffers =
+            unsafe { gl.get_parameter_i32(glow::MAX_DRAW_BUFFERS) }.max(1) as u32;
+        // The second resolve writes the host's colours, the coverage, the
+        // depth and perhaps the seed sample.
+        let needed = n + 2 + u32::from(with_reference);
+        if needed > max_draw_buffers {
+            return Err(Error::Retrofit {
+                attachment: host
+                    .colors
+                    .last()
+                    .map_or_else(|| "the colour attachments".into(), |a| a.point.name()),
+                reason: format!(
+                    "two layers need {needed} draw buffers for the second layer ({n} colours, the coverage, the depth{}), the context has {max_draw_buffers}",
+                    if with_reference {
+                        ", the seed sample"
+                    } else {
+                        ""
+                    }
+                ),
+            });
+        }
+        // The first resolve's complex flag takes the draw buffer after the
+        // host's colours (and before the reference index) where one is left.
+        let flag_fits = n + 1 + u32::from(with_reference) <= max_draw_buffers;
         Made::build(gl, |made| {
-            let coverage = made.keep(Texture2d::new(
-                gl,
-                "second layer coverage",
-                Format::R16f,
-                w,
-                h,
-            )?);
-            let n = host.colors.len() as u32;
+            let texture = |made: &mut Made, label: &str, format: Format| {
+                Texture2d::new(gl, label, format, w, h).map(|t| made.keep(t))
+            };
+            let coverage = texture(made, "second layer coverage", Format::R16f)?;
+            let depth = texture(made, "second layer depth", Format::R32f)?;
             let reference = if with_reference {
-                Some(made.keep(Texture2d::new(
-                    gl,
-                    "second layer seed sample",
-                    Format::R8ui,
-                    w,
-                    h,
-                )?))
+                Some(texture(made, "second layer seed sample", Format::R8ui)?)
             } else {
                 None
             };
-            let mut extra = vec![(Attachment::Color(n), TextureRef::from(&coverage))];
-            if let Some(r) = &reference {
-                extra.push((Attachment::Color(n + 1), TextureRef::from(r)));
+            let stencil = texture(made, "second layer selection", Format::Depth24Stencil8)?;
+            let mut gbuffer = Vec::with_capacity(host.colors.len());
+            for a in &host.colors {
+                gbuffer.push(texture(
+                    made,
+                    &format!("second layer {}", a.point.name()),
+                    a.format,
+                )?);
             }
-            let (gbuffer, depth, target) = twin_set(gl, made, host, "second layer", &extra)?;
+            let mut attachments: Vec<(Attachment, TextureRef)> = gbuffer
+                .iter()
+                .enumerate()
+                .map(|(k, t)| (Attachment::Color(k as u32), TextureRef::from(t)))
+                .collect();
+            attachments.push((Attachment::Color(n), TextureRef::from(&coverage)));
+            attachments.push((Attachment::Color(n + 1), TextureRef::from(&depth)));
+            if let Some(r) = &reference {
+                attachments.push((Attachment::Color(n + 2), TextureRef::from(r)));
+            }
+            attachments.push((Attachment::DepthStencil, TextureRef::from(&stencil)));
+            let draw: Vec<Option<u32>> = (0..needed).map(Some).collect();
+            let target = made.keep(Framebuffer::new(gl, "second layer", &attachments, &draw)?);
+            let flag = if flag_fits {
+                Some(texture(made, "first layer complex flag", Format::R8)?)
+            } else {
+                None
+            };
             let (saved, saved_depth, saved_target) =
                 twin_set(gl, made, host, "second layer: first layer kept", &[])?;
             let host_target = made.keep(host_images_target(gl, host)?);
@@ -351,6 +437,22 @@ impl SecondLayer {
                     })
                     .collect()
             });
+            let select = made.keep(single_input_pass(
+                gl,
+                "second layer selection",
+                "second_layer_select.frag",
+                SECOND_LAYER_SELECT_FRAG,
+                "u_complex",
+                &[("o_unused", 0)],
+            )?);
+            let write_depth = made.keep(single_input_pass(
+                gl,
+                "second layer depth",
+                "second_layer_depth.frag",
+                SECOND_LAYER_DEPTH_FRAG,
+                "u_layer_depth",
+                &[],
+            )?);
             let mix_linear = made.keep(mix_pass(gl, MixKind::Linear, None)?);
             let mix_tonemapped = made.keep(mix_pass(gl, MixKind::Tonemapped, None)?);
             let mix_curve = match mix {
@@ -359,13 +461,15 @@ impl SecondLayer {
                 }
                 _ => None,
             };
-            let vao = made.keep(VertexArray::new(gl, "second layer mix")?);
+            let vao = made.keep(VertexArray::new(gl, "second layer passes")?);
             Ok(SecondLayer {
                 gbuffer,
                 coverage,
-                reference,
                 depth,
+                reference,
+                stencil,
                 target,
+                flag,
                 saved,
                 saved_depth,
                 saved_target,
@@ -376,6 +480,8 @@ impl SecondLayer {
                 depth_bits: host.depth.format.properties().depth_bits,
                 width: w,
                 height: h,
+                select,
+                write_depth,
                 mix_linear,
                 mix_tonemapped,
                 mix_curve,
@@ -386,6 +492,55 @@ impl SecondLayer {
                 resolved: false,
             })
         })
+    }
+
+    /// The first resolve's complex flag, where it has a draw buffer.
+    pub(crate) fn flag(&self) -> Option<&Texture2d> {
+        self.flag.as_ref()
+    }
+
+    /// Before the second resolve: with the complex flag, clear the target
+    /// to what a one-cluster pixel holds (zeros, the clear depth) and mark
+    /// the complex pixels in its stencil; the stencil value the resolve is
+    /// to run on (`None`: every pixel, without a flag). The caller keeps the
+    /// host's state.
+    pub(crate) fn select(&self, gl: &glow::Context, clear_depth: f32) -> Result<Option<u8>> {
+        let Some(flag) = &self.flag else {
+            return Ok(None);
+        };
+        let n = self.colors as u32;
+        unsafe {
+            self.target.bind(gl);
+            crate::gl::SavedState::prepare_fullscreen_pass(gl);
+            gl.disable(glow::DEPTH_TEST);
+            gl.disable(glow::FRAMEBUFFER_SRGB);
+            for (k, t) in self.gbuffer.iter().enumerate() {
+                match t.format.sample_kind() {
+                    SampleKind::Uint => gl.clear_buffer_u32_slice(glow::COLOR, k as u32, &[0; 4]),
+                    SampleKind::Int => gl.clear_buffer_i32_slice(glow::COLOR, k as u32, &[0; 4]),
+                    SampleKind::Float => {
+                        gl.clear_buffer_f32_slice(glow::COLOR, k as u32, &[0.0; 4])
+                    }
+                }
+            }
+            gl.clear_buffer_f32_slice(glow::COLOR, n, &[0.0; 4]);
+            gl.clear_buffer_f32_slice(glow::COLOR, n + 1, &[clear_depth, 0.0, 0.0, 0.0]);
+            if self.reference.is_some() {
+                gl.clear_buffer_u32_slice(glow::COLOR, n + 2, &[0; 4]);
+            }
+            gl.stencil_mask(0xFF);
+            gl.clear_buffer_i32_slice(glow::STENCIL, 0, &[0]);
+            gl.color_mask(false, false, false, false);
+            gl.enable(glow::STENCIL_TEST);
+            gl.stencil_func(glow::ALWAYS, i32::from(SELECTED), 0xFF);
+            gl.stencil_op(glow::KEEP, glow::KEEP, glow::REPLACE);
+            self.select.program().bind(gl);
+            TextureRef::from(flag).bind(gl, 0);
+        }
+        self.select.draw(gl, &self.vao);
+        unsafe { gl.color_mask(true, true, true, true) };
+        check_error(gl, "selecting the second layer's pixels")?;
+        Ok(Some(SELECTED))
     }
 
     /// The second layer's resolve target: layer 2's colours at `Color(k)`,
@@ -409,7 +564,8 @@ impl SecondLayer {
         self.reference.as_ref()
     }
 
-    /// Layer 2's colour textures, in host colour order, and its depth.
+    /// Layer 2's colour textures, in host colour order, and its depth-buffer
+    /// values (R32F).
     pub(crate) fn gbuffer(&self) -> (&[Texture2d], &Texture2d) {
         (&self.gbuffer, &self.depth)
     }
@@ -418,17 +574,28 @@ impl SecondLayer {
     /// coverage, and the lit copies once an output is known).
     pub(crate) fn bytes(&self) -> u64 {
         let texels = u64::from(self.width) * u64::from(self.height);
-        let layer: u64 = self
+        let colours: u64 = self
             .gbuffer
             .iter()
             .map(|t| u64::from(t.format.bytes_per_texel()))
-            .sum::<u64>()
-            + u64::from(self.depth.format.bytes_per_texel());
+            .sum();
+        let ours: u64 = [
+            Some(&self.coverage),
+            Some(&self.depth),
+            Some(&self.stencil),
+            Some(&self.saved_depth),
+            self.reference.as_ref(),
+            self.flag.as_ref(),
+        ]
+        .into_iter()
+        .flatten()
+        .map(|t| u64::from(t.format.bytes_per_texel()))
+        .sum();
         let lit = self
             .output
             .as_ref()
             .map_or(0, |o| 2 * u64::from(o.format.bytes_per_texel()));
-        texels * (2 * layer + u64::from(self.coverage.format.bytes_per_texel()) + lit)
+        texels * (2 * colours + ours + lit)
     }
 
     /// Copy colour attachment `k` (or depth, for `None`, with the stencil
@@ -489,10 +656,12 @@ impl SecondLayer {
                 .host_images
                 .as_ref()
                 .map(|_| ours(&self.saved, &self.saved_depth)),
-            Set::Second => self
-                .host_images
-                .as_ref()
-                .map(|_| ours(&self.gbuffer, &self.depth)),
+            Set::Second => self.host_images.as_ref().map(|_| {
+                self.gbuffer
+                    .iter()
+                    .map(|t| Some(CopyImage::of(t)))
+                    .collect()
+            }),
         }
     }
 
@@ -528,7 +697,8 @@ impl SecondLayer {
         let mut blitted = false;
         for (k, (s, d)) in src.iter().zip(&dst).enumerate() {
             let depth = k == self.colors;
-            if depth && self.depth_bits == 0 {
+            // The second layer's depth comes through its own pass.
+            if depth && (self.depth_bits == 0 || from == Set::Second || to == Set::Second) {
                 continue;
             }
             match (s, d) {
@@ -581,7 +751,9 @@ impl SecondLayer {
         for k in 0..self.colors {
             self.copy(gl, from, to, Some(k), false);
         }
-        if self.depth_bits > 0 {
+        // The second layer's depth comes through its own pass.
+        let second = from.raw() == self.target.raw() || to.raw() == self.target.raw();
+        if self.depth_bits > 0 && !second {
             self.copy(gl, from, to, None, !keep_stencil);
         }
         unsafe {
@@ -727,6 +899,7 @@ impl SecondLayer {
         self.copy_set(gl, Set::Host, Set::Saved, false);
         // The host's stencil stays: its lighting may test it.
         self.copy_set(gl, Set::Second, Set::Host, true);
+        self.depth_into_host(gl);
         check_error(gl, "keeping the first layer and copying in the second")?;
         self.lighting = true;
         Ok(())
@@ -756,6 +929,26 @@ impl SecondLayer {
         // Depth and stencil as they were before the second lighting.
         self.copy_set(gl, Set::Saved, Set::Host, false);
         check_error(gl, "mixing the two lit layers")
+    }
+
+    /// The second layer's depth into the host's depth attachment (its
+    /// stencil untouched).
+    fn depth_into_host(&self, gl: &glow::Context) {
+        if self.depth_bits == 0 {
+            return;
+        }
+        unsafe {
+            self.host_target.bind(gl);
+            crate::gl::SavedState::prepare_fullscreen_pass(gl);
+            gl.color_mask(false, false, false, false);
+            gl.enable(glow::DEPTH_TEST);
+            gl.depth_func(glow::ALWAYS);
+            gl.depth_mask(true);
+            self.write_depth.program().bind(gl);
+            TextureRef::from(&self.depth).bind(gl, 0);
+        }
+        self.write_depth.draw(gl, &self.vao);
+        unsafe { gl.color_mask(true, true, true, true) };
     }
 
     fn draw_mix(&self, gl: &glow::Context) -> Result<()> {
@@ -802,6 +995,12 @@ impl SecondLayer {
         if let Some(r) = self.reference {
             r.destroy(gl);
         }
+        if let Some(f) = self.flag {
+            f.destroy(gl);
+        }
+        self.stencil.destroy(gl);
+        self.select.destroy(gl);
+        self.write_depth.destroy(gl);
         self.depth.destroy(gl);
         self.saved_depth.destroy(gl);
         self.target.destroy(gl);

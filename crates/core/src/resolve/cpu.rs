@@ -81,8 +81,8 @@ pub struct ResolvedPixel {
 /// The second resolved layer of one pixel ([`ResolveSettings::layers`] = 2).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SecondLayerPixel {
-    /// Per colour attachment, the second cluster's resolved value (sample
-    /// 0's where there is no second cluster).
+    /// Per colour attachment, the second cluster's resolved value (zeros
+    /// where there is no second cluster).
     pub attachments: Vec<[f64; 4]>,
     /// The second cluster's depth-buffer value; the clear depth where there
     /// is none.
@@ -512,7 +512,8 @@ impl CpuResolve {
     /// cluster among them (each candidate seed's cluster is the samples
     /// within its window and of its orientation; ties to the nearer seed,
     /// then the lower index), resolved by the attachments' rules with the
-    /// seed as reference. A pixel that takes one sample has none.
+    /// seed as reference. A pixel that takes one sample has none; without
+    /// one its attachments are zeros and its depth the clear depth.
     pub fn resolve_second_layer_at(
         &self,
         px: &PixelSamples,
@@ -521,7 +522,7 @@ impl CpuResolve {
         let n = px.depth.len();
         let first = self.resolve_pixel_at(px, at);
         let none = |ambiguous| SecondLayerPixel {
-            attachments: px.attachments.iter().map(|a| a[0]).collect(),
+            attachments: vec![[0.0; 4]; px.attachments.len()],
             depth: self.clear_depth,
             reference: None,
             weights: vec![0.0; n],

@@ -208,12 +208,20 @@ impl ResolveProgramKey {
         };
         // The per-attachment code: one call of resolve.frag's template per
         // attachment, in order.
-        let (mut declarations, mut begins, mut steps, mut ends) =
-            (String::new(), String::new(), String::new(), String::new());
+        let (mut declarations, mut begins, mut steps, mut ends, mut zeros) = (
+            String::new(),
+            String::new(),
+            String::new(),
+            String::new(),
+            String::new(),
+        );
         for (k, (rule, _)) in self.attachments.iter().enumerate() {
             let args = format!("s0_{k}, ref_{k}, acc_{k}, ATT{k}_RULE");
             declarations.push_str(&format!(
                 "uniform ATT{k}_SAMPLER u_att{k}; out ATT{k}_VEC o_att{k}; "
+            ));
+            zeros.push_str(&format!(
+                "o_att{k} = has_second ? o_att{k} : ATT{k}_VEC(0); "
             ));
             if key_index == Some(k) {
                 begins.push_str(&format!("KEY_BEGIN({args}) "));
@@ -231,6 +239,7 @@ impl ResolveProgramKey {
         def("ATTACHMENT_BEGINS", begins);
         def("ATTACHMENT_STEPS", steps);
         def("ATTACHMENT_ENDS", ends);
+        def("ATTACHMENT_ZEROS", zeros);
         if matches!(self.key, KeySource::WorldPosition(_)) {
             def("KEY_WORLD", "1".into());
         }
@@ -398,6 +407,8 @@ impl ResolveParams {
 pub struct Resolver {
     programs: HashMap<ResolveProgramKey, Program>,
     vao: VertexArray,
+    /// The stencil value the next draw is limited to.
+    stencil: Option<u8>,
 }
 
 impl Resolver {
@@ -406,6 +417,7 @@ impl Resolver {
         Ok(Resolver {
             programs: HashMap::new(),
             vao: VertexArray::new(gl, "resolve full-screen triangle")?,
+            stencil: None,
         })
     }
 
@@ -510,7 +522,9 @@ impl Resolver {
             ));
         }
         let s = settings;
-        let write_depth = target.has_depth();
+        // The second layer's depth is a colour output; a depth-stencil
+        // attachment of its target holds only the stencil that limits it.
+        let write_depth = target.has_depth() && !second_layer_output;
         Ok(ResolveProgramKey {
             samples: inputs.samples,
             samples_as_layers: inputs.depth.target == glow::TEXTURE_2D_ARRAY,
@@ -528,7 +542,7 @@ impl Resolver {
                 && s.fast_path
                 && !matches!(inputs.key, KeySource::Depth),
             write_depth,
-            blend_depth: s.blend_depth && write_depth,
+            blend_depth: s.blend_depth && (write_depth || second_layer_output),
             complex_output: extra.complex,
             reference_output: extra.reference,
             selection: SelectionKey::of(&s.selection, inputs)?,
@@ -588,13 +602,16 @@ impl Resolver {
 
     /// Resolve the second layer of `inputs` (the largest cluster of samples
     /// outside the first layer's; see the README's "second layer") into
-    /// `target`: colour attachment `k` receives input `k`, colour
+    /// `target` (a depth-stencil attachment is used for `stencil` alone): colour attachment `k`
+    /// receives input `k` (0 where a pixel has one cluster), colour
     /// attachment `colors.len()` the coverage `n2 / (n1 + n2)` (0 where a
-    /// pixel has one cluster), the depth attachment the second cluster's
-    /// depth (the clear depth where there is none) and, with
-    /// `reference_output`, colour attachment `colors.len() + 1` the second
+    /// pixel has one cluster), `colors.len() + 1` the second cluster's
+    /// depth-buffer value (a float target; the clear depth where there is
+    /// none) and, with `reference_output`, `colors.len() + 2` the second
     /// cluster's seed sample (0 where there is none; an unsigned-integer
-    /// target, as [`ExtraOutputs::reference`]). Needs
+    /// target, as [`ExtraOutputs::reference`]). With `stencil`, only pixels
+    /// whose stencil value in `target` equals it are resolved (an early
+    /// test: the others keep what the target held). Needs
     /// `params.settings.layers == 2`. The host's GL state is kept, as
     /// [`Resolver::run`] keeps it.
     pub fn run_second_layer(
@@ -604,16 +621,20 @@ impl Resolver {
         target: &Framebuffer,
         params: &ResolveParams,
         reference_output: bool,
+        stencil: Option<u8>,
     ) -> Result<()> {
         let key = Self::second_layer_key(inputs, target, &params.settings, reference_output)?;
-        self.run_key(
+        self.stencil = stencil;
+        let result = self.run_key(
             gl,
             key,
             inputs,
             target,
             params,
             "the second layer's resolve pass",
-        )
+        );
+        self.stencil = None;
+        result
     }
     /// Resolve `inputs` into `target`, whose colour attachment `k` (draw buffer
     /// `k`) receives input `k`, whose depth attachment (if any) receives the
@@ -670,6 +691,7 @@ impl Resolver {
         params: &ResolveParams,
     ) -> Result<()> {
         let vao = self.vao.raw;
+        let stencil = self.stencil;
         let program = self.program(gl, key)?;
         let s = params.settings;
         unsafe {
@@ -685,6 +707,12 @@ impl Resolver {
                 gl.depth_mask(true);
             } else {
                 gl.disable(glow::DEPTH_TEST);
+            }
+            if let Some(value) = stencil {
+                gl.enable(glow::STENCIL_TEST);
+                gl.stencil_func(glow::EQUAL, i32::from(value), 0xFF);
+                gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+                gl.stencil_mask(0);
             }
             program.bind(gl);
             // Units as build_program set them: depth at 0, attachment k at 1 + k.
@@ -753,7 +781,8 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
     }
     if key.second_layer_output {
         frag_outputs.push(("o_coverage".into(), next));
-        next += 1;
+        frag_outputs.push(("o_layer_depth".into(), next + 1));
+        next += 2;
     }
     if key.reference_output {
         frag_outputs.push(("o_reference".into(), next));
