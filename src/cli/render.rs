@@ -76,7 +76,9 @@ pub struct RenderArgs {
     #[arg(long)]
     strict_memory: bool,
     /// What to write: final, an attachment name, depth, complex (the pixels
-    /// the method treated as complex), or (with --method gbaa) edges.
+    /// the method treated as complex), layers (with --layers 2: the second
+    /// layer's coverage, black where a pixel has one cluster), or (with
+    /// --method gbaa) edges.
     #[arg(long, default_value = "final")]
     view: String,
 }
@@ -405,6 +407,28 @@ fn complex_view(session: &mut Session) -> Result<image::RgbaImage> {
     ))
 }
 
+/// The `layers` view: the second layer's coverage `α` as grey (black
+/// where a pixel has one cluster of samples).
+fn layers_view(session: &mut Session) -> Result<image::RgbaImage> {
+    let Session { ctx, renderer } = session;
+    let renderer = renderer
+        .as_mut()
+        .ok_or_else(|| Error::invalid("the renderer is gone"))?;
+    let coverage = renderer.read_second_layer_coverage(ctx.gl())?.ok_or_else(|| {
+        Error::invalid(
+            "the `layers` view shows the second layer's coverage; use it with --layers 2 and front, median or back",
+        )
+    })?;
+    Ok(image::RgbaImage::from_fn(
+        coverage.width(),
+        coverage.height(),
+        |x, y| {
+            let v = coverage.get_pixel(x, y)[0];
+            image::Rgba([v, v, v, 255])
+        },
+    ))
+}
+
 /// Run `render --explain`: the plan, as text or JSON, without rendering.
 fn run_explain(cmd: &RenderCmd) -> Result<()> {
     let args = &cmd.render;
@@ -437,6 +461,8 @@ pub fn run_render(cmd: &RenderCmd) -> Result<()> {
     let mut session = Session::open(&cmd.render)?;
     let img = if cmd.render.view == "complex" {
         complex_view(&mut session)?
+    } else if cmd.render.view == "layers" {
+        layers_view(&mut session)?
     } else {
         resolved_view(&session, &cmd.render.view)?
     };

@@ -234,6 +234,10 @@ pub enum Pass {
     Lighting,
     /// Lighting of every sample (methods `per-sample` and `complex`).
     PerSampleLighting,
+    /// The resolve's second layer (`layers=2`): the same lighting pass
+    /// again on the second layer, where its coverage is above 0, and the
+    /// mix of the two lit layers (its resolve runs in `resolve`).
+    SecondLayer,
     /// Alpha-blended objects, forward, single-sampled.
     Transparent,
     /// HDR to the 8-bit image.
@@ -265,6 +269,7 @@ impl Pass {
             Pass::ComplexMask => "complex-mask",
             Pass::Lighting => "lighting",
             Pass::PerSampleLighting => "lighting-per-sample",
+            Pass::SecondLayer => "second-layer",
             Pass::Transparent => "transparent",
             Pass::Tonemap => "tonemap",
             Pass::Fxaa => "fxaa",
@@ -351,6 +356,10 @@ pub struct Plan {
     pub gbuffer_bytes: u64,
     /// The same for FreeSpace Open's layout at the same size and sample count.
     pub full_gbuffer_bytes: u64,
+    /// Of `gbuffer_bytes`, what the resolve's second layer keeps (0 with
+    /// one layer): its G-buffer, the first layer's copy, its coverage,
+    /// depth and selection, the lit copies and the stencil mask.
+    pub second_layer_bytes: u64,
     /// The memory budget in bytes.
     pub budget_bytes: u64,
     /// Where the budget came from.
@@ -439,6 +448,11 @@ impl Plan {
             samples,
             adaptive: options.adaptive,
             gbuffer_bytes: gbuffer_bytes(&layout, width, height, twin) + extra_bytes,
+            second_layer_bytes: technique::second_layer_bytes(&RenderOptions {
+                aa,
+                layout: layout.clone(),
+                ..options.clone()
+            }),
             full_gbuffer_bytes: gbuffer_bytes(
                 &GBufferLayout::freespace_open(),
                 width,
@@ -526,6 +540,7 @@ impl Plan {
             "permutations": self.permutations,
             "gbuffer_bytes": self.gbuffer_bytes,
             "full_gbuffer_bytes": self.full_gbuffer_bytes,
+            "second_layer_bytes": self.second_layer_bytes,
             "budget_bytes": self.budget_bytes,
             "budget_source": self.budget_source,
             "warnings": self.warnings,
@@ -600,6 +615,14 @@ impl Plan {
             fmt_bytes(self.budget_bytes),
             self.budget_source
         );
+        if let (AaMode::Resolve(settings), true) = (self.aa, self.second_layer_bytes > 0) {
+            let _ = writeln!(
+                t,
+                "second layer: {} of it (its G-buffer and the first layer's copy, coverage, depth, selection, two lit copies, the stencil mask); clusters split by depth window and by normal (cosine below {})",
+                fmt_bytes(self.second_layer_bytes),
+                settings.normal_threshold
+            );
+        }
         for w in &self.warnings {
             let _ = writeln!(t, "warning: {w}");
         }
@@ -871,6 +894,9 @@ fn decide_passes(
         AaMode::Complex => passes.extend([Pass::ComplexMask, Pass::PerSampleLighting]),
         AaMode::Sparse(_) => {
             passes.extend([Pass::SparseDepth, Pass::SparseLists, Pass::SparseLighting]);
+        }
+        AaMode::Resolve(settings) if settings.layers == 2 => {
+            passes.extend([Pass::Lighting, Pass::SecondLayer]);
         }
         _ => passes.push(Pass::Lighting),
     }

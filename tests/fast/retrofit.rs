@@ -6,7 +6,8 @@
 use crate::common;
 
 use common::host::{Host, perspective, triangle};
-use deferred_msaa::{ColorAttachment, Error};
+use deferred_msaa::resolve::NormalEncoding;
+use deferred_msaa::{ColorAttachment, Error, NormalAttachment};
 use deferred_msaa_lab::gl::{Attachment, Format, Texture2d, TextureRef, live_objects};
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
@@ -301,6 +302,119 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
             }
         }
     }
+    // Two layers on rasterised samples: the first layer split by normal and
+    // the second layer (only where the first resolve flagged a sample
+    // outside its cluster) against the CPU reference.
+    let mut second_pixels = 0;
+    for (method, window) in [
+        (ResolveMethod::Median, Window::Smooth),
+        (ResolveMethod::Front, Window::Hard),
+    ] {
+        let settings = ResolveSettings {
+            method,
+            window,
+            layers: 2,
+            ..ResolveSettings::default()
+        };
+        let options = RetrofitOptions {
+            resolve: settings,
+            normal_attachment: Some(NormalAttachment {
+                attachment: ColorAttachment(2),
+                encoding: NormalEncoding::Xyz,
+            }),
+            ..default_options.clone()
+        };
+        // A second layer changes what the retrofit allocates, so its twins
+        // are new: the host draws into them again.
+        msaa.set_options(gl, &options).unwrap();
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        host.draw(gl, &projection(), false);
+        msaa.resolve(gl, &frame()).unwrap();
+        let (colors, depth) = msaa.second_layer_gbuffer().unwrap();
+        let layer: Vec<_> = colors
+            .iter()
+            .map(|t| readback.read(gl, *t, 1).unwrap())
+            .collect();
+        let layer_depth = readback.read(gl, depth, 1).unwrap();
+        let coverage = readback
+            .read(gl, msaa.second_layer_coverage().unwrap(), 1)
+            .unwrap();
+        let first: Vec<_> = [&host.albedo, &host.position, &host.normal]
+            .iter()
+            .map(|t| readback.read(gl, TextureRef::from(*t), 1).unwrap())
+            .collect();
+        let cpu = CpuResolve {
+            settings,
+            rules: msaa.rules().to_vec(),
+            key_source: CpuKeySource::Position(1),
+            clear_depth: 1.0,
+            footprint: footprint(),
+            normal: Some((2, NormalEncoding::Xyz)),
+        };
+        let mut bad = Vec::new();
+        for y in 0..H {
+            for x in 0..W {
+                let px = PixelSamples {
+                    depth: (0..n)
+                        .map(|s| depth_samples.get(s, x, y)[0] as f64)
+                        .collect(),
+                    attachments: samples
+                        .iter()
+                        .map(|a| (0..n).map(|s| a.get(s, x, y).map(|c| c as f64)).collect())
+                        .collect(),
+                };
+                let want_first = cpu.resolve_pixel(&px);
+                let want = cpu.resolve_second_layer_at(&px, None);
+                second_pixels += usize::from(want.reference.is_some());
+                if want.ambiguous {
+                    continue;
+                }
+                let a = coverage.get(0, x, y)[0] as f64;
+                if (a - want.coverage).abs() > 1e-3 {
+                    bad.push(format!("({x},{y}) coverage: gpu {a} cpu {}", want.coverage));
+                }
+                for k in 0..3 {
+                    let pairs = [
+                        (&layer[k], &want.attachments[k], "second"),
+                        (&first[k], &want_first.attachments[k], "first"),
+                    ];
+                    for (plane, expected, which) in pairs {
+                        let got = plane.get(0, x, y);
+                        let ok = if k == 1 {
+                            (0..4).all(|c| {
+                                ((got[c] as f64) - expected[c]).abs()
+                                    <= 1e-4 * (1.0 + expected[c].abs())
+                            })
+                        } else {
+                            (0..4).all(|c| half_close(got[c], expected[c]))
+                        };
+                        if !ok {
+                            bad.push(format!(
+                                "({x},{y}) {which} layer att {k}: gpu {got:?} cpu {expected:?}"
+                            ));
+                        }
+                    }
+                }
+                let d = layer_depth.get(0, x, y)[0] as f64;
+                if (d - want.depth).abs() > 1e-6 {
+                    bad.push(format!(
+                        "({x},{y}) second layer depth: gpu {d} cpu {}",
+                        want.depth
+                    ));
+                }
+            }
+        }
+        assert!(
+            bad.is_empty(),
+            "{settings:?}: {} mismatches: {:#?}",
+            bad.len(),
+            &bad[..bad.len().min(6)]
+        );
+    }
+    assert!(
+        second_pixels > 20,
+        "only {second_pixels} pixels with a second layer"
+    );
     msaa.set_options(gl, &default_options).unwrap();
     // The scene has edges: the slow path must really have been exercised,
     // and every selection must have turned some complex pixels into one-sample ones.

@@ -25,6 +25,9 @@
 //                          and whose PLANE_SAMPLER samples are equal (opt-in)
 //   WRITE_DEPTH            write the resolved depth; BLEND_DEPTH blends it
 //   COMPLEX_OUTPUT         also write 1.0 for pixels that took the slow path
+//   OUTSIDE_OUTPUT         also write 1.0 for pixels a sample of which is outside
+//                          the reference's cluster (weight 0): those that may
+//                          have a second layer
 //   REFERENCE_OUTPUT       also write the reference sample's index (0 for one-sample
 //                          pixels): the host's stencil is copied from that sample
 //   SELECT_REGION          selective AA: REGION_RECT or REGION_ELLIPSE (u_region)
@@ -87,6 +90,9 @@ uniform float u_normal_threshold;
 ATTACHMENT_DECLARATIONS
 #ifdef COMPLEX_OUTPUT
 out float o_complex;
+#endif
+#ifdef OUTSIDE_OUTPUT
+out float o_outside;
 #endif
 #ifdef REFERENCE_OUTPUT
 out uint o_reference;
@@ -678,6 +684,7 @@ void main() {
     // one-sample pixels leaves at the top of its first iteration.
     float depth_sum = 0.0;
     float depth_weight = 0.0;
+    bool any_outside = false;
     ATTACHMENT_BEGINS
     for (int i = g_zero; i < NUM_SAMPLES; ++i) {
         float z_i;
@@ -701,6 +708,7 @@ void main() {
 #endif
         depth_sum += w * depth_i;
         depth_weight += w;
+        any_outside = any_outside || w == 0.0;
         ATTACHMENT_STEPS
         // A group of one-sample pixels leaves here, after sample 0.
         if (g_one) break;
@@ -731,6 +739,9 @@ void main() {
 #endif
 #ifdef COMPLEX_OUTPUT
     o_complex = g_one ? 0.0 : 1.0;
+#endif
+#ifdef OUTSIDE_OUTPUT
+    o_outside = !g_one && any_outside ? 1.0 : 0.0;
 #endif
 #ifdef REFERENCE_OUTPUT
     o_reference = uint(g_one ? 0 : r);

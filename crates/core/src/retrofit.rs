@@ -886,7 +886,7 @@ impl MsaaRetrofit {
             } else {
                 None
             };
-            // After the colours: the complex flag for the second layer, then
+            // After the colours: the outside flag for the second layer, then
             // the reference index for the stencil copy (the program key's
             // order of extra outputs).
             let mut next = host.colors.len() as u32;
@@ -1005,8 +1005,9 @@ impl MsaaRetrofit {
     /// index, when the host's stencil is copied.
     fn extra_outputs(&self) -> ExtraOutputs {
         ExtraOutputs {
-            // The second layer's resolve runs where the first took its slow path.
-            complex: self.second.as_ref().is_some_and(|s| s.flag().is_some()),
+            complex: false,
+            // The second layer's resolve runs where the first left a sample out.
+            outside: self.second.as_ref().is_some_and(|s| s.flag().is_some()),
             reference: self.stencil.is_some(),
         }
     }

@@ -169,9 +169,10 @@ pub(crate) struct SecondLayer {
     stencil: Texture2d,
     /// All of the above: the second layer's resolve target.
     target: Framebuffer,
-    /// The first layer's complex flag (R8), which the first resolve writes
-    /// where the host's colours leave it a draw buffer: with it the second
-    /// resolve runs on complex pixels alone; without, on every pixel.
+    /// The first layer's outside flag (R8: a sample lies outside its
+    /// cluster), which the first resolve writes where the host's colours
+    /// leave it a draw buffer: with it the second resolve runs on those
+    /// pixels alone; without, on every pixel.
     flag: Option<Texture2d>,
     /// The first layer, kept while the host lights the second.
     saved: Vec<Texture2d>,
@@ -378,7 +379,7 @@ impl SecondLayer {
                 ),
             });
         }
-        // The first resolve's complex flag takes the draw buffer after the
+        // The first resolve's outside flag takes the draw buffer after the
         // host's colours (and before the reference index) where one is left.
         let flag_fits = n + 1 + u32::from(with_reference) <= max_draw_buffers;
         Made::build(gl, |made| {
@@ -415,7 +416,7 @@ impl SecondLayer {
             let draw: Vec<Option<u32>> = (0..needed).map(Some).collect();
             let target = made.keep(Framebuffer::new(gl, "second layer", &attachments, &draw)?);
             let flag = if flag_fits {
-                Some(texture(made, "first layer complex flag", Format::R8)?)
+                Some(texture(made, "first layer outside flag", Format::R8)?)
             } else {
                 None
             };
@@ -442,7 +443,7 @@ impl SecondLayer {
                 "second layer selection",
                 "second_layer_select.frag",
                 SECOND_LAYER_SELECT_FRAG,
-                "u_complex",
+                "u_outside",
                 &[("o_unused", 0)],
             )?);
             let write_depth = made.keep(single_input_pass(
@@ -494,14 +495,14 @@ impl SecondLayer {
         })
     }
 
-    /// The first resolve's complex flag, where it has a draw buffer.
+    /// The first resolve's outside flag, where it has a draw buffer.
     pub(crate) fn flag(&self) -> Option<&Texture2d> {
         self.flag.as_ref()
     }
 
-    /// Before the second resolve: with the complex flag, clear the target
+    /// Before the second resolve: with the outside flag, clear the target
     /// to what a one-cluster pixel holds (zeros, the clear depth) and mark
-    /// the complex pixels in its stencil; the stencil value the resolve is
+    /// the flagged pixels in its stencil; the stencil value the resolve is
     /// to run on (`None`: every pixel, without a flag). The caller keeps the
     /// host's state.
     pub(crate) fn select(&self, gl: &glow::Context, clear_depth: f32) -> Result<Option<u8>> {

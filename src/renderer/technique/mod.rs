@@ -42,6 +42,7 @@ pub use complex::Complex;
 pub use gbaa::Gbaa;
 use glam::{DMat4, Mat4};
 pub(crate) use per_sample::PerSample;
+pub(crate) use resolve::second_layer_bytes;
 pub use sparse::Sparse;
 use std::any::Any;
 

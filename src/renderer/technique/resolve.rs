@@ -78,15 +78,24 @@ fn two_layers(aa: &AaMode) -> bool {
 }
 
 /// The bytes two layers add for `options`: the retrofit's second layer
-/// (its G-buffer, the first layer's copy, the coverage, the seed sample
-/// where depth has stencil, two lit RGBA16F copies) and the stencil mask.
+/// (its colours and the first layer's copy in the layout's formats, the
+/// copy of depth, the R32F depth, the R16F coverage, the D24S8 selection,
+/// the R8 complex flag, the R8UI seed sample where depth has stencil, two
+/// lit RGBA16F copies) and the renderer's D24S8 stencil mask, as
+/// `MsaaRetrofit::second_layer_bytes` counts them once made.
 pub(crate) fn second_layer_bytes(options: &RenderOptions) -> u64 {
     if !two_layers(&options.aa) {
         return 0;
     }
-    let layer = options.layout.bytes_per_sample();
-    let seed = u64::from(options.layout.depth.has_stencil());
-    let per_pixel = 2 * layer + 2 + seed + 2 * 8 + 4;
+    let layout = &options.layout;
+    let colours: u64 = layout
+        .colors
+        .iter()
+        .map(|a| u64::from(a.format.bytes_per_texel()))
+        .sum();
+    let depth = u64::from(layout.depth.bytes_per_texel());
+    let seed = u64::from(layout.depth.has_stencil());
+    let per_pixel = 2 * colours + depth + 4 + 2 + 4 + 1 + seed + 2 * 8 + 4;
     per_pixel * u64::from(options.width) * u64::from(options.height)
 }
 

@@ -110,6 +110,9 @@ pub(crate) struct ResolveProgramKey {
     pub blend_depth: bool,
     /// Write the complex-pixel mask to output `attachments.len()`.
     pub complex_output: bool,
+    /// Write the outside flag (1.0 where a sample is outside the first
+    /// layer's cluster) after the complex mask.
+    pub outside_output: bool,
     /// Write the reference sample's index to the output after those.
     pub reference_output: bool,
     /// Selective anti-aliasing criteria compiled in.
@@ -277,6 +280,9 @@ impl ResolveProgramKey {
         if self.complex_output {
             def("COMPLEX_OUTPUT", "1".into());
         }
+        if self.outside_output {
+            def("OUTSIDE_OUTPUT", "1".into());
+        }
         if self.reference_output {
             def("REFERENCE_OUTPUT", "1".into());
         }
@@ -322,6 +328,9 @@ impl ResolveProgramKey {
 pub struct ExtraOutputs {
     /// 1.0 where the pixel took the slow path, else 0.0 (a float target).
     pub complex: bool,
+    /// 1.0 where a sample lies outside the pixel's cluster (its weight is
+    /// 0: the pixel may have a second layer), else 0.0 (a float target).
+    pub outside: bool,
     /// The index of the pixel's reference sample (0 where it took one
     /// sample), to an unsigned-integer target: how the host's stencil is
     /// copied from the reference sample.
@@ -332,6 +341,7 @@ impl From<bool> for ExtraOutputs {
     fn from(complex: bool) -> Self {
         ExtraOutputs {
             complex,
+            outside: false,
             reference: false,
         }
     }
@@ -516,9 +526,9 @@ impl Resolver {
             }
             _ => None,
         };
-        if second_layer_output && extra.complex {
+        if second_layer_output && (extra.complex || extra.outside) {
             return Err(Error::invalid(
-                "the second layer's resolve writes no complex mask",
+                "the second layer's resolve writes no complex mask or outside flag",
             ));
         }
         let s = settings;
@@ -544,6 +554,7 @@ impl Resolver {
             write_depth,
             blend_depth: s.blend_depth && (write_depth || second_layer_output),
             complex_output: extra.complex,
+            outside_output: extra.outside,
             reference_output: extra.reference,
             selection: SelectionKey::of(&s.selection, inputs)?,
             normal,
@@ -594,8 +605,8 @@ impl Resolver {
             )));
         }
         let extra = ExtraOutputs {
-            complex: false,
             reference: reference_output,
+            ..ExtraOutputs::default()
         };
         Self::base_key(inputs, target, settings, extra, true)
     }
@@ -777,6 +788,10 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
     let mut next = key.attachments.len() as u32;
     if key.complex_output {
         frag_outputs.push(("o_complex".into(), next));
+        next += 1;
+    }
+    if key.outside_output {
+        frag_outputs.push(("o_outside".into(), next));
         next += 1;
     }
     if key.second_layer_output {
