@@ -34,7 +34,9 @@
 //! ```
 
 pub mod bar_width;
+
 mod crops;
+pub mod layers;
 pub mod methods;
 mod plot;
 pub mod report;

@@ -369,7 +369,7 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
@@ -384,7 +384,7 @@ mod tests {
         assert_eq!(pareto_front(&pts), [true, true, false, true, false]);
     }
 
-    fn run(method: &str, ms_lighting: f64) -> Run {
+    pub(crate) fn run(method: &str, ms_lighting: f64) -> Run {
         Run {
             scene: "builtin:halo".into(),
             method: method.into(),
@@ -416,7 +416,7 @@ mod tests {
         }
     }
 
-    fn report(runs: Vec<Run>) -> Report {
+    pub(crate) fn report(runs: Vec<Run>) -> Report {
         Report {
             renderer: "llvmpipe".into(),
             gl_version: "4.5".into(),
