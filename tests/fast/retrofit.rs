@@ -604,3 +604,82 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
     }
     assert_eq!(live_objects(), before);
 }
+
+/// The second layer's calls in the wrong order, or without two layers, are
+/// one-line errors that leave the retrofit working; with one layer
+/// `begin_second_layer` does nothing and says so.
+#[test]
+fn second_layer_calls_out_of_order_are_errors() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let host = host(gl);
+    let options = RetrofitOptions {
+        position_attachment: Some(ColorAttachment(1)),
+        ..RetrofitOptions::default()
+    };
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
+    let output = Some(host.fbo.raw());
+    assert!(!msaa.begin_second_layer(gl, output).unwrap());
+    assert!(msaa.second_layer_coverage().is_none());
+    assert_eq!(msaa.second_layer_bytes(), 0);
+    let one_line = |e: Error| {
+        let text = e.to_string();
+        assert_eq!(text.lines().count(), 1, "{text}");
+        text
+    };
+    let text = one_line(msaa.finish_second_layer(gl, output).unwrap_err());
+    assert!(text.contains("two layers"), "{text}");
+
+    let two = RetrofitOptions {
+        resolve: ResolveSettings {
+            layers: 2,
+            ..ResolveSettings::default()
+        },
+        normal_attachment: Some(NormalAttachment {
+            attachment: ColorAttachment(2),
+            encoding: NormalEncoding::Xyz,
+        }),
+        ..options
+    };
+    msaa.set_options(gl, &two).unwrap();
+    assert!(msaa.second_layer_bytes() > 0);
+    // Before this frame's resolve, and finish before begin.
+    let text = one_line(msaa.begin_second_layer(gl, output).unwrap_err());
+    assert!(text.contains("resolve"), "{text}");
+    let text = one_line(msaa.finish_second_layer(gl, output).unwrap_err());
+    assert!(text.contains("begin_second_layer"), "{text}");
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    host.draw(gl, &projection(), false);
+    msaa.resolve(gl, &frame()).unwrap();
+    assert!(msaa.begin_second_layer(gl, output).unwrap());
+    // Twice, a resolve in between, or another output: refused.
+    let text = one_line(msaa.begin_second_layer(gl, output).unwrap_err());
+    assert!(text.contains("twice"), "{text}");
+    let text = one_line(msaa.resolve(gl, &frame()).unwrap_err());
+    assert!(text.contains("between"), "{text}");
+    let text = one_line(msaa.finish_second_layer(gl, None).unwrap_err());
+    assert!(text.contains("another output"), "{text}");
+    msaa.finish_second_layer(gl, output).unwrap();
+    // A normal attachment that is not there is refused by name, and the
+    // retrofit keeps its two layers.
+    let bad = RetrofitOptions {
+        normal_attachment: Some(NormalAttachment {
+            attachment: ColorAttachment(7),
+            encoding: NormalEncoding::Unorm,
+        }),
+        ..two.clone()
+    };
+    let text = one_line(msaa.set_options(gl, &bad).unwrap_err());
+    assert!(
+        text.contains("GL_COLOR_ATTACHMENT7") && text.contains("nothing is attached"),
+        "{text}"
+    );
+    assert_eq!(msaa.options(), &two);
+    assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
+    msaa.destroy(gl);
+    host.destroy(gl);
+    assert_eq!(live_objects(), before, "GL objects leaked");
+}

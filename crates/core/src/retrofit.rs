@@ -1210,9 +1210,10 @@ impl MsaaRetrofit {
     }
 
     /// Change the options. Only what they change is rebuilt: the twins
-    /// when the sample count, budget, rules or key change; the programs
-    /// whenever the resolve's permutation changes. On error the retrofit
-    /// keeps working with the options it had.
+    /// when the sample count, budget, rules, key, stencil copy, layer
+    /// count, normal attachment or layer mix change (the host draws into
+    /// the new twins); the programs whenever the resolve's permutation
+    /// changes. On error the retrofit keeps working with the options it had.
     pub fn set_options(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
         let host = SetupState::capture(gl);
         let result = self.change_options(gl, options);
