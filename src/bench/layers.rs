@@ -63,7 +63,10 @@ pub fn layers_table(reports: &[&Report]) -> String {
         md,
         "| scene | lights | FLIP none | average | median | **median:layers=2** | per-sample | layers=2 / per-sample | none+fxaa | layers=2+fxaa | halo px median | halo px layers=2 | bar width px median | bar width px layers=2 |"
     );
-    let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(
+        md,
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
     for report in reports {
         for scene in report.scenes() {
             let get = |m: &str| run(report, scene, m);

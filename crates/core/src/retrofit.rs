@@ -1117,8 +1117,8 @@ impl MsaaRetrofit {
     /// [`MsaaRetrofit::finish_second_layer`]. `false`, and nothing done, with
     /// one layer.
     ///
-    /// Where a pixel has no second cluster the second layer holds sample
-    /// 0's values and the clear depth, so a lighting pass that skips
+    /// Where a pixel has no second cluster the second layer holds the clear
+    /// depth (and colours nothing reads), so a lighting pass that skips
     /// background (by a depth test or its own test of the depth value)
     /// skips it; its output there is not used.
     pub fn begin_second_layer(
@@ -1175,8 +1175,10 @@ impl MsaaRetrofit {
     }
 
     /// The second layer's G-buffer as of the last resolve: its colour
-    /// textures in host colour order (the host's formats) and its depth;
-    /// `None` with one layer. For hosts that light it with a pass of their own.
+    /// textures in host colour order (the host's formats; meaningful where
+    /// the coverage is above 0) and its depth-buffer values (R32F, the
+    /// clear depth where the coverage is 0); `None` with one layer. For
+    /// hosts that light it with a pass of their own.
     pub fn second_layer_gbuffer(&self) -> Option<(Vec<TextureRef>, TextureRef)> {
         self.second.as_ref().map(|s| {
             let (colors, depth) = s.gbuffer();

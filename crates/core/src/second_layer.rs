@@ -10,7 +10,7 @@
 //! textures, and [`MsaaRetrofit::finish_second_layer`](crate::MsaaRetrofit::finish_second_layer)
 //! mixes the two by coverage and puts the first layer back.
 
-use crate::gl::format::{ComponentType, SampleKind};
+use crate::gl::format::ComponentType;
 use crate::gl::{
     Attachment, Format, Framebuffer, FullscreenPass, GlObject, Handle, HostImage, Made,
     ShaderSource, Texture2d, TextureRef, VertexArray, check_error,
@@ -79,6 +79,9 @@ struct OutputTarget {
     /// A framebuffer of that image alone, for the mix (the host's may have
     /// other draw buffers); `None` for the default framebuffer.
     target: Option<Framebuffer>,
+    /// The same image with the second layer's selection stencil: the mix
+    /// then draws only where the second resolve ran.
+    masked: Option<Framebuffer>,
     /// The lit first layer, and the lit second layer: copies of the output.
     lit_first: Texture2d,
     lit_second: Texture2d,
@@ -90,6 +93,7 @@ struct OutputTarget {
 impl GlObject for OutputTarget {
     fn handles(&self, out: &mut Vec<Handle>) {
         self.target.handles(out);
+        self.masked.handles(out);
         self.lit_first.handles(out);
         self.lit_second.handles(out);
         self.lit_first_fbo.handles(out);
@@ -100,6 +104,9 @@ impl GlObject for OutputTarget {
 impl OutputTarget {
     fn destroy(self, gl: &glow::Context) {
         if let Some(t) = self.target {
+            t.destroy(gl);
+        }
+        if let Some(t) = self.masked {
             t.destroy(gl);
         }
         self.lit_first_fbo.destroy(gl);
@@ -201,6 +208,8 @@ pub(crate) struct SecondLayer {
     output: Option<OutputTarget>,
     /// `begin_second_layer` ran and `finish_second_layer` has not.
     pub(crate) lighting: bool,
+    /// The last `select` marked the selection stencil.
+    selected: std::cell::Cell<bool>,
     /// The second layer was resolved since the last `finish_second_layer`.
     pub(crate) resolved: bool,
 }
@@ -490,6 +499,7 @@ impl SecondLayer {
                 vao,
                 output: None,
                 lighting: false,
+                selected: std::cell::Cell::new(false),
                 resolved: false,
             })
         })
@@ -500,12 +510,15 @@ impl SecondLayer {
         self.flag.as_ref()
     }
 
-    /// Before the second resolve: with the outside flag, clear the target
-    /// to what a one-cluster pixel holds (zeros, the clear depth) and mark
-    /// the flagged pixels in its stencil; the stencil value the resolve is
+    /// Before the second resolve: with the outside flag, clear the coverage
+    /// to 0, the depth to the clear depth and the seed sample to 0 (what a
+    /// one-cluster pixel holds; its colours are left as they were, which
+    /// nothing reads where the coverage is 0) and mark the flagged pixels in
+    /// the stencil; the stencil value the resolve is
     /// to run on (`None`: every pixel, without a flag). The caller keeps the
     /// host's state.
     pub(crate) fn select(&self, gl: &glow::Context, clear_depth: f32) -> Result<Option<u8>> {
+        self.selected.set(false);
         let Some(flag) = &self.flag else {
             return Ok(None);
         };
@@ -515,15 +528,6 @@ impl SecondLayer {
             crate::gl::SavedState::prepare_fullscreen_pass(gl);
             gl.disable(glow::DEPTH_TEST);
             gl.disable(glow::FRAMEBUFFER_SRGB);
-            for (k, t) in self.gbuffer.iter().enumerate() {
-                match t.format.sample_kind() {
-                    SampleKind::Uint => gl.clear_buffer_u32_slice(glow::COLOR, k as u32, &[0; 4]),
-                    SampleKind::Int => gl.clear_buffer_i32_slice(glow::COLOR, k as u32, &[0; 4]),
-                    SampleKind::Float => {
-                        gl.clear_buffer_f32_slice(glow::COLOR, k as u32, &[0.0; 4])
-                    }
-                }
-            }
             gl.clear_buffer_f32_slice(glow::COLOR, n, &[0.0; 4]);
             gl.clear_buffer_f32_slice(glow::COLOR, n + 1, &[clear_depth, 0.0, 0.0, 0.0]);
             if self.reference.is_some() {
@@ -541,6 +545,7 @@ impl SecondLayer {
         self.select.draw(gl, &self.vao);
         unsafe { gl.color_mask(true, true, true, true) };
         check_error(gl, "selecting the second layer's pixels")?;
+        self.selected.set(true);
         Ok(Some(SELECTED))
     }
 
@@ -814,6 +819,26 @@ impl SecondLayer {
                 }
                 None => None,
             };
+            let masked = match &image {
+                Some(image) => {
+                    let images: Vec<(Attachment, HostImage)> = image
+                        .host_image()
+                        .map(|i| (Attachment::Color(0), i))
+                        .into_iter()
+                        .collect();
+                    Some(made.keep(Framebuffer::with_host_images(
+                        gl,
+                        "second layer mix target (host output, selection stencil)",
+                        &[
+                            (Attachment::Color(0), image.texture_ref()),
+                            (Attachment::DepthStencil, TextureRef::from(&self.stencil)),
+                        ],
+                        &images,
+                        &[Some(0)],
+                    )?))
+                }
+                None => None,
+            };
             let lit_first = made.keep(Texture2d::new(gl, "lit first layer", format, w, h)?);
             let lit_second = made.keep(Texture2d::new(gl, "lit second layer", format, w, h)?);
             let fbo = |t: &Texture2d, label: &str| {
@@ -829,6 +854,7 @@ impl SecondLayer {
             Ok::<_, Error>(OutputTarget {
                 host,
                 target,
+                masked,
                 lit_first,
                 lit_second,
                 lit_first_fbo,
@@ -963,6 +989,43 @@ impl SecondLayer {
             (LayerMix::Auto, _) if float => &self.mix_tonemapped,
             _ => &self.mix_linear,
         };
+        // With the selection stencil and an image of the host's: the first
+        // layer back everywhere by a copy, then the mix only where the second
+        // resolve ran (a superset of the pixels with coverage above 0).
+        if let (Some(masked), Some(target), true) = (&o.masked, &o.target, self.selected.get()) {
+            let (w, h) = (self.width as i32, self.height as i32);
+            unsafe {
+                gl.disable(glow::FRAMEBUFFER_SRGB);
+                gl.disable(glow::SCISSOR_TEST);
+                gl.color_mask(true, true, true, true);
+                gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(o.lit_first_fbo.raw()));
+                gl.read_buffer(glow::COLOR_ATTACHMENT0);
+                gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(target.raw()));
+                gl.blit_framebuffer(
+                    0,
+                    0,
+                    w,
+                    h,
+                    0,
+                    0,
+                    w,
+                    h,
+                    glow::COLOR_BUFFER_BIT,
+                    glow::NEAREST,
+                );
+                pass.begin(gl, masked);
+                gl.enable(glow::STENCIL_TEST);
+                gl.stencil_func(glow::EQUAL, i32::from(SELECTED), 0xFF);
+                gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+                gl.stencil_mask(0);
+                gl.enable(glow::FRAMEBUFFER_SRGB);
+                TextureRef::from(&o.lit_first).bind(gl, 0);
+                TextureRef::from(&o.lit_second).bind(gl, 1);
+                TextureRef::from(&self.coverage).bind(gl, 2);
+            }
+            pass.draw(gl, &self.vao);
+            return Ok(());
+        }
         unsafe {
             match &o.target {
                 Some(t) => {
