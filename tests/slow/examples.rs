@@ -187,9 +187,34 @@ fn median() -> AaMode {
 #[ignore = "slow tier: scripts/test runs it"]
 fn every_example_builds() {
     let dir = built_examples().as_ref().unwrap_or_else(|e| panic!("{e}"));
-    for name in ["retrofit", "viewer", "headless"] {
+    for name in ["retrofit", "viewer", "headless", "layers_table"] {
         let path = dir.join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
         assert!(path.is_file(), "{} was not built", path.display());
+    }
+}
+
+/// The README's second-layer table: no report, or a file that is not one,
+/// is a one-line error and a non-zero exit.
+#[test]
+#[ignore = "slow tier: scripts/test runs it"]
+fn layers_table_refuses_what_is_not_a_report() {
+    let none = Command::new(example("layers_table"))
+        .output()
+        .expect("runs");
+    assert_eq!(none.status.code(), Some(2));
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("layers-table");
+    std::fs::create_dir_all(&dir).expect("a scratch folder");
+    let bad = dir.join("report.json");
+    std::fs::write(&bad, "{ not json").expect("written");
+    for path in [bad, dir.join("missing.json")] {
+        let out = Command::new(example("layers_table"))
+            .arg(&path)
+            .output()
+            .expect("runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains(&path.display().to_string()), "{err}");
     }
 }
 
