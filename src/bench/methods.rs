@@ -333,6 +333,18 @@ mod tests {
     }
 
     #[test]
+    fn two_layers_are_a_resolve_option() {
+        let e: MethodEntry = "median:layers=2:normal-threshold=0.9+fxaa".parse().unwrap();
+        let AaMode::Resolve(settings) = e.method else {
+            panic!("{:?}", e.method);
+        };
+        assert_eq!((settings.layers, settings.normal_threshold), (2, 0.9));
+        assert!(e.fxaa);
+        let one: MethodEntry = "median".parse().unwrap();
+        assert!(matches!(one.method, AaMode::Resolve(s) if s.layers == 1));
+    }
+
+    #[test]
     fn bad_entries_are_refused_in_one_line() {
         for bad in [
             "sideways",
@@ -342,6 +354,9 @@ mod tests {
             "none:hard",
             "median+smaa",
             "median+fxaa:hard",
+            "median:layers=3",
+            "average:layers=2",
+            "median:normal-threshold=2",
             "",
         ] {
             let e = bad.parse::<MethodEntry>().unwrap_err().to_string();

@@ -190,6 +190,16 @@ fn refusals_are_one_line_with_a_non_zero_exit() {
             "none",
         ),
         (&["render", "--aa-max-depth", "-1", "--size", "16x16"], "-1"),
+        (&["render", "--layers", "3", "--size", "16x16"], "layers"),
+        (&["render", "--method", "gbaa", "--layers", "2"], "gbaa"),
+        (
+            &["render", "--method", "average", "--layers", "2"],
+            "average",
+        ),
+        (
+            &["render", "--view", "layers", "--size", "16x16"],
+            "--layers 2",
+        ),
         (&["frobnicate"], "frobnicate"),
     ];
     for (args, needle) in cases {
