@@ -485,6 +485,8 @@ struct Job<'a> {
     /// The fraction of pixels the method treated as complex in the last
     /// frame ([`Renderer::complex_pixel_fraction`]).
     complex_fraction: Option<f64>,
+    /// The share of pixels the second layer covers in the last frame.
+    second_layer_share: Option<f64>,
     /// `sparse`: the pixels that fell back to one sample in the last frame.
     sparse_overflow_pixels: Option<u64>,
 }
@@ -754,6 +756,7 @@ fn time_scene(
                 image: None,
                 gbuffer_bytes,
                 complex_fraction: None,
+                second_layer_share: None,
                 sparse_overflow_pixels: None,
             });
         }
@@ -781,6 +784,10 @@ fn time_scene(
             if last {
                 job.image = Some(renderer.read_final(gl)?);
                 job.complex_fraction = renderer.complex_pixel_fraction(gl)?;
+                job.second_layer_share = renderer.read_second_layer_coverage(gl)?.map(|c| {
+                    let covered = c.pixels().filter(|p| p[0] > 0).count();
+                    covered as f64 / (c.width() as f64 * c.height() as f64).max(1.0)
+                });
                 job.sparse_overflow_pixels = renderer
                     .technique::<Sparse>()
                     .map_or(Ok(None), |s| s.stats(gl))?
@@ -872,6 +879,7 @@ fn time_scene(
             ms_second_layer: median(job.frames.iter().map(|t| t.second_layer_ms).collect()),
             flip_p95: flip.p95 as f64,
             complex_fraction: job.complex_fraction,
+            second_layer_share: job.second_layer_share,
             sparse_overflow_pixels: job.sparse_overflow_pixels,
             full_ms_gbuffer_bytes: matches!(job.entry.method, AaMode::Sparse(_)).then(|| {
                 config

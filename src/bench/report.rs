@@ -89,6 +89,10 @@ pub struct Run {
     /// not all equal; all of them with `:nofast`), for `complex` those lit
     /// per sample, 1 for `per-sample` (extra key; `null` without multisampling).
     pub complex_fraction: Option<f64>,
+    /// With two layers: the share of pixels the second layer covers (its
+    /// coverage above 0) in the last frame (extra key; `null` otherwise).
+    #[serde(default)]
+    pub second_layer_share: Option<f64>,
     /// `sparse`: pixels that fell back to one sample because the block pool
     /// ran out in the last frame (extra key; `null` for other methods).
     #[serde(default)]
@@ -217,6 +221,7 @@ impl Report {
                 .iter()
                 .any(|r| r.flip_edges.is_some() || r.flip_interior.is_some());
             let bar_column = runs.iter().any(|r| r.bar_width_error_px.is_some());
+            let layer_column = runs.iter().any(|r| r.second_layer_share.is_some());
             if let Some(share) = runs.iter().find_map(|r| r.edge_pixel_share) {
                 let _ = writeln!(
                     md,
@@ -224,6 +229,13 @@ impl Report {
                      marks as holding two or more surface clusters (silhouettes, creases), \
                      {:.1} % of this scene's, and over the rest.\n",
                     share * 100.0
+                );
+            }
+            if layer_column {
+                let _ = writeln!(
+                    md,
+                    "Second layer %: with two layers, the pixels the second layer covers (two or \
+                     more clusters of samples) in the run's last frame.\n"
                 );
             }
             if bar_column {
@@ -248,6 +260,9 @@ impl Report {
             if bar_column {
                 header.push("bar width error px");
             }
+            if layer_column {
+                header.push("second layer %");
+            }
             header.extend(["PSNR dB", "halo px", "complex %", "G-buffer MiB", "× none"]);
             let mut align = vec!["---"];
             align.resize(header.len(), "---:");
@@ -269,6 +284,11 @@ impl Report {
                 }
                 if bar_column {
                     cells.push(cell(run.bar_width_error_px, |v| format!("{v:+.3}")));
+                }
+                if layer_column {
+                    cells.push(cell(run.second_layer_share, |v| {
+                        format!("{:.1}", v * 100.0)
+                    }));
                 }
                 cells.extend([
                     run.psnr_db.map_or("∞".to_string(), |p| format!("{p:.2}")),
@@ -406,6 +426,7 @@ pub(crate) mod tests {
             flip_p95: 0.2,
             complex_fraction: None,
             sparse_overflow_pixels: None,
+            second_layer_share: None,
             full_ms_gbuffer_bytes: None,
             samples_requested: 4,
             lights: 7,
