@@ -192,10 +192,33 @@ pub struct HostFramebuffer {
     pub undrawn: Vec<Attachment>,
 }
 
+/// How a framebuffer of ours attaches the host images that are not whole
+/// 2D textures ([`Framebuffer::with_host_images`]).
+pub(crate) type HostImages = Vec<(Attachment, HostImage)>;
+
 impl HostFramebuffer {
     /// Width and height (all attachments agree).
     pub fn size(&self) -> (u32, u32) {
         (self.depth.width, self.depth.height)
+    }
+
+    /// The host's images as a framebuffer of ours attaches them: colour
+    /// `k` at `Color(k)` (in host colour order), depth at its own point,
+    /// and how those that are not whole 2D textures are attached.
+    pub(crate) fn images(&self) -> (Vec<(Attachment, TextureRef)>, HostImages) {
+        let mut attachments = Vec::with_capacity(self.colors.len() + 1);
+        let mut images = Vec::new();
+        for (point, a) in self
+            .colors
+            .iter()
+            .enumerate()
+            .map(|(k, a)| (Attachment::Color(k as u32), a))
+            .chain([(self.depth.point, &self.depth)])
+        {
+            attachments.push((point, a.texture_ref()));
+            images.extend(a.host_image().map(|image| (point, image)));
+        }
+        (attachments, images)
     }
 }
 
@@ -857,18 +880,7 @@ impl MsaaRetrofit {
                 samples,
             )?);
             // The resolve writes output k into the host's k-th colour texture.
-            let mut attachments: Vec<(Attachment, TextureRef)> = Vec::new();
-            let mut images: Vec<(Attachment, HostImage)> = Vec::new();
-            for (point, a) in host
-                .colors
-                .iter()
-                .enumerate()
-                .map(|(k, a)| (Attachment::Color(k as u32), a))
-                .chain([(host.depth.point, &host.depth)])
-            {
-                attachments.push((point, a.texture_ref()));
-                images.extend(a.host_image().map(|image| (point, image)));
-            }
+            let (mut attachments, images) = host.images();
             let mut draw: Vec<Option<u32>> = (0..host.colors.len() as u32).map(Some).collect();
             let stencil = if host.depth.format.has_stencil() {
                 Some(made.keep(StencilCopyTargets::new(gl, &host, options.stencil)?))

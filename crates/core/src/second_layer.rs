@@ -294,18 +294,7 @@ fn single_input_pass(
 /// A framebuffer over the host's colour images at `Color(k)` and its depth
 /// image, for the copies.
 fn host_images_target(gl: &glow::Context, host: &HostFramebuffer) -> Result<Framebuffer> {
-    let mut attachments: Vec<(Attachment, TextureRef)> = Vec::new();
-    let mut images: Vec<(Attachment, HostImage)> = Vec::new();
-    for (point, a) in host
-        .colors
-        .iter()
-        .enumerate()
-        .map(|(k, a)| (Attachment::Color(k as u32), a))
-        .chain([(host.depth.point, &host.depth)])
-    {
-        attachments.push((point, a.texture_ref()));
-        images.extend(a.host_image().map(|image| (point, image)));
-    }
+    let (attachments, images) = host.images();
     let draw: Vec<Option<u32>> = (0..host.colors.len() as u32).map(Some).collect();
     Framebuffer::with_host_images(
         gl,

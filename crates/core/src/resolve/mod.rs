@@ -417,7 +417,14 @@ impl ResolveParams {
 pub struct Resolver {
     programs: HashMap<ResolveProgramKey, Program>,
     vao: VertexArray,
-    /// The stencil value the next draw is limited to.
+}
+
+/// How one resolve draw runs beside its program: the stage its GL errors
+/// are reported as, and the stencil value it is limited to (an early test
+/// on the target's stencil).
+#[derive(Clone, Copy, Debug)]
+struct DrawRun<'s> {
+    stage: &'s str,
     stencil: Option<u8>,
 }
 
@@ -427,7 +434,6 @@ impl Resolver {
         Ok(Resolver {
             programs: HashMap::new(),
             vao: VertexArray::new(gl, "resolve full-screen triangle")?,
-            stencil: None,
         })
     }
 
@@ -635,17 +641,11 @@ impl Resolver {
         stencil: Option<u8>,
     ) -> Result<()> {
         let key = Self::second_layer_key(inputs, target, &params.settings, reference_output)?;
-        self.stencil = stencil;
-        let result = self.run_key(
-            gl,
-            key,
-            inputs,
-            target,
-            params,
-            "the second layer's resolve pass",
-        );
-        self.stencil = None;
-        result
+        let run = DrawRun {
+            stage: "the second layer's resolve pass",
+            stencil,
+        };
+        self.run_key(gl, key, inputs, target, params, run)
     }
     /// Resolve `inputs` into `target`, whose colour attachment `k` (draw buffer
     /// `k`) receives input `k`, whose depth attachment (if any) receives the
@@ -662,7 +662,11 @@ impl Resolver {
         extra: impl Into<ExtraOutputs>,
     ) -> Result<()> {
         let base = Self::base_key(inputs, target, &params.settings, extra.into(), false)?;
-        self.run_key(gl, base, inputs, target, params, "the resolve pass")
+        let run = DrawRun {
+            stage: "the resolve pass",
+            stencil: None,
+        };
+        self.run_key(gl, base, inputs, target, params, run)
     }
 
     fn run_key(
@@ -672,7 +676,7 @@ impl Resolver {
         inputs: &ResolveInputs<'_>,
         target: &Framebuffer,
         params: &ResolveParams,
-        stage: &str,
+        run: DrawRun<'_>,
     ) -> Result<()> {
         if matches!(inputs.key, KeySource::WorldPosition(_)) && params.view_row.is_none() {
             return Err(Error::invalid(
@@ -686,10 +690,10 @@ impl Resolver {
         }
         // Units 0..=colors hold the inputs.
         let state = SavedState::capture(gl, inputs.colors.len() as u32 + 1);
-        let result = self.draw(gl, &base, inputs, target, params);
+        let result = self.draw(gl, &base, inputs, target, params, run.stencil);
         state.restore(gl);
         result?;
-        check_error(gl, stage)
+        check_error(gl, run.stage)
     }
 
     /// One draw of the program for `key` into `target`, a full-screen triangle.
@@ -700,9 +704,9 @@ impl Resolver {
         inputs: &ResolveInputs<'_>,
         target: &Framebuffer,
         params: &ResolveParams,
+        stencil: Option<u8>,
     ) -> Result<()> {
         let vao = self.vao.raw;
-        let stencil = self.stencil;
         let program = self.program(gl, key)?;
         let s = params.settings;
         unsafe {
