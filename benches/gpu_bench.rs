@@ -29,17 +29,17 @@
 
 mod common;
 
-use common::{Rng, parse_size, quantile};
-use deferred_msaa::gbuffer::{GBuffer, GBufferLayout};
-use deferred_msaa::gl::{
-    Buffer, Capabilities, Format, GpuTimer, Program, ShaderStage, TextureRef, TimerKind,
-    VertexArray, check_error, preamble,
-};
+use common::{parse_size, quantile};
+use deferred_msaa::gbuffer::GBufferLayout;
+use deferred_msaa::gl::{Capabilities, Format, GpuTimer, TextureRef, TimerKind, check_error};
 use deferred_msaa::readback::{Readback, SampleImage};
 use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
 use deferred_msaa::resolve::{KeySource, ResolveSettings, ResolveSlot};
 use deferred_msaa::{ColorAttachment, Error, Frame, MsaaRetrofit, RetrofitOptions};
 use deferred_msaa_headless::{Backend, HeadlessContext};
+use deferred_msaa_testkit::projection::{self, perspective};
+use deferred_msaa_testkit::scene::RandomScene;
+use deferred_msaa_testkit::{Host, Output};
 use glow::HasContext;
 use serde_json::{Value, json};
 use std::fmt::Write as _;
@@ -62,40 +62,6 @@ const FOV_Y: f32 = 0.9;
 const NEAR: f32 = 0.5;
 const FAR: f32 = 200.0;
 const BACKGROUND_Z: f32 = 120.0;
-
-/// Every output the host shader can write, by layout attachment name.
-const OUTPUTS: [&str; 5] = ["color", "position", "normal", "specular", "emissive"];
-
-const MODEL_VERT: &str = "
-in vec3 a_position;
-in vec3 a_color;
-uniform mat4 u_projection;
-out vec3 v_view;
-out vec3 v_color;
-void main() {
-    v_view = a_position;
-    v_color = a_color;
-    gl_Position = u_projection * vec4(a_position, 1.0);
-}
-";
-/// FreeSpace Open's five outputs; emissive reaches HDR values so that
-/// `blend-hdr` is exercised, specular is 8-bit in both layouts.
-const MODEL_FRAG: &str = "
-in vec3 v_view;
-in vec3 v_color;
-out vec4 o_color;
-out vec4 o_position;
-out vec4 o_normal;
-out vec4 o_specular;
-out vec4 o_emissive;
-void main() {
-    o_color = vec4(v_color, 1.0);
-    o_position = vec4(v_view, 1.0);
-    o_normal = vec4(normalize(cross(dFdx(v_view), dFdy(v_view))), 0.5);
-    o_specular = vec4(v_color.bgr, 0.25);
-    o_emissive = vec4(v_color * (40.0 * v_color.r * v_color.r), 1.0);
-}
-";
 
 struct Args {
     out: PathBuf,
@@ -162,204 +128,78 @@ fn parse_args() -> Args {
     }
 }
 
-fn perspective(aspect: f32) -> [f32; 16] {
-    let f = 1.0 / (FOV_Y / 2.0).tan();
-    let mut m = [0.0; 16];
-    m[0] = f / aspect;
-    m[5] = f;
-    m[10] = (FAR + NEAR) / (NEAR - FAR);
-    m[11] = -1.0;
-    m[14] = 2.0 * FAR * NEAR / (NEAR - FAR);
-    m
-}
-
-/// `[x, y, z, r, g, b]` view-space vertices: a far background triangle, then
-/// `count` triangles 2 % to 25 % of the height across (log-uniform), 3 to 100
-/// units away, a little tilted. With `open_corner` the background leaves the
-/// top-right corner empty, so that the check meets cleared samples too.
-fn scene(aspect: f32, count: usize, seed: u64, open_corner: bool) -> Vec<f32> {
-    let mut rng = Rng::new(seed);
-    let tan_half = (FOV_Y / 2.0).tan();
-    let mut v = Vec::with_capacity((count + 1) * 18);
-    let mut push = |p: [f32; 3], c: [f32; 3]| {
-        v.extend_from_slice(&p);
-        v.extend_from_slice(&c);
-    };
-    let (bx, by) = (BACKGROUND_Z * tan_half * aspect, BACKGROUND_Z * tan_half);
-    let corners = if open_corner {
-        [[-1.5, -1.5], [1.6, -1.5], [-1.5, 1.6]]
-    } else {
-        [[-4.0, -2.0], [4.0, -2.0], [0.0, 4.0]]
-    };
-    for [x, y] in corners {
-        push([x * bx, y * by, -BACKGROUND_Z], [0.3, 0.4, 0.6]);
-    }
-    for _ in 0..count {
-        let z = rng.range(3.0, 100.0);
-        let (cx, cy) = (rng.range(-1.1, 1.1), rng.range(-1.1, 1.1));
-        let size = 0.02 * 12.5f32.powf(rng.unit());
-        let half_h = z * tan_half;
-        let radius = size * half_h;
-        let (ox, oy) = (cx * half_h * aspect, cy * half_h);
-        let phase = rng.range(0.0, std::f32::consts::TAU);
-        let color = [rng.unit(), rng.unit(), rng.unit()];
-        for k in 0..3 {
-            let a = phase + k as f32 * std::f32::consts::TAU / 3.0 + rng.range(-0.5, 0.5);
-            let r = radius * rng.range(0.5, 1.0);
-            let tilt = radius * rng.range(-0.3, 0.3);
-            push([ox + r * a.cos(), oy + r * a.sin(), -(z + tilt)], color);
-        }
-    }
-    v
-}
-
-/// A scene's vertices on the GPU and the lens it is seen through.
+/// A scene's vertices and the lens it is seen through.
 struct Model {
-    vbo: Buffer,
-    vertices: i32,
-    projection: [f32; 16],
+    vertices: Vec<f32>,
+    projection: [f64; 16],
     width: u32,
     height: u32,
 }
 
 impl Model {
-    fn new(
-        gl: &glow::Context,
-        width: u32,
-        height: u32,
-        count: usize,
-        seed: u64,
-        open_corner: bool,
-    ) -> Result<Model, Error> {
+    /// The random scene of `count` triangles at `width` x `height`; with
+    /// `open_corner` the background leaves the top-right corner empty, so
+    /// that the check meets cleared samples too.
+    fn new(width: u32, height: u32, count: usize, seed: u64, open_corner: bool) -> Model {
         let aspect = width as f32 / height as f32;
-        let data = scene(aspect, count, seed, open_corner);
-        let vbo = Buffer::with_data(
-            gl,
-            "gpu_bench vertices",
-            glow::ARRAY_BUFFER,
-            bytemuck::cast_slice(&data),
-            glow::STATIC_DRAW,
-        )?;
-        Ok(Model {
-            vbo,
-            vertices: (data.len() / 6) as i32,
-            projection: perspective(aspect),
+        let scene = RandomScene {
+            aspect,
+            fov_y: FOV_Y,
+            background_z: BACKGROUND_Z,
+            count,
+            seed,
+            open_corner,
+        };
+        Model {
+            vertices: scene.vertices(),
+            projection: perspective(FOV_Y.into(), aspect.into(), NEAR.into(), Some(FAR.into())),
             width,
             height,
-        })
+        }
     }
 
     fn frame(&self) -> Frame {
-        Frame::from_matrix(self.projection)
-    }
-
-    fn destroy(self, gl: &glow::Context) {
-        self.vbo.destroy(gl);
+        projection::frame(&self.projection, false)
     }
 }
 
-/// A host engine: its single-sample G-buffer in a layout, and its model shader.
-struct Host {
-    gbuffer: GBuffer,
-    program: Program,
-    vao: VertexArray,
-}
-
-impl Host {
-    fn new(gl: &glow::Context, layout: &GBufferLayout, model: &Model) -> Result<Host, Error> {
-        if let Some(a) = layout
-            .colors
-            .iter()
-            .find(|a| !OUTPUTS.contains(&a.name.as_str()))
-        {
+/// A host engine of `layout` (the test kit's toy host, its G-buffer in the
+/// layout's formats) with `model`'s triangles.
+fn host_for(gl: &glow::Context, layout: &GBufferLayout, model: &Model) -> Result<Host, Error> {
+    let mut outputs = Vec::with_capacity(layout.colors.len());
+    for a in &layout.colors {
+        let Some(output) = Output::from_name(&a.name) else {
             return Err(Error::invalid(format!(
                 "the host shader writes no `{}` attachment",
                 a.name
             )));
-        }
-        let names: Vec<String> = layout
-            .colors
-            .iter()
-            .map(|a| format!("o_{}", a.name))
-            .collect();
-        let outputs: Vec<(&str, u32)> = names
-            .iter()
-            .enumerate()
-            .map(|(k, n)| (n.as_str(), k as u32))
-            .collect();
-        let gbuffer = GBuffer::new(gl, layout, model.width, model.height)?;
-        let program = match Program::build(
-            gl,
-            "gpu_bench host model",
-            &preamble(&[], &[]),
-            &[
-                (ShaderStage::Vertex, "model.vert", MODEL_VERT),
-                (ShaderStage::Fragment, "model.frag", MODEL_FRAG),
-            ],
-            &outputs,
-        ) {
-            Ok(p) => p,
-            Err(e) => {
-                gbuffer.destroy(gl);
-                return Err(e);
-            }
         };
-        let vao = match VertexArray::new(gl, "gpu_bench host vao") {
-            Ok(v) => v,
-            Err(e) => {
-                program.destroy(gl);
-                gbuffer.destroy(gl);
-                return Err(e);
-            }
-        };
-        // Attribute locations are the linker's, so each host's VAO is its own.
-        unsafe {
-            vao.bind(gl);
-            gl.bind_buffer(glow::ARRAY_BUFFER, Some(model.vbo.raw()));
-            for (name, offset) in [("a_position", 0), ("a_color", 12)] {
-                if let Some(loc) = gl.get_attrib_location(program.raw(), name) {
-                    gl.enable_vertex_attrib_array(loc);
-                    gl.vertex_attrib_pointer_f32(loc, 3, glow::FLOAT, false, 24, offset);
-                }
-            }
-            gl.bind_vertex_array(None);
-            gl.bind_buffer(glow::ARRAY_BUFFER, None);
-        }
-        Ok(Host {
-            gbuffer,
-            program,
-            vao,
-        })
+        outputs.push((output, a.format));
     }
+    let mut host = Host::with_outputs(gl, model.width, model.height, &outputs, layout.depth)?;
+    if let Err(e) = host.set_triangles(gl, &model.vertices) {
+        host.destroy(gl);
+        return Err(e);
+    }
+    Ok(host)
+}
 
-    /// The host's geometry pass into `fbo` (the retrofit's twin).
-    fn draw(&self, gl: &glow::Context, fbo: glow::Framebuffer, model: &Model) -> Result<(), Error> {
-        unsafe {
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-            gl.viewport(0, 0, model.width as i32, model.height as i32);
-            gl.enable(glow::DEPTH_TEST);
-            gl.depth_func(glow::LESS);
-            gl.depth_mask(true);
-            gl.clear_color(0.0, 0.0, 0.0, 0.0);
-            gl.clear_depth_f64(1.0);
-            gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
-            self.program.bind(gl);
-            self.program.set_mat4(gl, "u_projection", &model.projection);
-            self.vao.bind(gl);
-            gl.draw_arrays(glow::TRIANGLES, 0, model.vertices);
-            gl.bind_vertex_array(None);
-            gl.use_program(None);
-            gl.disable(glow::DEPTH_TEST);
-            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
-        }
-        check_error(gl, "drawing the scene")
+/// The host's geometry pass into `fbo` (the retrofit's twin).
+fn draw_into(
+    gl: &glow::Context,
+    host: &Host,
+    fbo: glow::Framebuffer,
+    model: &Model,
+) -> Result<(), Error> {
+    unsafe {
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
     }
-
-    fn destroy(self, gl: &glow::Context) {
-        self.vao.destroy(gl);
-        self.program.destroy(gl);
-        self.gbuffer.destroy(gl);
+    host.draw(gl, &model.projection, false);
+    unsafe {
+        gl.disable(glow::DEPTH_TEST);
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
     }
+    check_error(gl, "drawing the scene")
 }
 
 /// The two layouts measured: a key for reports, a label, the layout.
@@ -600,12 +440,9 @@ fn check_count(
     model: &Model,
     checked: &mut Vec<u32>,
 ) -> Result<Offer, Error> {
-    let host = Host::new(gl, layout, model)?;
-    let result = match MsaaRetrofit::new(
-        gl,
-        host.gbuffer.fbo.raw(),
-        &options_for(layout, requested, true),
-    ) {
+    let host = host_for(gl, layout, model)?;
+    let result = match MsaaRetrofit::new(gl, host.fbo.raw(), &options_for(layout, requested, true))
+    {
         Ok(mut msaa) => {
             let r = check_retrofit(
                 gl, readback, layout, &host, &mut msaa, model, requested, checked,
@@ -646,7 +483,7 @@ fn check_retrofit(
         return Ok(Offer::NotOffered(format!("the driver gave {samples}x")));
     }
     checked.push(samples);
-    host.draw(gl, msaa.framebuffer(), model)?;
+    draw_into(gl, host, msaa.framebuffer(), model)?;
     let (depth_ref, color_refs, _) = msaa.inputs()?;
     let inputs = color_refs
         .iter()
@@ -669,12 +506,11 @@ fn check_retrofit(
         msaa.set_options(gl, &options_for(layout, requested, fast_path))?;
         msaa.resolve(gl, &frame)?;
         let resolved = host
-            .gbuffer
             .colors
             .iter()
-            .map(|t| readback.read(gl, TextureRef::from(t), 1))
+            .map(|(_, t)| readback.read(gl, TextureRef::from(t), 1))
             .collect::<Result<Vec<_>, Error>>()?;
-        let resolved_depth = readback.read(gl, TextureRef::from(&host.gbuffer.depth), 1)?;
+        let resolved_depth = readback.read(gl, TextureRef::from(&host.depth), 1)?;
         let cpu = CpuResolve {
             settings: msaa.options().resolve,
             rules: msaa.rules().to_vec(),
@@ -754,7 +590,7 @@ fn blit_resolve(gl: &glow::Context, t: &Timed, width: u32, height: u32) {
     let colors = t.layout.colors.len() as u32;
     unsafe {
         gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(t.msaa.framebuffer()));
-        gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(t.host.gbuffer.fbo.raw()));
+        gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(t.host.fbo.raw()));
         for k in 0..colors {
             gl.read_buffer(glow::COLOR_ATTACHMENT0 + k);
             gl.draw_buffers(&[glow::COLOR_ATTACHMENT0 + k]);
@@ -859,18 +695,15 @@ fn time_count(
     let mut timed: Vec<Timed> = Vec::new();
     let built = (|| -> Result<(), Error> {
         for (key, label, layout) in layouts_here {
-            let host = Host::new(gl, layout, model)?;
-            let msaa = match MsaaRetrofit::new(
-                gl,
-                host.gbuffer.fbo.raw(),
-                &options_for(layout, samples, false),
-            ) {
-                Ok(m) => m,
-                Err(e) => {
-                    host.destroy(gl);
-                    return Err(e);
-                }
-            };
+            let host = host_for(gl, layout, model)?;
+            let msaa =
+                match MsaaRetrofit::new(gl, host.fbo.raw(), &options_for(layout, samples, false)) {
+                    Ok(m) => m,
+                    Err(e) => {
+                        host.destroy(gl);
+                        return Err(e);
+                    }
+                };
             let t = Timed {
                 key,
                 label,
@@ -879,7 +712,7 @@ fn time_count(
                 msaa,
             };
             // Both permutations compiled now, so switching later only picks one.
-            let ready = t.host.draw(gl, t.msaa.framebuffer(), model).and_then(|()| {
+            let ready = draw_into(gl, &t.host, t.msaa.framebuffer(), model).and_then(|()| {
                 let real = t.msaa.samples();
                 if real == samples {
                     Ok(())
@@ -1377,20 +1210,7 @@ fn run(args: &Args) -> Result<bool, String> {
 
     // 1. The check.
     let mut readback = Readback::new(gl).map_err(e)?;
-    let model = match Model::new(
-        gl,
-        CHECK_WIDTH,
-        CHECK_HEIGHT,
-        CHECK_TRIANGLES,
-        args.seed,
-        true,
-    ) {
-        Ok(m) => m,
-        Err(err) => {
-            readback.destroy(gl);
-            return Err(err.to_string());
-        }
-    };
+    let model = Model::new(CHECK_WIDTH, CHECK_HEIGHT, CHECK_TRIANGLES, args.seed, true);
     let all_layouts = layouts();
     let mut checked: Vec<Vec<u32>> = vec![Vec::new(); all_layouts.len()];
     let mut checks = Vec::new();
@@ -1437,7 +1257,6 @@ fn run(args: &Args) -> Result<bool, String> {
             checks.push(entry);
         }
     }
-    model.destroy(gl);
     readback.destroy(gl);
 
     // 2. The timing: what each layout was checked at, the headline count first.
@@ -1487,66 +1306,54 @@ fn run(args: &Args) -> Result<bool, String> {
         skipped: Vec::new(),
         errors: Vec::new(),
     };
-    match Model::new(
-        gl,
-        args.width,
-        args.height,
-        TIMING_TRIANGLES,
-        args.seed,
-        false,
-    ) {
-        Err(err) => timing.errors.push((first.unwrap_or(0), err.to_string())),
-        Ok(model) => {
-            // Seconds per sample of the first count's timing, to predict the others.
-            let mut per_sample: Option<f64> = None;
-            for (i, &n) in counts.iter().enumerate() {
-                let here: Vec<_> = all_layouts
-                    .iter()
-                    .zip(&checked)
-                    .filter(|(_, c)| c.contains(&n))
-                    .map(|(l, _)| l.clone())
-                    .collect();
-                let spent = started.elapsed().as_secs_f64();
-                if i > 0 {
-                    let estimate = per_sample.map_or(0.0, |s| s * n as f64);
-                    if spent + estimate > args.budget_s {
-                        let why = format!(
-                            "time budget: {spent:.0} s spent, about {estimate:.0} s more needed, budget {:.0} s",
-                            args.budget_s
-                        );
-                        eprintln!("[time] {n}x skipped ({why})");
-                        timing.skipped.push((n, why));
-                        continue;
-                    }
-                }
-                eprintln!(
-                    "[time] {n}x: {} ({:.0} s)",
-                    here.iter().map(|l| l.0).collect::<Vec<_>>().join(", "),
-                    spent
+    let model = Model::new(args.width, args.height, TIMING_TRIANGLES, args.seed, false);
+    // Seconds per sample of the first count's timing, to predict the others.
+    let mut per_sample: Option<f64> = None;
+    for (i, &n) in counts.iter().enumerate() {
+        let here: Vec<_> = all_layouts
+            .iter()
+            .zip(&checked)
+            .filter(|(_, c)| c.contains(&n))
+            .map(|(l, _)| l.clone())
+            .collect();
+        let spent = started.elapsed().as_secs_f64();
+        if i > 0 {
+            let estimate = per_sample.map_or(0.0, |s| s * n as f64);
+            if spent + estimate > args.budget_s {
+                let why = format!(
+                    "time budget: {spent:.0} s spent, about {estimate:.0} s more needed, budget {:.0} s",
+                    args.budget_s
                 );
-                let t0 = Instant::now();
-                match time_count(gl, n, &here, &model, args, &mut wall, &mut query, started) {
-                    Ok(cases) => {
-                        for c in &cases {
-                            if let Some((f, o)) = c.ratios(headline) {
-                                eprintln!(
-                                    "[time] {n}x {}: resolve/blit {f:.3} (fast path on), {o:.3} (off)",
-                                    c.layout
-                                );
-                            }
-                        }
-                        timing.cases.extend(cases);
-                    }
-                    Err(err) => {
-                        eprintln!("[time] {n}x failed: {err}");
-                        timing.errors.push((n, err.to_string()));
-                    }
-                }
-                if per_sample.is_none() {
-                    per_sample = Some(t0.elapsed().as_secs_f64() / n as f64);
-                }
+                eprintln!("[time] {n}x skipped ({why})");
+                timing.skipped.push((n, why));
+                continue;
             }
-            model.destroy(gl);
+        }
+        eprintln!(
+            "[time] {n}x: {} ({:.0} s)",
+            here.iter().map(|l| l.0).collect::<Vec<_>>().join(", "),
+            spent
+        );
+        let t0 = Instant::now();
+        match time_count(gl, n, &here, &model, args, &mut wall, &mut query, started) {
+            Ok(cases) => {
+                for c in &cases {
+                    if let Some((f, o)) = c.ratios(headline) {
+                        eprintln!(
+                            "[time] {n}x {}: resolve/blit {f:.3} (fast path on), {o:.3} (off)",
+                            c.layout
+                        );
+                    }
+                }
+                timing.cases.extend(cases);
+            }
+            Err(err) => {
+                eprintln!("[time] {n}x failed: {err}");
+                timing.errors.push((n, err.to_string()));
+            }
+        }
+        if per_sample.is_none() {
+            per_sample = Some(t0.elapsed().as_secs_f64() / n as f64);
         }
     }
     let has_query = query.is_some();

@@ -40,13 +40,12 @@
 
 mod common;
 
-use common::{Rng, parse_size, quantile};
+use common::{parse_size, quantile};
 use deferred_msaa::{ColorAttachment, Frame};
 use deferred_msaa_lab::context::{Backend, HeadlessContext};
 use deferred_msaa_lab::gl::FULLSCREEN_VERT;
 use deferred_msaa_lab::gl::{
-    Attachment, Buffer, Format, Framebuffer, GpuTimer, Program, ShaderStage, Texture2d, TextureRef,
-    TimerKind, VertexArray, check_error, preamble,
+    Format, GpuTimer, Program, ShaderStage, TimerKind, VertexArray, check_error, preamble,
 };
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
@@ -55,6 +54,9 @@ use deferred_msaa_lab::resolve::{
 };
 use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
 use deferred_msaa_lab::scene::{Camera, Scene};
+use deferred_msaa_testkit::Host as ToyHost;
+use deferred_msaa_testkit::projection;
+use deferred_msaa_testkit::scene::RandomScene;
 use glow::HasContext;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -65,31 +67,6 @@ const FAR: f32 = 200.0;
 /// Distance of the background triangle.
 const BACKGROUND_Z: f32 = 120.0;
 
-/// The host's model shader: view-space position in, three G-buffer outputs.
-const MODEL_VERT: &str = "
-in vec3 a_position;
-in vec3 a_color;
-uniform mat4 u_projection;
-out vec3 v_view;
-out vec3 v_color;
-void main() {
-    v_view = a_position;
-    v_color = a_color;
-    gl_Position = u_projection * vec4(a_position, 1.0);
-}
-";
-const MODEL_FRAG: &str = "
-in vec3 v_view;
-in vec3 v_color;
-out vec4 o_color;
-out vec4 o_position;
-out vec4 o_normal;
-void main() {
-    o_color = vec4(v_color, 1.0);
-    o_position = vec4(v_view, 1.0);
-    o_normal = vec4(normalize(cross(dFdx(v_view), dFdy(v_view))), 0.5);
-}
-";
 /// The floors of the one-pass resolve at 0 % complex pixels: full-screen
 /// passes that read only what a uniformity test needs (every depth and
 /// position sample for the exact test; every position sample and depth
@@ -281,61 +258,27 @@ fn scene_vertices(spec: &str) -> Result<(Vec<f32>, Camera), String> {
     Ok((v, scene.camera))
 }
 
-/// Interleaved `[x, y, z, r, g, b]` view-space vertices: one triangle that
-/// covers the whole view far away, then `count` random triangles, 2 % to 25 %
-/// of the screen height across (log-uniform, so most are small), at distances
-/// 3 to 100, mildly tilted, in random order.
+/// The synthetic scene: the test kit's random triangles (see
+/// [`RandomScene`]) behind one far triangle that covers the whole view.
 fn scene(args: &Args) -> Vec<f32> {
-    let mut rng = Rng::new(args.seed);
-    let aspect = args.width as f32 / args.height as f32;
-    let tan_half = (FOV_Y / 2.0).tan();
-    let mut v = Vec::with_capacity((args.triangles + 1) * 18);
-    let mut push = |p: [f32; 3], c: [f32; 3]| {
-        v.extend_from_slice(&p);
-        v.extend_from_slice(&c);
-    };
-    let (bx, by) = (BACKGROUND_Z * tan_half * aspect, BACKGROUND_Z * tan_half);
-    for p in [
-        [-4.0 * bx, -2.0 * by],
-        [4.0 * bx, -2.0 * by],
-        [0.0, 4.0 * by],
-    ] {
-        push([p[0], p[1], -BACKGROUND_Z], [0.3, 0.4, 0.6]);
+    RandomScene {
+        aspect: args.width as f32 / args.height as f32,
+        fov_y: FOV_Y,
+        background_z: BACKGROUND_Z,
+        count: args.triangles,
+        seed: args.seed,
+        open_corner: false,
     }
-    for _ in 0..args.triangles {
-        let z = rng.range(3.0, 100.0);
-        // Screen-space centre (NDC, a little beyond the edges) and size.
-        let (cx, cy) = (rng.range(-1.1, 1.1), rng.range(-1.1, 1.1));
-        let size = 0.02 * (12.5f32).powf(rng.unit()); // fraction of the height
-        let half_h = z * tan_half; // view-space half height at distance z
-        let radius = size * half_h; // circumradius ≈ half the size across
-        let (ox, oy) = (cx * half_h * aspect, cy * half_h);
-        let phase = rng.range(0.0, std::f32::consts::TAU);
-        let color = [rng.unit(), rng.unit(), rng.unit()];
-        for k in 0..3 {
-            let a = phase + k as f32 * std::f32::consts::TAU / 3.0 + rng.range(-0.5, 0.5);
-            let r = radius * rng.range(0.5, 1.0);
-            let tilt = radius * rng.range(-0.3, 0.3);
-            push([ox + r * a.cos(), oy + r * a.sin(), -(z + tilt)], color);
-        }
-    }
-    v
+    .vertices()
 }
 
-/// The host engine: its own G-buffer FBO and model shader.
+/// The host engine (the test kit's toy host: RGBA16F colour, position and
+/// normal, 32-bit float depth) and the camera it draws with.
 struct Host {
-    color: Texture2d,
-    position: Texture2d,
-    normal: Texture2d,
-    depth: Texture2d,
-    fbo: Framebuffer,
-    program: Program,
-    vao: VertexArray,
-    vbo: Buffer,
-    vertices: i32,
-    width: u32,
-    height: u32,
+    engine: ToyHost,
     camera: Camera,
+    /// The camera's projection as the engine uploads it.
+    projection: [f64; 16],
 }
 
 impl Host {
@@ -345,126 +288,50 @@ impl Host {
             None => (scene(args), synthetic_camera()),
         };
         let (w, h) = (args.width, args.height);
-        let color = Texture2d::new(gl, "host color", Format::Rgba16f, w, h)?;
-        let position = Texture2d::new(gl, "host position", Format::Rgba16f, w, h)?;
-        let normal = Texture2d::new(gl, "host normal", Format::Rgba16f, w, h)?;
-        let depth = Texture2d::new(gl, "host depth", Format::Depth32f, w, h)?;
-        let fbo = Framebuffer::new(
-            gl,
-            "host gbuffer",
-            &[
-                (Attachment::Color(0), TextureRef::from(&color)),
-                (Attachment::Color(1), TextureRef::from(&position)),
-                (Attachment::Color(2), TextureRef::from(&normal)),
-                (Attachment::Depth, TextureRef::from(&depth)),
-            ],
-            &[Some(0), Some(1), Some(2)],
-        )?;
-        let program = Program::build(
-            gl,
-            "host model",
-            &preamble(&[], &[]),
-            &[
-                (ShaderStage::Vertex, "model.vert", MODEL_VERT),
-                (ShaderStage::Fragment, "model.frag", MODEL_FRAG),
-            ],
-            &[("o_color", 0), ("o_position", 1), ("o_normal", 2)],
-        )?;
-        let vbo = Buffer::with_data(
-            gl,
-            "host vertices",
-            glow::ARRAY_BUFFER,
-            bytemuck::cast_slice(&data),
-            glow::STATIC_DRAW,
-        )?;
-        let vao = VertexArray::new(gl, "host vao")?;
-        unsafe {
-            vao.bind(gl);
-            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo.raw()));
-            for (name, offset) in [("a_position", 0), ("a_color", 12)] {
-                if let Some(loc) = gl.get_attrib_location(program.raw(), name) {
-                    gl.enable_vertex_attrib_array(loc);
-                    gl.vertex_attrib_pointer_f32(loc, 3, glow::FLOAT, false, 24, offset);
-                }
-            }
-            gl.bind_vertex_array(None);
-            gl.bind_buffer(glow::ARRAY_BUFFER, None);
+        let mut engine = ToyHost::new(gl, w, h, Format::Rgba16f, Format::Depth32f)?;
+        if let Err(e) = engine.set_triangles(gl, &data) {
+            engine.destroy(gl);
+            return Err(e);
         }
+        let projection = camera
+            .projection(w as f32 / h as f32)
+            .to_cols_array()
+            .map(f64::from);
         Ok(Host {
-            color,
-            position,
-            normal,
-            depth,
-            fbo,
-            program,
-            vao,
-            vbo,
-            vertices: (data.len() / 6) as i32,
+            engine,
             camera,
-            width: w,
-            height: h,
+            projection,
         })
     }
 
     /// The geometry pass, into whatever framebuffer is bound.
     fn draw(&self, gl: &glow::Context) {
-        let aspect = self.width as f32 / self.height as f32;
-        unsafe {
-            gl.viewport(0, 0, self.width as i32, self.height as i32);
-            gl.enable(glow::DEPTH_TEST);
-            gl.depth_func(glow::LESS);
-            gl.depth_mask(true);
-            gl.clear_color(0.0, 0.0, 0.0, 0.0);
-            gl.clear_depth_f64(1.0);
-            gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
-            self.program.bind(gl);
-            self.program.set_mat4(
-                gl,
-                "u_projection",
-                &self.camera.projection(aspect).to_cols_array(),
-            );
-            self.vao.bind(gl);
-            gl.draw_arrays(glow::TRIANGLES, 0, self.vertices);
-            gl.bind_vertex_array(None);
-            gl.use_program(None);
-        }
+        self.engine.draw(gl, &self.projection, false);
     }
 
     fn params(&self, settings: ResolveSettings) -> ResolveParams {
-        let p = self
-            .camera
-            .projection(self.width as f32 / self.height as f32)
-            .to_cols_array();
+        let p = self.projection;
         ResolveParams {
             settings,
             projection: DepthProjection {
-                p22: p[10] as f64,
-                p23: p[14] as f64,
+                p22: p[10],
+                p23: p[14],
                 zero_to_one: false,
                 clear_depth: 1.0,
             },
             fov_y: self.camera.fov_y as f64,
-            height_px: self.height,
+            height_px: self.engine.height,
             view_row: None,
         }
     }
 
     /// The frame the resolve is given: the camera's projection as drawn.
     fn frame(&self) -> Frame {
-        Frame::from(
-            self.camera
-                .projection(self.width as f32 / self.height as f32),
-        )
+        projection::frame(&self.projection, false)
     }
 
     fn destroy(self, gl: &glow::Context) {
-        self.fbo.destroy(gl);
-        for t in [self.color, self.position, self.normal, self.depth] {
-            t.destroy(gl);
-        }
-        self.program.destroy(gl);
-        self.vao.destroy(gl);
-        self.vbo.destroy(gl);
+        self.engine.destroy(gl);
     }
 }
 
@@ -472,10 +339,10 @@ impl Host {
 /// with `depth` of the depth attachment too (the attachments the resolve
 /// writes; a multisampled depth blit takes one sample, GL_NEAREST).
 fn blit_resolve(gl: &glow::Context, twin: glow::Framebuffer, host: &Host, depth: bool) {
-    let (w, h) = (host.width as i32, host.height as i32);
+    let (w, h) = (host.engine.width as i32, host.engine.height as i32);
     unsafe {
         gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(twin));
-        gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(host.fbo.raw()));
+        gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(host.engine.fbo.raw()));
         for k in 0..3 {
             gl.read_buffer(glow::COLOR_ATTACHMENT0 + k);
             gl.draw_buffers(&[glow::COLOR_ATTACHMENT0 + k]);
@@ -528,7 +395,7 @@ fn floor_pass(
 ) -> deferred_msaa::Result<()> {
     let (depth, colors, _) = msaa.inputs()?;
     unsafe {
-        host.fbo.bind(gl);
+        host.engine.fbo.bind(gl);
         gl.enable(glow::DEPTH_TEST);
         gl.depth_func(glow::ALWAYS);
         gl.depth_mask(true);
@@ -555,7 +422,7 @@ fn floor_pass(
 
 fn trivial_pass(gl: &glow::Context, program: &Program, vao: &VertexArray, host: &Host) {
     unsafe {
-        host.fbo.bind(gl);
+        host.engine.fbo.bind(gl);
         gl.disable(glow::DEPTH_TEST);
         gl.disable(glow::BLEND);
         program.bind(gl);
@@ -748,7 +615,7 @@ fn run(args: &Args) -> Result<(), String> {
         position_attachment: (!args.key_from_depth).then_some(ColorAttachment(1)),
         ..RetrofitOptions::default()
     };
-    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).map_err(e)?;
+    let mut msaa = MsaaRetrofit::new(gl, host.engine.fbo.raw(), &options).map_err(e)?;
     let samples = msaa.samples();
     let twin = msaa.framebuffer();
 

@@ -1,10 +1,9 @@
-//! The test kit both tiers (`tests/fast`, `tests/slow`) share: contexts and
-//! the skip rule, the RNG, a host renderer and its projections (`host`),
-//! goldens (`golden`).
+//! What both tiers (`tests/fast`, `tests/slow`) share beside the
+//! `deferred-msaa-testkit` crate (the toy host, the generator, projections):
+//! contexts and the skip rule, a test run alone (`alone`), goldens (`golden`).
 #![allow(dead_code)]
 
 pub mod golden;
-pub mod host;
 
 use deferred_msaa_lab::context::{Backend, HeadlessContext};
 
@@ -23,31 +22,6 @@ pub fn context(backend: Backend) -> Option<HeadlessContext> {
     match HeadlessContext::new(backend) {
         Ok(c) => Some(c),
         Err(e) => panic!("creating a {backend} context failed: {e}"),
-    }
-}
-
-/// A small deterministic generator (xorshift64*), so cases are reproducible.
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    /// Uniform in [0, 1).
-    pub fn unit(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.unit()
-    }
-    pub fn below(&mut self, n: u32) -> u32 {
-        (self.next_u64() % n as u64) as u32
     }
 }
 

@@ -191,13 +191,14 @@ fn the_retrofit_weighs_its_twins_and_refuses_what_does_not_fit() {
         return;
     };
     let gl = ctx.gl();
-    let host = common::host::Host::new(
+    let host = deferred_msaa_testkit::Host::new(
         gl,
         64,
         36,
         deferred_msaa_lab::gl::Format::Rgba32f,
         deferred_msaa_lab::gl::Format::Depth32f,
-    );
+    )
+    .expect("the toy host");
     let budgeted = |budget: MemoryBudget| RetrofitOptions {
         memory_budget: Some(budget),
         ..RetrofitOptions::default()

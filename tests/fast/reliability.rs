@@ -3,13 +3,15 @@
 
 use crate::common;
 
-use common::host::{Host, perspective, triangle};
 use deferred_msaa::ColorAttachment;
 use deferred_msaa_lab::context::{Backend, HeadlessContext};
 use deferred_msaa_lab::gl::{Format, TextureRef, live_objects};
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::resolve::{ResolveRule, ResolveSettings};
 use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
+use deferred_msaa_testkit::Host;
+use deferred_msaa_testkit::projection::perspective;
+use deferred_msaa_testkit::scene::triangle;
 use glow::HasContext;
 
 fn scene(seed: u32) -> Vec<f32> {
@@ -42,7 +44,7 @@ fn scene(seed: u32) -> Vec<f32> {
 }
 
 fn frame(width: u32, height: u32) -> deferred_msaa::Frame {
-    common::host::frame(
+    deferred_msaa_testkit::projection::frame(
         &perspective(0.9, width as f64 / height as f64, 0.5, Some(100.0)),
         false,
     )
@@ -77,8 +79,10 @@ fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
     let mut rss_after_warmup = 0;
     for cycle in 0..1000u32 {
         let (w, h) = sizes[cycle as usize % sizes.len()];
-        let mut host = Host::new(gl, w, h, Format::Rgba32f, Format::Depth32f);
-        host.set_triangles(gl, &scene(cycle % 7));
+        let mut host =
+            Host::new(gl, w, h, Format::Rgba32f, Format::Depth32f).expect("the toy host");
+        host.set_triangles(gl, &scene(cycle % 7))
+            .expect("the toy host's triangles");
         let options = RetrofitOptions {
             samples: 1 + cycle % 4,
             rules: vec![(ColorAttachment(2), ResolveRule::BlendNormal)],
@@ -111,7 +115,7 @@ fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
         msaa.set_options(gl, &alternate).unwrap();
         msaa.resolve(gl, &frame(w, h)).unwrap();
         unsafe {
-            for t in [&host.albedo, &host.normal] {
+            for t in [host.color(), host.normal()] {
                 gl.bind_texture(glow::TEXTURE_2D, Some(t.raw()));
                 gl.tex_image_2d(
                     glow::TEXTURE_2D,
@@ -125,7 +129,7 @@ fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
                     glow::PixelUnpackData::Slice(None),
                 );
             }
-            gl.bind_texture(glow::TEXTURE_2D, Some(host.position.raw()));
+            gl.bind_texture(glow::TEXTURE_2D, Some(host.position().raw()));
             gl.tex_image_2d(
                 glow::TEXTURE_2D,
                 0,
@@ -181,8 +185,9 @@ fn render_once(
 ) -> Vec<f32> {
     let gl = ctx.gl();
     let (w, h) = (48, 32);
-    let mut host = Host::new(gl, w, h, Format::Rgba32f, Format::Depth32f);
-    host.set_triangles(gl, &scene(seed));
+    let mut host = Host::new(gl, w, h, Format::Rgba32f, Format::Depth32f).expect("the toy host");
+    host.set_triangles(gl, &scene(seed))
+        .expect("the toy host's triangles");
     let mut msaa = MsaaRetrofit::new(
         gl,
         host.fbo.raw(),
@@ -199,7 +204,7 @@ fn render_once(
         unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
         host.draw(gl, &perspective(0.9, 1.5, 0.5, Some(100.0)), false);
         msaa.resolve(gl, &frame(w, h)).unwrap();
-        let frame = rb.read(gl, TextureRef::from(&host.albedo), 1).unwrap().data;
+        let frame = rb.read(gl, TextureRef::from(host.color()), 1).unwrap().data;
         if !out.is_empty() {
             assert_eq!(out, frame, "frame changed between identical frames");
         }

@@ -11,7 +11,6 @@
 
 use crate::common;
 
-use common::Rng;
 use deferred_msaa::ColorAttachment;
 use deferred_msaa_lab::gl::{
     Attachment, Format, Framebuffer, Texture2d, Texture2dArray, TextureRef,
@@ -25,6 +24,7 @@ use deferred_msaa_lab::resolve::{
     DepthProjection, KeySource, NormalEncoding, ResolveInputs, ResolveMethod, ResolveParams,
     ResolveRule, ResolveSettings, ResolveSlot, Resolver, Window,
 };
+use deferred_msaa_testkit::Rng;
 
 const W: u32 = 24;
 const H: u32 = 16;

@@ -5,7 +5,6 @@
 
 use crate::common;
 
-use common::host::{Host, perspective, triangle};
 use deferred_msaa::resolve::NormalEncoding;
 use deferred_msaa::{ColorAttachment, Error, NormalAttachment};
 use deferred_msaa_lab::gl::{Attachment, Format, Texture2d, TextureRef, live_objects};
@@ -15,6 +14,9 @@ use deferred_msaa_lab::resolve::{
     Region, ResolveMethod, ResolveRule, ResolveSettings, Selection, SelectionFlag, Window,
 };
 use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions, introspect};
+use deferred_msaa_testkit::Host;
+use deferred_msaa_testkit::projection::perspective;
+use deferred_msaa_testkit::scene::triangle;
 use glow::HasContext;
 
 const W: u32 = 64;
@@ -64,13 +66,14 @@ fn triangles() -> Vec<f32> {
 }
 
 fn host(gl: &glow::Context) -> Host {
-    let mut host = Host::new(gl, W, H, Format::Rgba32f, Format::Depth32f);
-    host.set_triangles(gl, &triangles());
+    let mut host = Host::new(gl, W, H, Format::Rgba32f, Format::Depth32f).expect("the toy host");
+    host.set_triangles(gl, &triangles())
+        .expect("the toy host's triangles");
     host
 }
 
 fn frame() -> deferred_msaa::Frame {
-    common::host::frame(&projection(), false)
+    deferred_msaa_testkit::projection::frame(&projection(), false)
 }
 
 /// `tan(fov_y / height)`: the pixel footprint the resolve derives from the frame.
@@ -226,7 +229,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
                 };
                 msaa.set_options(gl, &options).unwrap();
                 msaa.resolve(gl, &frame()).unwrap();
-                let resolved: Vec<_> = [&host.albedo, &host.position, &host.normal]
+                let resolved: Vec<_> = [host.color(), host.position(), host.normal()]
                     .iter()
                     .map(|t| readback.read(gl, TextureRef::from(*t), 1).unwrap())
                     .collect();
@@ -339,7 +342,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
         let coverage = readback
             .read(gl, msaa.second_layer_coverage().unwrap(), 1)
             .unwrap();
-        let first: Vec<_> = [&host.albedo, &host.position, &host.normal]
+        let first: Vec<_> = [host.color(), host.position(), host.normal()]
             .iter()
             .map(|t| readback.read(gl, TextureRef::from(*t), 1).unwrap())
             .collect();

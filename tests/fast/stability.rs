@@ -4,13 +4,15 @@
 
 use crate::common;
 
-use common::host::{Host, perspective, perspective_reversed, triangle};
 use deferred_msaa::ColorAttachment;
 use deferred_msaa_lab::gbuffer::{DepthSetup, GBufferLayout, precision_warnings};
 use deferred_msaa_lab::gl::{ExtraFns, Format, TextureRef, live_objects};
 use deferred_msaa_lab::readback::{Readback, SampleImage};
 use deferred_msaa_lab::resolve::{ResolveRule, ResolveSettings};
 use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
+use deferred_msaa_testkit::Host;
+use deferred_msaa_testkit::projection::{perspective, perspective_reversed};
+use deferred_msaa_testkit::scene::triangle;
 
 struct Case {
     name: String,
@@ -102,8 +104,10 @@ fn run(
             "glClipControl is needed for reversed-Z"
         );
     }
-    let mut host = Host::new(gl, case.width, case.height, case.position, case.depth);
-    host.set_triangles(gl, &case.triangles());
+    let mut host =
+        Host::new(gl, case.width, case.height, case.position, case.depth).expect("the toy host");
+    host.set_triangles(gl, &case.triangles())
+        .expect("the toy host's triangles");
     let options = RetrofitOptions {
         samples: 4,
         rules: vec![(ColorAttachment(2), ResolveRule::BlendNormal)],
@@ -118,17 +122,20 @@ fn run(
     unsafe { glow::HasContext::bind_framebuffer(gl, glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
     let m = case.projection();
     host.draw(gl, &m, case.reversed);
-    msaa.resolve(gl, &common::host::frame(&m, case.reversed))
-        .unwrap();
+    msaa.resolve(
+        gl,
+        &deferred_msaa_testkit::projection::frame(&m, case.reversed),
+    )
+    .unwrap();
     if case.reversed {
         extra.set_clip_depth_zero_to_one(false);
     }
     let mut rb = Readback::new(gl).unwrap();
     let out = Outcome {
         depth: rb.read(gl, TextureRef::from(&host.depth), 1).unwrap(),
-        position: rb.read(gl, TextureRef::from(&host.position), 1).unwrap(),
-        albedo: rb.read(gl, TextureRef::from(&host.albedo), 1).unwrap(),
-        normal: rb.read(gl, TextureRef::from(&host.normal), 1).unwrap(),
+        position: rb.read(gl, TextureRef::from(host.position()), 1).unwrap(),
+        albedo: rb.read(gl, TextureRef::from(host.color()), 1).unwrap(),
+        normal: rb.read(gl, TextureRef::from(host.normal()), 1).unwrap(),
     };
     rb.destroy(gl);
     msaa.destroy(gl);
@@ -380,7 +387,7 @@ fn hdr_values_up_to_65504_stay_finite() {
         return;
     };
     let gl = ctx.gl();
-    let mut host = Host::new(gl, 32, 32, Format::Rgba32f, Format::Depth32f);
+    let mut host = Host::new(gl, 32, 32, Format::Rgba32f, Format::Depth32f).expect("the toy host");
     let mut v = Vec::new();
     // A 65504-bright triangle over a dim one: edge pixels blend the two.
     triangle(
@@ -393,7 +400,8 @@ fn hdr_values_up_to_65504_stay_finite() {
         [[-3.0, -3.0, -9.99], [3.0, -3.0, -9.99], [0.0, 3.0, -9.99]],
         [65504.0, 65504.0, 1.0],
     );
-    host.set_triangles(gl, &v);
+    host.set_triangles(gl, &v)
+        .expect("the toy host's triangles");
     let options = RetrofitOptions {
         samples: 4,
         rules: vec![(ColorAttachment(0), ResolveRule::BlendHdr)],
@@ -404,9 +412,10 @@ fn hdr_values_up_to_65504_stay_finite() {
     unsafe { glow::HasContext::bind_framebuffer(gl, glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
     let m = perspective(1.2, 1.0, 0.1, Some(100.0));
     host.draw(gl, &m, false);
-    msaa.resolve(gl, &common::host::frame(&m, false)).unwrap();
+    msaa.resolve(gl, &deferred_msaa_testkit::projection::frame(&m, false))
+        .unwrap();
     let mut rb = Readback::new(gl).unwrap();
-    let albedo = rb.read(gl, TextureRef::from(&host.albedo), 1).unwrap();
+    let albedo = rb.read(gl, TextureRef::from(host.color()), 1).unwrap();
     assert!(
         albedo.data.iter().all(|v| v.is_finite() && *v <= 65504.0),
         "HDR blend left the FP16 range"

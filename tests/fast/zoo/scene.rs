@@ -55,7 +55,12 @@ pub fn view() -> Mat4 {
 /// The OpenGL projection for `width` x `height`.
 pub fn projection(width: u32, height: u32) -> Mat4 {
     let aspect = width as f64 / height as f64;
-    let m = crate::common::host::perspective(FOV_Y.into(), aspect, NEAR.into(), Some(FAR.into()));
+    let m = deferred_msaa_testkit::projection::perspective(
+        FOV_Y.into(),
+        aspect,
+        NEAR.into(),
+        Some(FAR.into()),
+    );
     Mat4::from_cols_array(&m.map(|v| v as f32))
 }
 
