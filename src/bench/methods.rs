@@ -28,8 +28,7 @@
 //!
 //! A run's `method` field in the report is the entry exactly as written.
 
-use crate::renderer::{AaMode, SparseOptions};
-use crate::resolve::{ResolveMethod, ResolveSettings, Window};
+use crate::renderer::{AaMode, technique};
 use crate::{Error, Result};
 use std::fmt;
 use std::str::FromStr;
@@ -56,34 +55,30 @@ pub const BASE_DEFAULT_METHODS: &[&str] = &[
 /// list with a warning (a list given with `--methods` fails instead).
 pub const OPTIONAL_DEFAULT_METHODS: &[&str] = &["per-sample", "complex", "sparse"];
 
-/// Every method name an entry may start with.
-pub const METHOD_NAMES: &[&str] = &[
-    "none",
-    "average",
-    "front",
-    "median",
-    "back",
-    "per-sample",
-    "complex",
-    "gbaa",
-    "sparse",
-];
-
-/// What the accepted entries look like, for error messages.
-const ACCEPTED: &str = "accepted: none, average, front, median, back, per-sample, complex, gbaa, sparse; \
-resolve options after colons (:hard, :smooth, :c=F, :c_in=F, :nofast, :position-uniformity, :plane-uniformity, :layers=2, :normal-threshold=F); sparse's :pool=N; :full (the full G-buffer layout) \
-and +fxaa after any entry";
+/// What the accepted entries look like, for error messages: every method
+/// name and every technique's options, from the renderer's registry.
+fn accepted() -> String {
+    let options: Vec<&str> = technique::KINDS
+        .iter()
+        .filter_map(|k| k.options_help())
+        .collect();
+    format!(
+        "accepted: {}; options after colons ({}); :full (the full G-buffer layout) and +fxaa after any entry",
+        AaMode::method_names().join(", "),
+        options.join("; ")
+    )
+}
 
 /// Whether the method's G-buffer pass does more than `none`'s (its
 /// `ms_aa` then includes its G-buffer time minus `none`'s).
 pub(crate) fn adds_geometry(aa: &AaMode) -> bool {
-    matches!(aa, AaMode::Gbaa | AaMode::Sparse(_))
+    technique::kind_of(aa).adds_geometry()
 }
 
 /// Whether the method does lighting work beyond the per-pixel pass of
 /// `none` (its `ms_aa` then includes its lighting time minus `none`'s).
 pub(crate) fn adds_lighting(aa: &AaMode) -> bool {
-    matches!(aa, AaMode::PerSample | AaMode::Complex | AaMode::Sparse(_))
+    technique::kind_of(aa).adds_lighting()
 }
 
 /// One entry of a method list: the method, FXAA, and the entry as written.
@@ -112,19 +107,6 @@ impl fmt::Display for MethodEntry {
     }
 }
 
-fn parse_number(entry: &str, key: &str, value: &str) -> Result<f64> {
-    value
-        .trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite())
-        .ok_or_else(|| {
-            Error::invalid(format!(
-                "method `{entry}`: `{key}={value}` is not a finite number"
-            ))
-        })
-}
-
 impl FromStr for MethodEntry {
     type Err = Error;
 
@@ -134,7 +116,8 @@ impl FromStr for MethodEntry {
         let label = s.trim();
         if label.is_empty() {
             return Err(Error::invalid(format!(
-                "an empty method entry in --methods; {ACCEPTED}"
+                "an empty method entry in --methods; {}",
+                accepted()
             )));
         }
         let (body, fxaa) = match label.split_once('+') {
@@ -142,7 +125,8 @@ impl FromStr for MethodEntry {
             Some((body, "fxaa")) => (body, true),
             Some((_, other)) => {
                 return Err(Error::invalid(format!(
-                    "method `{label}`: unknown `+{other}` (only `+fxaa`, at the end, is accepted); {ACCEPTED}"
+                    "method `{label}`: unknown `+{other}` (only `+fxaa`, at the end, is accepted); {}",
+                    accepted()
                 )));
             }
         };
@@ -150,104 +134,9 @@ impl FromStr for MethodEntry {
         let name = parts.next().unwrap_or("");
         // `:full` is about the layout, not the method: any entry takes it.
         let options: Vec<&str> = parts.filter(|o| *o != "full").collect();
-        let unknown = || Error::invalid(format!("unknown method `{label}`; {ACCEPTED}"));
-        let method = match name {
-            "none" | "per-sample" | "complex" | "gbaa" => {
-                if let Some(o) = options.first() {
-                    return Err(Error::invalid(format!(
-                        "method `{label}`: `{name}` takes no options (got `:{o}`); {ACCEPTED}"
-                    )));
-                }
-                match name {
-                    "none" => AaMode::None,
-                    "per-sample" => AaMode::PerSample,
-                    "gbaa" => AaMode::Gbaa,
-                    _ => AaMode::Complex,
-                }
-            }
-            "sparse" => {
-                let mut sparse = SparseOptions::default();
-                for option in &options {
-                    match option.split_once('=') {
-                        Some(("pool", v)) => {
-                            let blocks = v.trim().parse::<u32>().map_err(|_| {
-                                Error::invalid(format!(
-                                    "method `{label}`: `pool={v}` is not a number of blocks"
-                                ))
-                            })?;
-                            sparse.pool_blocks = Some(blocks);
-                        }
-                        _ => {
-                            return Err(Error::invalid(format!(
-                                "method `{label}`: unknown option `:{option}`; {ACCEPTED}"
-                            )));
-                        }
-                    }
-                }
-                AaMode::Sparse(sparse)
-            }
-            _ => {
-                let method: ResolveMethod = name.parse().map_err(|_| unknown())?;
-                let mut settings = ResolveSettings {
-                    method,
-                    ..ResolveSettings::default()
-                };
-                let mut c_in_given = false;
-                for option in &options {
-                    match option.split_once('=') {
-                        None if *option == "hard" => settings.window = Window::Hard,
-                        None if *option == "smooth" => settings.window = Window::Smooth,
-                        None if *option == "nofast" => settings.fast_path = false,
-                        None if matches!(
-                            *option,
-                            "position-uniformity" | "position_uniformity"
-                        ) =>
-                        {
-                            settings.position_uniformity = true
-                        }
-                        None if matches!(*option, "plane-uniformity" | "plane_uniformity") => {
-                            settings.plane_uniformity = true
-                        }
-                        Some(("layers", v)) => {
-                            settings.layers = match v.trim() {
-                                "1" => 1,
-                                "2" => 2,
-                                _ => {
-                                    return Err(Error::invalid(format!(
-                                        "method `{label}`: `layers={v}`: 1 or 2 resolved layers are accepted"
-                                    )));
-                                }
-                            };
-                            if settings.layers == 2 && method == ResolveMethod::Average {
-                                return Err(Error::invalid(format!(
-                                    "method `{label}`: average weighs every sample, so it has one cluster and no second layer; use front, median or back"
-                                )));
-                            }
-                        }
-                        Some(("normal-threshold" | "normal_threshold", v)) => {
-                            settings.normal_threshold = parse_number(label, "normal-threshold", v)?
-                        }
-                        Some(("c", v)) => settings.c = parse_number(label, "c", v)?,
-                        Some(("c_in" | "c-in", v)) => {
-                            settings.c_in = parse_number(label, "c_in", v)?;
-                            c_in_given = true;
-                        }
-                        _ => {
-                            return Err(Error::invalid(format!(
-                                "method `{label}`: unknown option `:{option}`; {ACCEPTED}"
-                            )));
-                        }
-                    }
-                }
-                if !c_in_given {
-                    settings.c_in = settings.c_in.min(settings.c * 0.5);
-                }
-                settings
-                    .validate()
-                    .map_err(|e| Error::invalid(format!("method `{label}`: {e}")))?;
-                AaMode::Resolve(settings)
-            }
-        };
+        let kind = technique::kind_named(name)
+            .ok_or_else(|| Error::invalid(format!("unknown method `{label}`; {}", accepted())))?;
+        let method = kind.parse(name, &options, label)?;
         Ok(MethodEntry {
             label: label.to_string(),
             method,
@@ -286,6 +175,7 @@ pub fn default_methods() -> Vec<MethodEntry> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::resolve::{ResolveMethod, ResolveSettings, Window};
 
     fn settings(e: &MethodEntry) -> ResolveSettings {
         match e.method {

@@ -6,7 +6,7 @@ use crate::gbuffer::{GBufferLayout, MemoryBudget};
 use crate::gl::TextureRef;
 use crate::readback::{Readback, SampleImage};
 use crate::renderer::plan::{Plan, PlanContext};
-use crate::renderer::technique::Gbaa;
+use crate::renderer::technique::{self, Gbaa};
 use crate::renderer::{AaMode, DepthMode, RenderOptions, Renderer, SparseOptions};
 use crate::resolve::{Region, ResolveMethod, ResolveSettings, Selection, Window};
 use crate::scene::Scene;
@@ -152,83 +152,76 @@ fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-const METHODS: &str = "none, average, front, median, back, per-sample, complex, gbaa, sparse";
-
 impl RenderArgs {
     fn options(&self) -> Result<RenderOptions> {
-        let selective =
-            self.method == "sparse" || ResolveMethod::all().iter().any(|m| m.name() == self.method);
+        let known = AaMode::method_names().contains(&self.method.as_str());
+        let aa: AaMode = self.method.parse().ok().filter(|_| known).ok_or_else(|| {
+            Error::invalid(format!(
+                "unknown method `{}`; available: {}",
+                self.method,
+                AaMode::method_names().join(", ")
+            ))
+        })?;
+        let selective = matches!(aa, AaMode::Resolve(_) | AaMode::Sparse(_));
         if !selective && (self.aa_region.is_some() || self.aa_max_depth.is_some()) {
             return Err(Error::invalid(format!(
                 "--aa-region and --aa-max-depth select pixels for the resolve methods (average, front, median, back) and sparse, not `{}`",
                 self.method
             )));
         }
-        let resolves = ResolveMethod::all().iter().any(|m| m.name() == self.method);
-        if self.layers != 1 && !resolves {
+        if self.layers != 1 && !matches!(aa, AaMode::Resolve(_)) {
             return Err(Error::invalid(format!(
                 "--layers is an option of the resolve methods (front, median, back), not `{}`",
                 self.method
             )));
         }
-        let aa = if self.method == "none" {
-            AaMode::None
-        } else if self.method == "gbaa" {
-            AaMode::Gbaa
-        } else if self.method == "per-sample" {
-            AaMode::PerSample
-        } else if self.method == "complex" {
-            AaMode::Complex
-        } else if self.method == "sparse" {
-            AaMode::Sparse(SparseOptions {
+        let aa = match aa {
+            AaMode::Sparse(sparse) => AaMode::Sparse(SparseOptions {
                 region: self.aa_region,
                 max_depth: self.aa_max_depth.map(|d| d as f32),
-                ..SparseOptions::default()
-            })
-        } else {
-            let method: ResolveMethod = self.method.parse().map_err(|_| {
-                Error::invalid(format!(
-                    "unknown method `{}`; available: {METHODS}",
-                    self.method
-                ))
-            })?;
-            let window: Window = self.window.parse()?;
-            let settings = ResolveSettings {
-                method,
-                window,
-                c: self.c,
-                c_in: self.c_in,
-                fast_path: !self.no_fast_path,
-                blend_depth: false,
-                plane_uniformity: false,
-                position_uniformity: false,
-                selection: Selection {
-                    region: self.aa_region,
-                    max_depth: self.aa_max_depth,
-                    flag: None,
-                },
-                layers: self.layers,
-                ..ResolveSettings::default()
-            };
-            if self.layers == 2 && method == ResolveMethod::Average {
-                return Err(Error::invalid(
-                    "--layers 2 needs front, median or back: average weighs every sample, so it has one cluster",
-                ));
+                ..sparse
+            }),
+            AaMode::Resolve(parsed) => {
+                let method = parsed.method;
+                let window: Window = self.window.parse()?;
+                let settings = ResolveSettings {
+                    method,
+                    window,
+                    c: self.c,
+                    c_in: self.c_in,
+                    fast_path: !self.no_fast_path,
+                    blend_depth: false,
+                    plane_uniformity: false,
+                    position_uniformity: false,
+                    selection: Selection {
+                        region: self.aa_region,
+                        max_depth: self.aa_max_depth,
+                        flag: None,
+                    },
+                    layers: self.layers,
+                    ..ResolveSettings::default()
+                };
+                if self.layers == 2 && method == ResolveMethod::Average {
+                    return Err(Error::invalid(
+                        "--layers 2 needs front, median or back: average weighs every sample, so it has one cluster",
+                    ));
+                }
+                if !(self.c.is_finite() && self.c > 0.0) {
+                    return Err(Error::invalid(format!(
+                        "--c must be a finite number above 0, got {}",
+                        self.c
+                    )));
+                }
+                if !(self.c_in.is_finite() && self.c_in >= 0.0 && self.c_in < self.c) {
+                    return Err(Error::invalid(format!(
+                        "--c-in must be at least 0 and below --c ({}), got {}",
+                        self.c, self.c_in
+                    )));
+                }
+                settings.validate()?;
+                AaMode::Resolve(settings)
             }
-            if !(self.c.is_finite() && self.c > 0.0) {
-                return Err(Error::invalid(format!(
-                    "--c must be a finite number above 0, got {}",
-                    self.c
-                )));
-            }
-            if !(self.c_in.is_finite() && self.c_in >= 0.0 && self.c_in < self.c) {
-                return Err(Error::invalid(format!(
-                    "--c-in must be at least 0 and below --c ({}), got {}",
-                    self.c, self.c_in
-                )));
-            }
-            settings.validate()?;
-            AaMode::Resolve(settings)
+            other => other,
         };
         if self.samples == 0 {
             return Err(Error::invalid("--samples must be at least 1"));
@@ -356,12 +349,12 @@ fn resolved_view(session: &Session, view: &str) -> Result<image::RgbaImage> {
     }
     let gbuffer = renderer.gbuffer();
     let layout = renderer.layout();
-    if matches!(renderer.effective_options().aa, AaMode::Sparse(_))
-        && layout.index_of(view).is_some()
-    {
+    let aa = renderer.effective_options().aa;
+    if !technique::kind_of(&aa).fills_gbuffer() && layout.index_of(view).is_some() {
+        let method = aa.name();
         return Err(Error::invalid(format!(
-            "view `{view}` shows a G-buffer attachment, which method `sparse` leaves empty \
-             (its attributes live in per-pixel lists); with sparse: final, depth"
+            "view `{view}` shows a G-buffer attachment, which method `{method}` leaves empty \
+             (its G-buffer pass does not fill it); with {method}: final, depth"
         )));
     }
     let (texture, channels) = if view == "depth" {

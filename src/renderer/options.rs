@@ -1,7 +1,7 @@
 //! What a frame is rendered with: the anti-aliasing method ([`AaMode`])
 //! and the rest of the options ([`RenderOptions`]).
 
-use super::{DepthMode, GBufferSlots, SparseOptions};
+use super::{DepthMode, GBufferSlots, SparseOptions, technique};
 use crate::gbuffer::{GBufferLayout, MemoryBudget};
 use crate::gl::ColorAttachment;
 use crate::resolve::NormalEncoding;
@@ -9,6 +9,7 @@ use crate::resolve::{KeySource, ResolveSettings, ResolveSlot, SelectionFlag};
 use crate::retrofit::{NormalAttachment, PositionSpace, RetrofitOptions};
 use crate::second_layer::LayerMix;
 use crate::{Error, Result};
+use std::str::FromStr;
 
 /// How the frame is anti-aliased.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -80,25 +81,24 @@ impl AaMode {
     /// `back`), `per-sample`, `complex`, `gbaa` or `sparse`: the name a
     /// bench method entry starts with.
     pub fn name(&self) -> &'static str {
-        match self {
-            AaMode::None => "none",
-            AaMode::Resolve(s) => s.method.name(),
-            AaMode::PerSample => "per-sample",
-            AaMode::Complex => "complex",
-            AaMode::Gbaa => "gbaa",
-            AaMode::Sparse(_) => "sparse",
-        }
+        technique::kind_of(self).method_name(self)
+    }
+
+    /// Every method name, as [`AaMode::name`] gives them.
+    pub fn method_names() -> Vec<&'static str> {
+        technique::method_names()
     }
 
     /// The settings of the G-buffer's resolve, when multisampling: those
     /// given with [`AaMode::Resolve`]; the default (median, smooth) for
-    /// [`AaMode::PerSample`] and [`AaMode::Complex`], whose resolved
-    /// G-buffer serves decals and transparent objects.
+    /// the other methods that draw into the twins ([`AaMode::PerSample`],
+    /// [`AaMode::Complex`]), whose resolved G-buffer serves decals and
+    /// transparent objects.
     pub fn settings(&self) -> Option<ResolveSettings> {
         match self {
-            AaMode::None | AaMode::Gbaa | AaMode::Sparse(_) => None,
             AaMode::Resolve(s) => Some(*s),
-            AaMode::PerSample | AaMode::Complex => Some(ResolveSettings::default()),
+            other if other.is_multisampled() => Some(ResolveSettings::default()),
+            _ => None,
         }
     }
 
@@ -106,29 +106,46 @@ impl AaMode {
     /// the four resolve methods. Methods of one technique can share a
     /// renderer: switching between them changes nothing on the GPU.
     pub fn technique_name(&self) -> &'static str {
-        match self {
-            AaMode::Resolve(_) => "resolve",
-            other => other.name(),
-        }
+        technique::kind_of(self).name()
     }
 
     /// Whether the method renders more than one sample per pixel, so that
     /// [`RenderOptions::samples`] applies: into the multisampled twins, or
     /// into [`AaMode::Sparse`]'s pre-pass.
     pub fn takes_samples(&self) -> bool {
-        self.is_multisampled() || matches!(self, AaMode::Sparse(_))
+        technique::kind_of(self).takes_samples()
     }
 
     /// Whether the G-buffer pass draws into the multisampled twins.
     pub fn is_multisampled(&self) -> bool {
-        !matches!(self, AaMode::None | AaMode::Gbaa | AaMode::Sparse(_))
+        technique::kind_of(self).draws_into_twins()
     }
 
     /// Whether the lighting pass lights samples of the multisampled
     /// G-buffer ([`AaMode::PerSample`], [`AaMode::Complex`]) rather than
     /// the resolved pixels.
     pub fn lights_per_sample(&self) -> bool {
-        matches!(self, AaMode::PerSample | AaMode::Complex)
+        technique::kind_of(self).lights_per_sample()
+    }
+}
+
+impl FromStr for AaMode {
+    type Err = Error;
+
+    /// A method spec: a method name, then its options after colons
+    /// (`median:hard:c=2`, `sparse:pool=64`, `gbaa`), as bench entries
+    /// write them. The error is one line.
+    fn from_str(spec: &str) -> Result<Self> {
+        let mut parts = spec.split(':');
+        let name = parts.next().unwrap_or("");
+        let options: Vec<&str> = parts.collect();
+        let kind = technique::kind_named(name).ok_or_else(|| {
+            Error::invalid(format!(
+                "unknown method `{spec}`; methods: {}",
+                technique::method_names().join(", ")
+            ))
+        })?;
+        kind.parse(name, &options, spec)
     }
 }
 
@@ -257,5 +274,47 @@ impl RenderOptions {
             layer_mix: LayerMix::Curve(super::tonemap::layer_mix_curve()),
             ..RetrofitOptions::default()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::resolve::{ResolveMethod, Window};
+
+    #[test]
+    fn method_specs_parse_through_the_registry() {
+        let aa: AaMode = "median:hard:c=3".parse().unwrap();
+        let AaMode::Resolve(s) = aa else {
+            panic!("{aa:?}")
+        };
+        assert_eq!(
+            (s.method, s.window, s.c),
+            (ResolveMethod::Median, Window::Hard, 3.0)
+        );
+        assert_eq!("gbaa".parse::<AaMode>().unwrap(), AaMode::Gbaa);
+        assert!(matches!(
+            "sparse:pool=8".parse::<AaMode>().unwrap(),
+            AaMode::Sparse(o) if o.pool_blocks == Some(8)
+        ));
+        for bad in ["sideways", "none:hard", "median:round", "sparse:pool=x", ""] {
+            let e = bad.parse::<AaMode>().unwrap_err().to_string();
+            assert_eq!(e.lines().count(), 1, "{bad}: {e}");
+            assert!(e.contains(&format!("`{bad}")), "{bad}: {e}");
+        }
+        assert_eq!(
+            AaMode::method_names(),
+            [
+                "none",
+                "average",
+                "front",
+                "median",
+                "back",
+                "per-sample",
+                "complex",
+                "gbaa",
+                "sparse"
+            ]
+        );
     }
 }

@@ -433,7 +433,7 @@ impl Plan {
         });
         let permutations = permutations(&layout, aa, samples);
         // `sparse` stands in for the multisampled layout at its count.
-        let full_twin = if matches!(aa, AaMode::Sparse(_)) {
+        let full_twin = if aa.takes_samples() && !aa.is_multisampled() {
             Some(options.samples)
         } else {
             twin
@@ -872,9 +872,9 @@ fn decide_passes(
     decisions: &mut Decisions,
 ) -> Vec<Pass> {
     let mut passes = vec![Pass::Clear, Pass::Background];
+    let kind = technique::kind_of(&aa);
     // `sparse` builds block lists instead of filling the G-buffer.
-    let sparse = matches!(aa, AaMode::Sparse(_));
-    if !sparse {
+    if kind.fills_gbuffer() {
         if layout.index_of("emissive").is_some() {
             passes.push(Pass::BackgroundCopy);
         } else {
@@ -889,26 +889,14 @@ fn decide_passes(
         passes.push(Pass::Resolve);
     }
     decisions.leave_out(Pass::Decals.name(), "no decal hook is installed");
-    match aa {
-        AaMode::PerSample => passes.push(Pass::PerSampleLighting),
-        AaMode::Complex => passes.extend([Pass::ComplexMask, Pass::PerSampleLighting]),
-        AaMode::Sparse(_) => {
-            passes.extend([Pass::SparseDepth, Pass::SparseLists, Pass::SparseLighting]);
-        }
-        AaMode::Resolve(settings) if settings.layers == 2 => {
-            passes.extend([Pass::Lighting, Pass::SecondLayer]);
-        }
-        _ => passes.push(Pass::Lighting),
-    }
+    passes.extend(kind.lighting_passes(&aa));
     if needs.transparent_objects > 0 {
         passes.push(Pass::Transparent);
     } else {
         decisions.leave_out(Pass::Transparent.name(), "no alpha-blended object");
     }
     passes.push(Pass::Tonemap);
-    if aa == AaMode::Gbaa {
-        passes.push(Pass::GbaaPost);
-    }
+    passes.extend(kind.post_passes());
     if options.fxaa {
         passes.push(Pass::Fxaa);
     } else {
@@ -986,12 +974,9 @@ fn permutations(layout: &GBufferLayout, aa: AaMode, samples: u32) -> Vec<Permuta
     .into_iter()
     .flatten()
     .collect();
+    let kind = technique::kind_of(&aa);
     let mut list = vec![Permutation {
-        program: if aa == AaMode::Complex {
-            "geometry (+ coverage where gl_SampleMaskIn exists)".into()
-        } else {
-            "geometry".into()
-        },
+        program: kind.geometry_program().into(),
         defines: defines(gbuffer.clone()),
     }];
     if let Some(s) = aa.settings().filter(|_| aa.is_multisampled()) {
@@ -1012,13 +997,11 @@ fn permutations(layout: &GBufferLayout, aa: AaMode, samples: u32) -> Vec<Permuta
             defines: d,
         });
     }
+    list.extend(kind.own_programs().iter().map(|&program| Permutation {
+        program: program.into(),
+        defines: Vec::new(),
+    }));
     if aa.lights_per_sample() {
-        if aa == AaMode::Complex {
-            list.push(Permutation {
-                program: "complex-mask".into(),
-                defines: Vec::new(),
-            });
-        }
         list.push(Permutation {
             program: "lighting-per-sample".into(),
             defines: defines(gbuffer),

@@ -16,6 +16,7 @@ use crate::renderer::complex_mask::{self, ComplexMaskPass, MaskTarget};
 use crate::renderer::geometry_coverage::CoverageGeometryPass;
 use crate::renderer::lighting_per_sample::PerSampleLightingPass;
 use crate::renderer::pass::{LightTarget, StencilSelect};
+use crate::renderer::plan::Pass;
 use crate::renderer::targets::ComplexTargets;
 use crate::renderer::{AaMode, GBufferSlots};
 use crate::retrofit::MsaaRetrofit;
@@ -158,10 +159,6 @@ impl Complex {
 }
 
 impl Technique for Complex {
-    fn renders(&self, aa: &AaMode) -> bool {
-        *aa == AaMode::Complex
-    }
-
     fn prepare(
         &mut self,
         gl: &glow::Context,
@@ -305,5 +302,51 @@ impl Technique for Complex {
         if let Some(CoverageState { pass: Ok(p), .. }) = self.coverage {
             p.destroy(gl);
         }
+    }
+}
+
+/// What is known of `complex` before anything is built.
+pub(crate) struct Kind;
+
+impl super::Kind for Kind {
+    fn name(&self) -> &'static str {
+        "complex"
+    }
+
+    fn methods(&self) -> &'static [&'static str] {
+        &["complex"]
+    }
+
+    fn renders(&self, aa: &AaMode) -> bool {
+        *aa == AaMode::Complex
+    }
+
+    fn parse(&self, method: &str, options: &[&str], spec: &str) -> Result<AaMode> {
+        super::no_options(method, options, spec)?;
+        Ok(AaMode::Complex)
+    }
+
+    fn draws_into_twins(&self) -> bool {
+        true
+    }
+
+    fn lights_per_sample(&self) -> bool {
+        true
+    }
+
+    fn lighting_passes(&self, _aa: &AaMode) -> Vec<Pass> {
+        vec![Pass::ComplexMask, Pass::PerSampleLighting]
+    }
+
+    fn geometry_program(&self) -> &'static str {
+        "geometry (+ coverage where gl_SampleMaskIn exists)"
+    }
+
+    fn own_programs(&self) -> &'static [&'static str] {
+        &["complex-mask"]
+    }
+
+    fn build(&self) -> Box<dyn Technique> {
+        Box::new(Complex::default())
     }
 }

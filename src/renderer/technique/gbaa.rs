@@ -8,6 +8,7 @@ use super::{FrameParts, GBufferTarget, GeometryStep, Setup, Technique, Technique
 use crate::Result;
 use crate::gl::{GpuTimer, TextureRef, VertexArray};
 use crate::renderer::gbaa::{GbaaPasses, GbaaTargets, edge_bytes};
+use crate::renderer::plan::Pass;
 use crate::renderer::targets::{ColorTarget, Targets};
 use crate::renderer::{AaMode, RenderOptions, timed};
 use std::any::Any;
@@ -70,10 +71,6 @@ impl Gbaa {
 }
 
 impl Technique for Gbaa {
-    fn renders(&self, aa: &AaMode) -> bool {
-        *aa == AaMode::Gbaa
-    }
-
     /// Programs and targets both wait for a frame: the targets refer to the
     /// G-buffer's textures.
     fn prepare(
@@ -175,5 +172,39 @@ impl Technique for Gbaa {
         if let Some(v) = self.fullscreen {
             v.destroy(gl);
         }
+    }
+}
+
+/// What is known of `gbaa` before anything is built.
+pub(crate) struct Kind;
+
+impl super::Kind for Kind {
+    fn name(&self) -> &'static str {
+        "gbaa"
+    }
+
+    fn methods(&self) -> &'static [&'static str] {
+        &["gbaa"]
+    }
+
+    fn renders(&self, aa: &AaMode) -> bool {
+        *aa == AaMode::Gbaa
+    }
+
+    fn parse(&self, method: &str, options: &[&str], spec: &str) -> Result<AaMode> {
+        super::no_options(method, options, spec)?;
+        Ok(AaMode::Gbaa)
+    }
+
+    fn adds_geometry(&self) -> bool {
+        true
+    }
+
+    fn post_passes(&self) -> Vec<Pass> {
+        vec![Pass::GbaaPost]
+    }
+
+    fn build(&self) -> Box<dyn Technique> {
+        Box::new(Gbaa::default())
     }
 }

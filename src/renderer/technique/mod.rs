@@ -13,8 +13,16 @@
 //! technique builds or allocates it owns and frees in
 //! `Technique::destroy`.
 //!
-//! Adding a technique: a module here with a type implementing
-//! `Technique`, and its line in `registry`.
+//! What is known of a technique before anything is built (its method
+//! names and how their options parse, whether it draws into the
+//! multisampled twins, which passes the plan lists for it, ...) is its
+//! `Kind`, a unit type beside it that the options, the plan, the bench and
+//! the command line ask.
+//!
+//! Adding a technique: its [`AaMode`] variant (the public option that
+//! names it, with its options), a module here with a type implementing
+//! `Technique` and a unit type implementing `Kind`, and its line in
+//! `KINDS`.
 //!
 //! The public types here are the techniques whose own state a renderer
 //! lends out, through [`Renderer::technique`](super::Renderer::technique).
@@ -31,6 +39,7 @@ use super::geometry::{GeometryPass, GeometryTarget};
 use super::lighting::{LightBatch, LightingPass, StandIns};
 use super::mesh::GpuScene;
 use super::pass::{LightTarget, StencilSelect};
+use super::plan::Pass;
 use super::targets::{ColorTarget, Targets};
 use super::{AaMode, GBufferSlots, RenderOptions, timed};
 use crate::Result;
@@ -46,17 +55,138 @@ pub(crate) use resolve::second_layer_bytes;
 pub use sparse::Sparse;
 use std::any::Any;
 
-/// Every technique, once, in an empty state (nothing is built before a
-/// technique is first used). Adding a technique is one line here.
-pub(crate) fn registry() -> Vec<Box<dyn Technique>> {
-    vec![
-        Box::new(none::NoAntialiasing),
-        Box::new(resolve::Resolve::default()),
-        Box::new(PerSample::default()),
-        Box::new(Complex::default()),
-        Box::new(Gbaa::default()),
-        Box::new(Sparse::default()),
-    ]
+/// Every technique, once. Adding a technique is one line here.
+pub(crate) static KINDS: [&dyn Kind; 6] = [
+    &none::Kind,
+    &resolve::Kind,
+    &per_sample::Kind,
+    &complex::Kind,
+    &gbaa::Kind,
+    &sparse::Kind,
+];
+
+/// What is known of a technique before anything is built: its method names
+/// and how they parse, and the facts the options, the plan, the bench and
+/// the command line ask of it. The defaults are `none`'s.
+pub(crate) trait Kind: Sync {
+    /// The technique's name: the method's, or `resolve` for the four
+    /// resolve methods. Methods of one technique can share a renderer.
+    fn name(&self) -> &'static str;
+
+    /// The method names it renders, as `--method` and bench entries spell them.
+    fn methods(&self) -> &'static [&'static str];
+
+    /// Whether it renders `aa`.
+    fn renders(&self, aa: &AaMode) -> bool;
+
+    /// The method name of `aa`, which it renders.
+    fn method_name(&self, _aa: &AaMode) -> &'static str {
+        self.name()
+    }
+
+    /// The mode for `method` (one of [`Kind::methods`]) with `options`, the
+    /// parts of a method spec after its colons; errors are one line that
+    /// names `spec`.
+    fn parse(&self, method: &str, options: &[&str], spec: &str) -> Result<AaMode>;
+
+    /// The options [`Kind::parse`] takes, for error messages; `None`: none.
+    fn options_help(&self) -> Option<&'static str> {
+        None
+    }
+
+    /// Whether the G-buffer pass draws into the retrofit's multisampled twins.
+    fn draws_into_twins(&self) -> bool {
+        false
+    }
+
+    /// Whether it renders more than one sample per pixel, so that
+    /// [`RenderOptions::samples`] applies.
+    fn takes_samples(&self) -> bool {
+        self.draws_into_twins()
+    }
+
+    /// Whether lighting lights samples of the twins rather than resolved pixels.
+    fn lights_per_sample(&self) -> bool {
+        false
+    }
+
+    /// Whether its G-buffer pass does more than `none`'s (the bench then
+    /// counts its G-buffer time beyond `none`'s as anti-aliasing time).
+    fn adds_geometry(&self) -> bool {
+        false
+    }
+
+    /// Whether its lighting does more than `none`'s per-pixel pass (the
+    /// bench then counts its lighting time beyond `none`'s likewise).
+    fn adds_lighting(&self) -> bool {
+        self.lights_per_sample()
+    }
+
+    /// Whether the G-buffer pass fills the G-buffer's attachments.
+    fn fills_gbuffer(&self) -> bool {
+        true
+    }
+
+    /// The plan's lighting passes for `aa`, in frame order.
+    fn lighting_passes(&self, _aa: &AaMode) -> Vec<Pass> {
+        vec![Pass::Lighting]
+    }
+
+    /// The plan's passes after the tonemap and before FXAA.
+    fn post_passes(&self) -> Vec<Pass> {
+        Vec::new()
+    }
+
+    /// The plan's name for its G-buffer program.
+    fn geometry_program(&self) -> &'static str {
+        "geometry"
+    }
+
+    /// The plan's names of the programs it compiles beside the G-buffer,
+    /// resolve and lighting programs, in frame order.
+    fn own_programs(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// The technique, in an empty state (nothing is built before it is
+    /// first used).
+    fn build(&self) -> Box<dyn Technique>;
+}
+
+/// The kind of the technique that renders `aa`.
+pub(crate) fn kind_of(aa: &AaMode) -> &'static dyn Kind {
+    // Every AaMode has its kind: the registry's own tests check it.
+    KINDS
+        .iter()
+        .copied()
+        .find(|k| k.renders(aa))
+        .unwrap_or_else(|| unreachable!("no technique renders {aa:?}"))
+}
+
+/// The kind whose methods include `method`.
+pub(crate) fn kind_named(method: &str) -> Option<&'static dyn Kind> {
+    KINDS
+        .iter()
+        .copied()
+        .find(|k| k.methods().contains(&method))
+}
+
+/// Every method name, in the registry's order.
+pub(crate) fn method_names() -> Vec<&'static str> {
+    KINDS
+        .iter()
+        .flat_map(|k| k.methods().iter().copied())
+        .collect()
+}
+
+/// The error for options given to a method that takes none.
+pub(crate) fn no_options(method: &str, options: &[&str], spec: &str) -> Result<()> {
+    match options.first() {
+        None => Ok(()),
+        Some(o) => Err(crate::Error::invalid(format!(
+            "method `{spec}`: `{method}` takes no options (got `:{o}`)"
+        ))),
+    }
 }
 
 /// A technique whose state [`Renderer::technique`](super::Renderer::technique)
@@ -270,9 +400,6 @@ pub(crate) struct ComplexPixelsInput<'a> {
 /// [`prepare`](Technique::prepare) that needs them and kept; targets that
 /// refer to the frame's are dropped by [`options_changed`](Technique::options_changed).
 pub(crate) trait Technique: std::fmt::Debug {
-    /// Whether this technique renders `aa`.
-    fn renders(&self, aa: &AaMode) -> bool;
-
     /// Build what a frame with `setup` needs: programs (and targets of its
     /// own) always; targets that refer to the frame's objects when `frame`
     /// is given (it is not while options are being changed).
@@ -396,34 +523,43 @@ pub(crate) fn resolve_twins(
 }
 
 /// The registry's techniques, with their state.
-#[derive(Debug)]
 pub(crate) struct Techniques {
-    all: Vec<Box<dyn Technique>>,
+    all: Vec<(&'static dyn Kind, Box<dyn Technique>)>,
+}
+
+impl std::fmt::Debug for Techniques {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list()
+            .entries(self.all.iter().map(|(_, t)| t))
+            .finish()
+    }
 }
 
 impl Techniques {
     /// Every technique, nothing built yet.
     pub(crate) fn new() -> Self {
-        Techniques { all: registry() }
+        Techniques {
+            all: KINDS.iter().map(|&k| (k, k.build())).collect(),
+        }
     }
 
     /// The technique that renders `aa`.
     pub(crate) fn active(&self, aa: &AaMode) -> &dyn Technique {
         let position = self.position(aa);
-        &*self.all[position]
+        &*self.all[position].1
     }
 
     /// The technique that renders `aa`, to prepare or draw with.
     pub(crate) fn active_mut(&mut self, aa: &AaMode) -> &mut dyn Technique {
         let position = self.position(aa);
-        &mut *self.all[position]
+        &mut *self.all[position].1
     }
 
     fn position(&self, aa: &AaMode) -> usize {
         // Every AaMode has its technique: the registry's own tests check it.
         self.all
             .iter()
-            .position(|t| t.renders(aa))
+            .position(|(k, _)| k.renders(aa))
             .unwrap_or_else(|| unreachable!("no technique renders {aa:?}"))
     }
 
@@ -434,15 +570,14 @@ impl Techniques {
 
     /// Tell every technique that the options changed to ones `aa` renders.
     pub(crate) fn options_changed(&mut self, gl: &glow::Context, aa: &AaMode) {
-        for t in &mut self.all {
-            let active = t.renders(aa);
-            t.options_changed(gl, active);
+        for (k, t) in &mut self.all {
+            t.options_changed(gl, k.renders(aa));
         }
     }
 
     /// Free everything.
     pub(crate) fn destroy(self, gl: &glow::Context) {
-        for t in self.all {
+        for (_, t) in self.all {
             t.destroy(gl);
         }
     }
@@ -451,7 +586,8 @@ impl Techniques {
 /// The bytes the technique that renders `options.aa` allocates beside the
 /// G-buffer and its twins, before anything is built (for the plan).
 pub(crate) fn planned_memory(options: &RenderOptions) -> u64 {
-    Techniques::new().active(&options.aa).memory(options)
+    // An empty technique holds no GL object, so it is dropped, not destroyed.
+    kind_of(&options.aa).build().memory(options)
 }
 
 #[cfg(test)]
@@ -473,9 +609,21 @@ mod tests {
             AaMode::Gbaa,
             AaMode::Sparse(Default::default()),
         ];
-        let all = registry();
         for aa in modes {
-            assert_eq!(all.iter().filter(|t| t.renders(&aa)).count(), 1, "{aa:?}");
+            assert_eq!(KINDS.iter().filter(|k| k.renders(&aa)).count(), 1, "{aa:?}");
+            // A mode's method name parses back to a mode of the same kind.
+            let name = kind_of(&aa).method_name(&aa);
+            let kind = kind_named(name).expect("a method name of the registry");
+            assert_eq!(kind.name(), kind_of(&aa).name(), "{aa:?}");
+            let parsed = kind
+                .parse(name, &[], name)
+                .expect("a bare method name parses");
+            assert_eq!(kind_of(&parsed).name(), kind.name());
         }
+        let mut names = method_names();
+        let all = names.len();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), all, "a method name belongs to one technique");
     }
 }

@@ -1,7 +1,8 @@
 //! Method `none` ([`AaMode::None`]): the G-buffer pass draws straight into
 //! the single-sample G-buffer and every step is the frame's default.
 
-use super::Technique;
+use super::{Technique, no_options};
+use crate::Result;
 use crate::renderer::AaMode;
 use std::any::Any;
 
@@ -10,13 +11,35 @@ use std::any::Any;
 pub(crate) struct NoAntialiasing;
 
 impl Technique for NoAntialiasing {
-    fn renders(&self, aa: &AaMode) -> bool {
-        *aa == AaMode::None
-    }
-
     fn as_any(&self) -> &dyn Any {
         self
     }
 
     fn destroy(self: Box<Self>, _gl: &glow::Context) {}
+}
+
+/// What is known of `none` before anything is built.
+pub(crate) struct Kind;
+
+impl super::Kind for Kind {
+    fn name(&self) -> &'static str {
+        "none"
+    }
+
+    fn methods(&self) -> &'static [&'static str] {
+        &["none"]
+    }
+
+    fn renders(&self, aa: &AaMode) -> bool {
+        *aa == AaMode::None
+    }
+
+    fn parse(&self, method: &str, options: &[&str], spec: &str) -> Result<AaMode> {
+        no_options(method, options, spec)?;
+        Ok(AaMode::None)
+    }
+
+    fn build(&self) -> Box<dyn Technique> {
+        Box::new(NoAntialiasing)
+    }
 }

@@ -8,6 +8,7 @@ use crate::frame::Frame as ResolveFrame;
 use crate::gl::GpuTimer;
 use crate::renderer::lighting_per_sample::{PerSampleLightingPass, SampleInputs};
 use crate::renderer::pass::{LightTarget, StencilSelect};
+use crate::renderer::plan::Pass;
 use crate::renderer::{AaMode, GBufferSlots};
 use crate::retrofit::MsaaRetrofit;
 use crate::{Error, Result};
@@ -63,10 +64,6 @@ pub(super) fn per_sample_inputs<'a>(
 }
 
 impl Technique for PerSample {
-    fn renders(&self, aa: &AaMode) -> bool {
-        *aa == AaMode::PerSample
-    }
-
     fn prepare(
         &mut self,
         gl: &glow::Context,
@@ -139,5 +136,43 @@ impl Technique for PerSample {
         if let Some(p) = self.lighting {
             p.destroy(gl);
         }
+    }
+}
+
+/// What is known of `per-sample` before anything is built.
+pub(crate) struct Kind;
+
+impl super::Kind for Kind {
+    fn name(&self) -> &'static str {
+        "per-sample"
+    }
+
+    fn methods(&self) -> &'static [&'static str] {
+        &["per-sample"]
+    }
+
+    fn renders(&self, aa: &AaMode) -> bool {
+        *aa == AaMode::PerSample
+    }
+
+    fn parse(&self, method: &str, options: &[&str], spec: &str) -> Result<AaMode> {
+        super::no_options(method, options, spec)?;
+        Ok(AaMode::PerSample)
+    }
+
+    fn draws_into_twins(&self) -> bool {
+        true
+    }
+
+    fn lights_per_sample(&self) -> bool {
+        true
+    }
+
+    fn lighting_passes(&self, _aa: &AaMode) -> Vec<Pass> {
+        vec![Pass::PerSampleLighting]
+    }
+
+    fn build(&self) -> Box<dyn Technique> {
+        Box::new(PerSample::default())
     }
 }

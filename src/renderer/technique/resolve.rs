@@ -14,8 +14,10 @@ use crate::gl::{
     Attachment, Format, Framebuffer, GlObject, GpuTimer, Handle, Made, Texture2d, TextureRef,
 };
 use crate::renderer::pass::{LightTarget, StencilSelect};
+use crate::renderer::plan::Pass;
 use crate::renderer::second_layer_mask::SecondLayerMaskPass;
 use crate::renderer::{AaMode, RenderOptions, slow_path, timed};
+use crate::resolve::{ResolveMethod, ResolveSettings, Window};
 use crate::retrofit::MsaaRetrofit;
 use crate::{Error, Result};
 use std::any::Any;
@@ -100,10 +102,6 @@ pub(crate) fn second_layer_bytes(options: &RenderOptions) -> u64 {
 }
 
 impl Technique for Resolve {
-    fn renders(&self, aa: &AaMode) -> bool {
-        matches!(aa, AaMode::Resolve(_))
-    }
-
     fn prepare(
         &mut self,
         gl: &glow::Context,
@@ -205,4 +203,128 @@ impl Technique for Resolve {
             m.destroy(gl);
         }
     }
+}
+
+/// What is known of the resolve methods before anything is built.
+pub(crate) struct Kind;
+
+impl super::Kind for Kind {
+    fn name(&self) -> &'static str {
+        "resolve"
+    }
+
+    fn methods(&self) -> &'static [&'static str] {
+        &["average", "front", "median", "back"]
+    }
+
+    fn renders(&self, aa: &AaMode) -> bool {
+        matches!(aa, AaMode::Resolve(_))
+    }
+
+    fn method_name(&self, aa: &AaMode) -> &'static str {
+        match aa {
+            AaMode::Resolve(s) => s.method.name(),
+            _ => self.name(),
+        }
+    }
+
+    /// The window (`:hard`, `:smooth`), `:c=F` (when given without `c_in`,
+    /// `c_in` becomes `min(2.5, c/2)`), `:c_in=F` (also `c-in`), `:nofast`,
+    /// the fast path's opt-in tests (`:position-uniformity`,
+    /// `:plane-uniformity`), `:layers=2` and `:normal-threshold=F`.
+    fn parse(&self, method: &str, options: &[&str], spec: &str) -> Result<AaMode> {
+        let method: ResolveMethod = method.parse()?;
+        let mut settings = ResolveSettings {
+            method,
+            ..ResolveSettings::default()
+        };
+        let mut c_in_given = false;
+        for option in options {
+            match option.split_once('=') {
+                None if *option == "hard" => settings.window = Window::Hard,
+                None if *option == "smooth" => settings.window = Window::Smooth,
+                None if *option == "nofast" => settings.fast_path = false,
+                None if matches!(*option, "position-uniformity" | "position_uniformity") => {
+                    settings.position_uniformity = true
+                }
+                None if matches!(*option, "plane-uniformity" | "plane_uniformity") => {
+                    settings.plane_uniformity = true
+                }
+                Some(("layers", v)) => {
+                    settings.layers = match v.trim() {
+                        "1" => 1,
+                        "2" => 2,
+                        _ => {
+                            return Err(Error::invalid(format!(
+                                "method `{spec}`: `layers={v}`: 1 or 2 resolved layers are accepted"
+                            )));
+                        }
+                    };
+                    if settings.layers == 2 && method == ResolveMethod::Average {
+                        return Err(Error::invalid(format!(
+                            "method `{spec}`: average weighs every sample, so it has one cluster and no second layer; use front, median or back"
+                        )));
+                    }
+                }
+                Some(("normal-threshold" | "normal_threshold", v)) => {
+                    settings.normal_threshold = parse_number(spec, "normal-threshold", v)?
+                }
+                Some(("c", v)) => settings.c = parse_number(spec, "c", v)?,
+                Some(("c_in" | "c-in", v)) => {
+                    settings.c_in = parse_number(spec, "c_in", v)?;
+                    c_in_given = true;
+                }
+                _ => {
+                    return Err(Error::invalid(format!(
+                        "method `{spec}`: unknown option `:{option}` (the resolve methods take {})",
+                        OPTIONS_HELP
+                    )));
+                }
+            }
+        }
+        if !c_in_given {
+            settings.c_in = settings.c_in.min(settings.c * 0.5);
+        }
+        settings
+            .validate()
+            .map_err(|e| Error::invalid(format!("method `{spec}`: {e}")))?;
+        Ok(AaMode::Resolve(settings))
+    }
+
+    fn options_help(&self) -> Option<&'static str> {
+        Some(OPTIONS_HELP)
+    }
+
+    fn draws_into_twins(&self) -> bool {
+        true
+    }
+
+    fn lighting_passes(&self, aa: &AaMode) -> Vec<Pass> {
+        if two_layers(aa) {
+            vec![Pass::Lighting, Pass::SecondLayer]
+        } else {
+            vec![Pass::Lighting]
+        }
+    }
+
+    fn build(&self) -> Box<dyn Technique> {
+        Box::new(Resolve::default())
+    }
+}
+
+/// The options of [`Kind::parse`], for error messages.
+const OPTIONS_HELP: &str = ":hard, :smooth, :c=F, :c_in=F, :nofast, :position-uniformity, :plane-uniformity, :layers=2, :normal-threshold=F";
+
+/// `value` of option `key` as a finite number.
+fn parse_number(spec: &str, key: &str, value: &str) -> Result<f64> {
+    value
+        .trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| {
+            Error::invalid(format!(
+                "method `{spec}`: `{key}={value}` is not a finite number"
+            ))
+        })
 }

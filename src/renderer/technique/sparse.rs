@@ -5,10 +5,11 @@
 //! [`SparseOptions`](crate::renderer::SparseOptions)).
 
 use super::{FrameParts, GeometryStep, LightingStep, Setup, Technique, TechniqueState};
-use crate::Result;
 use crate::renderer::pass::{LightTarget, StencilSelect};
+use crate::renderer::plan::Pass;
 use crate::renderer::sparse::{BuildParams, LightParams, SparseState};
-use crate::renderer::{AaMode, RenderOptions, SparseMemory, SparseStats};
+use crate::renderer::{AaMode, RenderOptions, SparseMemory, SparseOptions, SparseStats};
+use crate::{Error, Result};
 use std::any::Any;
 
 /// The multisampled G-buffer as per-pixel linked lists of blocks
@@ -55,10 +56,6 @@ impl Sparse {
 }
 
 impl Technique for Sparse {
-    fn renders(&self, aa: &AaMode) -> bool {
-        matches!(aa, AaMode::Sparse(_))
-    }
-
     /// Its targets depend on the options alone, so they are allocated
     /// while options change too.
     fn prepare(
@@ -144,5 +141,73 @@ impl Technique for Sparse {
 
     fn destroy(self: Box<Self>, gl: &glow::Context) {
         self.state.destroy(gl);
+    }
+}
+
+/// What is known of `sparse` before anything is built.
+pub(crate) struct Kind;
+
+impl super::Kind for Kind {
+    fn name(&self) -> &'static str {
+        "sparse"
+    }
+
+    fn methods(&self) -> &'static [&'static str] {
+        &["sparse"]
+    }
+
+    fn renders(&self, aa: &AaMode) -> bool {
+        matches!(aa, AaMode::Sparse(_))
+    }
+
+    /// `:pool=N`: the block pool's size.
+    fn parse(&self, _method: &str, options: &[&str], spec: &str) -> Result<AaMode> {
+        let mut sparse = SparseOptions::default();
+        for option in options {
+            match option.split_once('=') {
+                Some(("pool", v)) => {
+                    let blocks = v.trim().parse::<u32>().map_err(|_| {
+                        Error::invalid(format!(
+                            "method `{spec}`: `pool={v}` is not a number of blocks"
+                        ))
+                    })?;
+                    sparse.pool_blocks = Some(blocks);
+                }
+                _ => {
+                    return Err(Error::invalid(format!(
+                        "method `{spec}`: unknown option `:{option}` (sparse takes :pool=N)"
+                    )));
+                }
+            }
+        }
+        Ok(AaMode::Sparse(sparse))
+    }
+
+    fn options_help(&self) -> Option<&'static str> {
+        Some("sparse's :pool=N")
+    }
+
+    fn takes_samples(&self) -> bool {
+        true
+    }
+
+    fn adds_geometry(&self) -> bool {
+        true
+    }
+
+    fn adds_lighting(&self) -> bool {
+        true
+    }
+
+    fn fills_gbuffer(&self) -> bool {
+        false
+    }
+
+    fn lighting_passes(&self, _aa: &AaMode) -> Vec<Pass> {
+        vec![Pass::SparseDepth, Pass::SparseLists, Pass::SparseLighting]
+    }
+
+    fn build(&self) -> Box<dyn Technique> {
+        Box::new(Sparse::default())
     }
 }
