@@ -40,7 +40,10 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use deferred_msaa_lab::gl::{Capabilities, ShaderSource};
+use deferred_msaa_lab::gl::{
+    Capabilities, FullscreenPass, Made, ShaderSource, VertexArray, check_error,
+    draw_fullscreen_triangle,
+};
 use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
 use deferred_msaa_lab::resolve::{
     COMPLEX_GLSL, COMPLEX_GLSL_NAME, DepthProjection, KeySource, ResolveMethod, ResolveSettings,
@@ -916,13 +919,6 @@ fn read_back_buffer(gl: &glow::Context, width: u32, height: u32) -> AnyResult<im
 // ---------------------------------------------------------------------------
 // Drawing a view into the window.
 
-const PRESENT_VERT: &str = r#"#version 150 core
-void main() {
-    vec2 corner = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
-    gl_Position = vec4(corner * 2.0 - 1.0, 0.0, 1.0);
-}
-"#;
-
 /// One texel of the chosen texture per window pixel, made readable.
 const PRESENT_FRAG: &str = r#"
 uniform sampler2D u_image;
@@ -1000,36 +996,36 @@ void main() {
 "#;
 
 struct Presenter {
-    view: glow::Program,
-    complex: glow::Program,
-    vao: glow::VertexArray,
+    view: FullscreenPass,
+    complex: FullscreenPass,
+    vao: VertexArray,
 }
 
 impl Presenter {
     fn new(gl: &glow::Context) -> AnyResult<Presenter> {
         let present = ShaderSource::new().part("viewer present.frag", PRESENT_FRAG);
-        let view = build_program(gl, PRESENT_VERT, &present)?;
-        let complex_source = ShaderSource::new()
+        let complex = ShaderSource::new()
             .part(COMPLEX_GLSL_NAME, COMPLEX_GLSL)
             .part("viewer complex.frag", COMPLEX_FRAG);
-        let complex = match build_program(gl, PRESENT_VERT, &complex_source) {
-            Ok(p) => p,
-            Err(e) => {
-                unsafe { gl.delete_program(view) };
-                return Err(e);
-            }
-        };
-        let vao = match unsafe { gl.create_vertex_array() } {
-            Ok(v) => v,
-            Err(e) => {
-                unsafe {
-                    gl.delete_program(view);
-                    gl.delete_program(complex);
-                }
-                return Err(e.into());
-            }
-        };
-        Ok(Presenter { view, complex, vao })
+        let outputs = [("o_color", 0)];
+        let presenter = Made::build(gl, |made| -> deferred_msaa_lab::Result<Presenter> {
+            Ok(Presenter {
+                view: made.keep(FullscreenPass::new(
+                    gl,
+                    "viewer present",
+                    &present,
+                    &outputs,
+                )?),
+                complex: made.keep(FullscreenPass::new(
+                    gl,
+                    "viewer complex",
+                    &complex,
+                    &outputs,
+                )?),
+                vao: made.keep(VertexArray::new(gl, "viewer vao")?),
+            })
+        })?;
+        Ok(presenter)
     }
 
     /// Draw `view` of the renderer's last frame into the window's back buffer.
@@ -1087,107 +1083,55 @@ impl Presenter {
             gl.disable(glow::SCISSOR_TEST);
             gl.disable(glow::FRAMEBUFFER_SRGB);
             gl.color_mask(true, true, true, true);
-            let program = if complex_key.is_some() {
-                self.complex
-            } else {
-                self.view
-            };
-            gl.use_program(Some(program));
-            let uniform = |name: &str| gl.get_uniform_location(program, name);
+        }
+        let program = if complex_key.is_some() {
+            self.complex.program()
+        } else {
+            self.view.program()
+        };
+        program.bind(gl);
+        unsafe {
             gl.active_texture(glow::TEXTURE0);
             gl.bind_texture(glow::TEXTURE_2D, Some(texture));
-            gl.uniform_1_i32(uniform("u_image").as_ref(), 0);
-            gl.uniform_2_f32(
-                uniform("u_window").as_ref(),
-                window.width as f32,
-                window.height as f32,
-            );
-            if let Some((key, component, samples)) = complex_key {
+        }
+        program.set_i32(gl, "u_image", 0);
+        program.set_vec2(gl, "u_window", [window.width as f32, window.height as f32]);
+        if let Some((key, component, samples)) = complex_key {
+            unsafe {
                 gl.active_texture(glow::TEXTURE1);
                 gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, Some(key));
-                gl.uniform_1_i32(uniform("u_key").as_ref(), 1);
-                gl.uniform_1_i32(uniform("u_samples").as_ref(), samples as i32);
-                gl.uniform_1_i32(uniform("u_component").as_ref(), component);
-            } else {
-                gl.uniform_1_i32(uniform("u_mode").as_ref(), mode);
-                gl.uniform_4_f32(
-                    uniform("u_depth").as_ref(),
+            }
+            program.set_i32(gl, "u_key", 1);
+            program.set_i32(gl, "u_samples", samples as i32);
+            program.set_i32(gl, "u_component", component);
+        } else {
+            program.set_i32(gl, "u_mode", mode);
+            program.set_vec4(
+                gl,
+                "u_depth",
+                [
                     depth.p22 as f32,
                     depth.p23 as f32,
                     depth.zero_to_one as i32 as f32,
                     depth.clear_depth as f32,
-                );
-                gl.uniform_2_f32(uniform("u_range").as_ref(), near, far);
-            }
-            gl.bind_vertex_array(Some(self.vao));
-            gl.draw_arrays(glow::TRIANGLES, 0, 3);
-            gl.bind_vertex_array(None);
+                ],
+            );
+            program.set_vec2(gl, "u_range", [near, far]);
+        }
+        draw_fullscreen_triangle(gl, &self.vao);
+        unsafe {
             gl.active_texture(glow::TEXTURE1);
             gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
             gl.active_texture(glow::TEXTURE0);
             gl.bind_texture(glow::TEXTURE_2D, None);
             gl.use_program(None);
-            match gl.get_error() {
-                glow::NO_ERROR => Ok(()),
-                code => Err(format!("GL error 0x{code:04X} drawing the view").into()),
-            }
         }
+        Ok(check_error(gl, "drawing the view")?)
     }
 
     fn destroy(self, gl: &glow::Context) {
-        unsafe {
-            gl.delete_program(self.view);
-            gl.delete_program(self.complex);
-            gl.delete_vertex_array(self.vao);
-        }
-    }
-}
-
-fn build_program(
-    gl: &glow::Context,
-    vertex: &str,
-    fragment: &ShaderSource,
-) -> AnyResult<glow::Program> {
-    let fragment_text = fragment.text();
-    unsafe {
-        let program = gl.create_program()?;
-        let mut shaders = Vec::new();
-        for (stage, source) in [
-            (glow::VERTEX_SHADER, vertex),
-            (glow::FRAGMENT_SHADER, fragment_text.as_str()),
-        ] {
-            let shader = gl.create_shader(stage)?;
-            gl.shader_source(shader, source);
-            gl.compile_shader(shader);
-            if !gl.get_shader_compile_status(shader) {
-                let log = gl.get_shader_info_log(shader);
-                gl.delete_shader(shader);
-                for s in shaders {
-                    gl.delete_shader(s);
-                }
-                gl.delete_program(program);
-                // The fragment stage's parts: name the file and line.
-                let located = if stage == glow::FRAGMENT_SHADER {
-                    fragment.explain(&log)
-                } else {
-                    String::new()
-                };
-                return Err(format!("viewer shader: {}\n{located}", log.trim()).into());
-            }
-            gl.attach_shader(program, shader);
-            shaders.push(shader);
-        }
-        gl.bind_frag_data_location(program, 0, "o_color");
-        gl.link_program(program);
-        for shader in shaders {
-            gl.detach_shader(program, shader);
-            gl.delete_shader(shader);
-        }
-        if !gl.get_program_link_status(program) {
-            let log = gl.get_program_info_log(program);
-            gl.delete_program(program);
-            return Err(format!("viewer program: {}", log.trim()).into());
-        }
-        Ok(program)
+        self.view.destroy(gl);
+        self.complex.destroy(gl);
+        self.vao.destroy(gl);
     }
 }
