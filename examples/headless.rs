@@ -16,6 +16,8 @@ use deferred_msaa_lab::renderer::{RenderOptions, Renderer};
 use deferred_msaa_lab::scene::Scene;
 
 fn run() -> Result<(), Box<dyn Error>> {
+    // Three positional arguments, read by hand rather than by clap, so that
+    // the example stays the shortest path.
     let mut args = std::env::args().skip(1);
     let model = args
         .next()

@@ -35,6 +35,7 @@ use std::process::ExitCode;
 
 use deferred_msaa::resolve::{ResolveMethod, ResolveRule, ResolveSettings};
 use deferred_msaa::{ColorAttachment, Frame, MsaaRetrofit, RetrofitOptions};
+use deferred_msaa_lab::cli::{Printed, parse_args};
 use deferred_msaa_lab::context::{Backend, HeadlessContext};
 use deferred_msaa_lab::scene::{AlphaMode, Background, LightKind, Scene};
 use glam::{Mat3, Mat4, Vec3};
@@ -43,7 +44,12 @@ use glow::HasContext;
 type AnyResult<T> = Result<T, Box<dyn Error>>;
 
 fn main() -> ExitCode {
-    match run() {
+    let args = match parse_args::<Args>() {
+        Ok(args) => args,
+        Err(Printed::Help) => return ExitCode::SUCCESS,
+        Err(Printed::UsageError) => return ExitCode::FAILURE,
+    };
+    match run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("retrofit: {e}");
@@ -52,14 +58,18 @@ fn main() -> ExitCode {
     }
 }
 
-fn run() -> AnyResult<()> {
-    let args = Args::parse(std::env::args().skip(1))?;
+fn run(args: Args) -> AnyResult<()> {
+    let (width, height) = args.size;
+    let method = match args.method.as_str() {
+        "none" => None,
+        name => Some(name.parse::<ResolveMethod>()?),
+    };
     let scene = Scene::load(&args.scene)?;
     let context = HeadlessContext::new(Backend::Egl)?;
     let gl = context.gl();
 
-    let engine = Engine::new(gl, &scene, args.width, args.height)?;
-    let image = match args.method {
+    let engine = Engine::new(gl, &scene, width, height)?;
+    let image = match method {
         None => {
             // The engine as it was: no MSAA.
             engine.geometry_pass(gl, engine.gbuffer_fbo())?;
@@ -114,79 +124,46 @@ fn run() -> AnyResult<()> {
     println!(
         "{} ({}x{}) -> {}",
         scene.name,
-        args.width,
-        args.height,
+        width,
+        height,
         args.out.display()
     );
     Ok(())
 }
 
 /// The command line.
+#[derive(clap::Parser)]
+#[command(
+    name = "retrofit",
+    about = "An engine's deferred renderer with depth-aware MSAA retrofitted by four lines"
+)]
 struct Args {
+    /// Where the image goes.
+    #[arg(default_value = "target/retrofit.png")]
     out: std::path::PathBuf,
+    /// A built-in scene (`builtin:NAME`) or a glTF file.
+    #[arg(long, default_value = "builtin:greebles")]
     scene: String,
-    width: u32,
-    height: u32,
+    /// The image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x360", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Samples per pixel asked for (the driver's real count is used).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
     samples: u32,
-    /// `None`: no MSAA at all.
-    method: Option<ResolveMethod>,
+    /// `none` (the engine as it was) or the resolve method.
+    #[arg(long, default_value = "median", value_parser = ["none", "average", "front", "median", "back"])]
+    method: String,
 }
 
-impl Args {
-    fn parse(mut args: impl Iterator<Item = String>) -> AnyResult<Args> {
-        let mut parsed = Args {
-            out: "target/retrofit.png".into(),
-            scene: "builtin:greebles".into(),
-            width: 640,
-            height: 360,
-            samples: 4,
-            method: Some(ResolveMethod::Median),
-        };
-        while let Some(arg) = args.next() {
-            let mut value = |name: &str| {
-                args.next().ok_or_else(|| {
-                    format!("{name} needs a value (see the header of examples/retrofit.rs)")
-                })
-            };
-            match arg.as_str() {
-                "--scene" => parsed.scene = value("--scene")?,
-                "--size" => (parsed.width, parsed.height) = parse_size(&value("--size")?)?,
-                "--samples" => {
-                    let v = value("--samples")?;
-                    parsed.samples = v.parse().ok().filter(|&n| n > 0).ok_or_else(|| {
-                        format!("--samples: expected a count of 1 or more, got `{v}`")
-                    })?;
-                }
-                "--method" => {
-                    let v = value("--method")?;
-                    parsed.method = if v == "none" {
-                        None
-                    } else {
-                        Some(ResolveMethod::all().iter().copied().find(|m| m.name() == v).ok_or_else(
-                            || format!("--method: expected none, average, front, median or back, got `{v}`"),
-                        )?)
-                    };
-                }
-                other if other.starts_with('-') => {
-                    return Err(format!(
-                        "unknown option `{other}`; usage: retrofit [OUT.png] [--scene S] [--size WxH] [--samples N] [--method M]"
-                    )
-                    .into());
-                }
-                path => parsed.out = path.into(),
-            }
-        }
-        Ok(parsed)
-    }
-}
-
-fn parse_size(text: &str) -> AnyResult<(u32, u32)> {
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
     let parsed = text
         .split_once('x')
         .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)));
     match parsed {
         Some((w, h)) if w > 0 && h > 0 && w <= 16384 && h <= 16384 => Ok((w, h)),
-        _ => Err(format!("--size: expected WIDTHxHEIGHT such as 640x360, got `{text}`").into()),
+        _ => Err(format!(
+            "expected WIDTHxHEIGHT such as 640x360, got `{text}`"
+        )),
     }
 }
 

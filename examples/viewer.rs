@@ -40,6 +40,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
+use deferred_msaa_lab::cli::{Printed, parse_args};
 use deferred_msaa_lab::gl::{
     Capabilities, FullscreenPass, Made, ShaderSource, VertexArray, check_error,
     draw_fullscreen_triangle,
@@ -72,8 +73,6 @@ type AnyResult<T> = Result<T, Box<dyn Error>>;
 /// Frames of a scripted run after which resident memory is the baseline.
 const WARMUP_FRAMES: u32 = 100;
 
-const USAGE: &str = "usage: viewer [SCENE] [--size WxH] [--samples N] [--method M] [--fxaa] [--frames N --screenshot FILE] [--keys KEYS]";
-
 /// The methods, in key order (`0` … `4`).
 const METHODS: [Option<ResolveMethod>; 5] = [
     None,
@@ -84,7 +83,12 @@ const METHODS: [Option<ResolveMethod>; 5] = [
 ];
 
 fn main() -> ExitCode {
-    match run() {
+    let args = match parse_args::<Cli>() {
+        Ok(cli) => Args::from(cli),
+        Err(Printed::Help) => return ExitCode::SUCCESS,
+        Err(Printed::UsageError) => return ExitCode::FAILURE,
+    };
+    match run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("viewer: {e}");
@@ -93,8 +97,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn run() -> AnyResult<()> {
-    let args = Args::parse(std::env::args().skip(1))?;
+fn run(args: Args) -> AnyResult<()> {
     let scene = Scene::load(&args.scene)?;
     for w in &scene.warnings {
         eprintln!("viewer: {}: {w}", args.scene);
@@ -159,93 +162,73 @@ struct Args {
     keys: Vec<char>,
 }
 
-impl Args {
-    fn parse(mut args: impl Iterator<Item = String>) -> AnyResult<Args> {
-        let mut parsed = Args {
-            scene: "builtin:greebles".into(),
-            width: 960,
-            height: 540,
-            samples: 4,
-            method: 3,
-            fxaa: false,
-            frames: None,
-            screenshot: None,
-            keys: Vec::new(),
-        };
-        let mut scene_given = false;
-        while let Some(arg) = args.next() {
-            let mut value = |name: &str| {
-                args.next()
-                    .ok_or_else(|| format!("{name} needs a value; {USAGE}"))
-            };
-            match arg.as_str() {
-                "--size" => {
-                    let v = value("--size")?;
-                    let size = v
-                        .split_once('x')
-                        .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
-                        .filter(|&(w, h)| (1..=16384).contains(&w) && (1..=16384).contains(&h));
-                    (parsed.width, parsed.height) = size.ok_or_else(|| {
-                        format!("--size: expected WIDTHxHEIGHT such as 960x540, got `{v}`")
-                    })?;
-                }
-                "--samples" => {
-                    let v = value("--samples")?;
-                    parsed.samples = v.parse().ok().filter(|&n| n > 0).ok_or_else(|| {
-                        format!("--samples: expected a count of 1 or more, got `{v}`")
-                    })?;
-                }
-                "--method" => {
-                    let v = value("--method")?;
-                    parsed.method = METHODS
-                        .iter()
-                        .position(|m| method_name(*m) == v)
-                        .ok_or_else(|| {
-                            format!(
-                                "--method: expected none, average, front, median or back, got `{v}`"
-                            )
-                        })?;
-                }
-                "--fxaa" => parsed.fxaa = true,
-                "--frames" => {
-                    let v = value("--frames")?;
-                    parsed.frames = Some(v.parse().ok().filter(|&n| n > 0).ok_or_else(|| {
-                        format!("--frames: expected a count of 1 or more, got `{v}`")
-                    })?);
-                }
-                "--screenshot" => parsed.screenshot = Some(value("--screenshot")?.into()),
-                "--keys" => parsed.keys = value("--keys")?.chars().collect(),
-                "-h" | "--help" => {
-                    println!("{USAGE}");
-                    print_keys();
-                    std::process::exit(0);
-                }
-                other if other.starts_with('-') => {
-                    return Err(format!("unknown option `{other}`; {USAGE}").into());
-                }
-                scene if !scene_given => {
-                    parsed.scene = scene.to_string();
-                    scene_given = true;
-                }
-                extra => return Err(format!("unexpected argument `{extra}`; {USAGE}").into()),
-            }
+/// The command line, as clap reads it.
+#[derive(clap::Parser)]
+#[command(name = "viewer", about = "The demo renderer in a window, its methods switched live", after_help = KEYS)]
+struct Cli {
+    /// A built-in scene (`builtin:NAME`) or a glTF file.
+    #[arg(default_value = "builtin:greebles")]
+    scene: String,
+    /// The window's size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "960x540", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Samples per pixel asked for (the driver's real count is used).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+    samples: u32,
+    /// The method to start with.
+    #[arg(long, default_value = "median", value_parser = ["none", "average", "front", "median", "back"])]
+    method: String,
+    /// Start with FXAA on.
+    #[arg(long)]
+    fxaa: bool,
+    /// Render this many frames, then quit (1 with --screenshot alone).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: Option<u32>,
+    /// Save the last frame's window here.
+    #[arg(long)]
+    screenshot: Option<PathBuf>,
+    /// Keys to press, one a frame, as if typed (see below).
+    #[arg(long, default_value = "")]
+    keys: String,
+}
+
+impl From<Cli> for Args {
+    fn from(cli: Cli) -> Args {
+        Args {
+            scene: cli.scene,
+            width: cli.size.0,
+            height: cli.size.1,
+            samples: cli.samples,
+            // clap admitted only the methods' names.
+            method: METHODS
+                .iter()
+                .position(|m| method_name(*m) == cli.method)
+                .unwrap_or(3),
+            fxaa: cli.fxaa,
+            frames: cli.frames.or_else(|| cli.screenshot.as_ref().map(|_| 1)),
+            screenshot: cli.screenshot,
+            keys: cli.keys.chars().collect(),
         }
-        if parsed.screenshot.is_some() && parsed.frames.is_none() {
-            parsed.frames = Some(1);
-        }
-        Ok(parsed)
     }
+}
+
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    text.split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
+        .filter(|&(w, h)| (1..=16384).contains(&w) && (1..=16384).contains(&h))
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT such as 960x540, got `{text}`"))
 }
 
 fn method_name(method: Option<ResolveMethod>) -> &'static str {
     method.map_or("none", ResolveMethod::name)
 }
 
+/// The keys, for `--help` and `?`.
+const KEYS: &str = "keys: M/Shift+M method, 0-4 none/average/front/median/back, N sample count, F FXAA, \
+V/Shift+V view, arrows/HJKL or drag orbit, +/- or wheel zoom, R reset camera, P screenshot, ? keys, Esc/Q quit";
+
 fn print_keys() {
-    println!(
-        "keys: M/Shift+M method, 0-4 none/average/front/median/back, N sample count, F FXAA, \
-         V/Shift+V view, arrows/HJKL or drag orbit, +/- or wheel zoom, R reset camera, P screenshot, ? keys, Esc/Q quit"
-    );
+    println!("{KEYS}");
 }
 
 /// What a key press or a scripted key does.

@@ -59,23 +59,10 @@ pub fn main() -> i32 {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn"))
         .format_timestamp(None)
         .init();
-    let cli = match Cli::try_parse() {
+    let cli = match parse_args::<Cli>() {
         Ok(c) => c,
-        Err(e) if !e.use_stderr() => {
-            // --help and --version.
-            let _ = e.print();
-            return 0;
-        }
-        Err(e) => {
-            // Usage errors as one line, like every other refusal.
-            let text = e.render().to_string();
-            let line = text
-                .lines()
-                .find(|l| !l.trim().is_empty())
-                .unwrap_or("error: bad arguments");
-            eprintln!("{} (see --help)", line.trim_end());
-            return 2;
-        }
+        Err(Printed::Help) => return 0,
+        Err(Printed::UsageError) => return 2,
     };
     match std::panic::catch_unwind(|| run(cli)) {
         Ok(Ok(())) => 0,
@@ -84,6 +71,37 @@ pub fn main() -> i32 {
             1
         }
         Err(_) => 101,
+    }
+}
+
+/// What [`parse_args`] printed instead of returning the arguments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Printed {
+    /// `--help` or `--version`, on standard output.
+    Help,
+    /// A usage error, as one line on standard error.
+    UsageError,
+}
+
+/// Parse the process's arguments into `P` (the `deferred-msaa` binary's and
+/// the examples' command lines), printing `--help` and `--version` as clap
+/// writes them and a usage error as one line, like every other refusal.
+pub fn parse_args<P: Parser>() -> std::result::Result<P, Printed> {
+    match P::try_parse() {
+        Ok(p) => Ok(p),
+        Err(e) if !e.use_stderr() => {
+            let _ = e.print();
+            Err(Printed::Help)
+        }
+        Err(e) => {
+            let text = e.render().to_string();
+            let line = text
+                .lines()
+                .find(|l| !l.trim().is_empty())
+                .unwrap_or("error: bad arguments");
+            eprintln!("{} (see --help)", line.trim_end());
+            Err(Printed::UsageError)
+        }
     }
 }
 
