@@ -1,7 +1,7 @@
 //! The background pass (`shaders_glsl/background.frag`): the scene's
 //! background drawn single-sampled into its own RGBA16F texture.
 
-use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
+use super::pass::{draw_fullscreen, fullscreen_program};
 use super::targets::ColorTarget;
 use crate::Result;
 use crate::gl::{GlObject, Handle, Program, VertexArray, check_error};
@@ -42,13 +42,7 @@ impl BackgroundPass {
         projection: &Mat4,
     ) -> Result<()> {
         let p = &self.program;
-        bind_target(
-            gl,
-            target.fbo.raw(),
-            target.texture.width,
-            target.texture.height,
-        );
-        fullscreen_state(gl);
+        target.begin_fullscreen(gl);
         p.bind(gl);
         let (kind, zenith, horizon, seed) = match *background {
             Background::Black => (0, [0.0; 3], [0.0; 3], 0),

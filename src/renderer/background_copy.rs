@@ -3,7 +3,7 @@
 //! emissive attachment (multisampled or not), as FreeSpace Open does; a blit
 //! cannot write a multisampled target.
 
-use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
+use super::pass::{begin_fullscreen, draw_fullscreen, fullscreen_program};
 use crate::Result;
 use crate::gl::{GlObject, Handle, Program, Texture2d, VertexArray, check_error};
 use glow::HasContext;
@@ -57,8 +57,7 @@ impl BackgroundCopyPass {
         vao: &VertexArray,
         background: &Texture2d,
     ) -> Result<()> {
-        bind_target(gl, target.fbo, target.width, target.height);
-        fullscreen_state(gl);
+        begin_fullscreen(gl, target.fbo, target.width, target.height);
         unsafe {
             gl.enable(glow::MULTISAMPLE);
             gl.draw_buffers(&[glow::COLOR_ATTACHMENT0 + target.emissive]);

@@ -7,7 +7,7 @@
 //! elsewhere. The two lighting passes then select pixels by that value.
 
 use super::lighting_per_sample::SampleInputs;
-use super::pass::{bind_target, draw_fullscreen, fullscreen_state};
+use super::pass::{begin_fullscreen, draw_fullscreen};
 use crate::gl::{FullscreenPass, Program, ShaderSource, TextureRef, VertexArray, check_error};
 use crate::resolve::{COMPLEX_GLSL, COMPLEX_GLSL_NAME};
 use crate::{Error, Result};
@@ -91,8 +91,7 @@ impl ComplexMaskPass {
         coverage: Option<TextureRef>,
         footprint: f32,
     ) -> Result<()> {
-        bind_target(gl, target.fbo, target.width, target.height);
-        fullscreen_state(gl);
+        begin_fullscreen(gl, target.fbo, target.width, target.height);
         unsafe {
             gl.color_mask(false, false, false, false);
             gl.stencil_mask(0xFF);

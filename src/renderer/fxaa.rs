@@ -1,7 +1,7 @@
 //! The FXAA-style post filter (`shaders_glsl/fxaa.frag`): luma-based edge
 //! smoothing of the tonemapped image into a second RGBA8 target.
 
-use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
+use super::pass::{draw_fullscreen, fullscreen_program};
 use super::targets::ColorTarget;
 use crate::Result;
 use crate::gl::{GlObject, Handle, Program, Texture2d, VertexArray, check_error};
@@ -31,13 +31,7 @@ impl FxaaPass {
         vao: &VertexArray,
         ldr: &Texture2d,
     ) -> Result<()> {
-        bind_target(
-            gl,
-            target.fbo.raw(),
-            target.texture.width,
-            target.texture.height,
-        );
-        fullscreen_state(gl);
+        target.begin_fullscreen(gl);
         unsafe {
             gl.active_texture(glow::TEXTURE0);
             gl.bind_texture(glow::TEXTURE_2D, Some(ldr.raw()));

@@ -20,7 +20,7 @@
 
 use super::GBufferSlots;
 use super::gbaa_geometry::{GbaaGeometryPass, NO_EDGE, edge_defines};
-use super::pass::{bind_target, draw_fullscreen, fullscreen_state};
+use super::pass::draw_fullscreen;
 use super::targets::ColorTarget;
 use super::tonemap::TONEMAP_FRAG;
 use crate::Result;
@@ -141,8 +141,7 @@ impl GbaaPasses {
         targets: &GbaaTargets,
         show_edges: bool,
     ) -> Result<()> {
-        bind_target(gl, out.fbo.raw(), out.texture.width, out.texture.height);
-        fullscreen_state(gl);
+        out.begin_fullscreen(gl);
         let image = &targets.tonemapped.texture;
         TextureRef::from(image).bind(gl, 0);
         TextureRef::from(&targets.edge).bind(gl, 1);

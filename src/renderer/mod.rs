@@ -343,31 +343,6 @@ impl Frame {
     }
 }
 
-/// Allocate single-sample textures for `layout` at `width`×`height`
-/// (labelled as [`GBuffer::new`] labels them).
-fn allocate_gbuffer_textures(
-    gl: &glow::Context,
-    layout: &GBufferLayout,
-    width: u32,
-    height: u32,
-) -> Result<(Vec<Texture2d>, Texture2d)> {
-    Made::build(gl, |made| {
-        let mut colors = Vec::with_capacity(layout.colors.len());
-        for a in &layout.colors {
-            let name = format!("gbuffer {}", a.name);
-            colors.push(made.keep(Texture2d::new(gl, &name, a.format, width, height)?));
-        }
-        let depth = made.keep(Texture2d::new(
-            gl,
-            "gbuffer depth",
-            layout.depth,
-            width,
-            height,
-        )?);
-        Ok((colors, depth))
-    })
-}
-
 fn free_textures(gl: &glow::Context, colors: Vec<Texture2d>, depth: Option<Texture2d>) {
     for t in colors {
         t.destroy(gl);
@@ -1041,7 +1016,7 @@ impl Renderer {
     fn resize(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
         let (colors, depth, targets) = Made::build(gl, |made| {
             let (colors, depth) =
-                allocate_gbuffer_textures(gl, &options.layout, options.width, options.height)?;
+                GBuffer::allocate_textures(gl, &options.layout, options.width, options.height)?;
             let (colors, depth) = (made.keep(colors), made.keep(depth));
             let targets = made.keep(Targets::new(gl, &depth, options.fxaa)?);
             Ok::<_, Error>((colors, depth, targets))

@@ -58,6 +58,18 @@ pub(crate) fn fullscreen_state(gl: &glow::Context) {
     }
 }
 
+/// The start of a full-screen pass: bind `fbo` with a `width`×`height`
+/// viewport ([`bind_target`]) and set [`fullscreen_state`].
+pub(crate) fn begin_fullscreen(
+    gl: &glow::Context,
+    fbo: glow::Framebuffer,
+    width: u32,
+    height: u32,
+) {
+    bind_target(gl, fbo, width, height);
+    fullscreen_state(gl);
+}
+
 /// Draw the full-screen triangle (an empty vertex array; positions come from `gl_VertexID`).
 pub(crate) fn draw_fullscreen(gl: &glow::Context, vao: &VertexArray) {
     draw_fullscreen_triangle(gl, vao);
@@ -89,10 +101,9 @@ pub(crate) struct LightTarget {
 }
 
 impl LightTarget {
-    /// Bind the framebuffer, set [`fullscreen_state`], then the stencil test.
+    /// [`begin_fullscreen`] on the framebuffer, then the stencil test.
     pub(crate) fn bind(&self, gl: &glow::Context) {
-        bind_target(gl, self.fbo, self.width, self.height);
-        fullscreen_state(gl);
+        begin_fullscreen(gl, self.fbo, self.width, self.height);
         if let StencilSelect::Equal(value) = self.stencil {
             unsafe {
                 gl.enable(glow::STENCIL_TEST);

@@ -4,7 +4,7 @@
 //! target.
 
 use super::pass::{
-    LightTarget, StencilSelect, bind_target, draw_fullscreen, fullscreen_program, fullscreen_state,
+    LightTarget, StencilSelect, begin_fullscreen, draw_fullscreen, fullscreen_program,
 };
 use crate::Result;
 use crate::gl::{GlObject, Handle, Program, TextureRef, VertexArray, check_error};
@@ -51,8 +51,7 @@ impl SecondLayerMaskPass {
         vao: &VertexArray,
         coverage: TextureRef,
     ) -> Result<LightTarget> {
-        bind_target(gl, target.fbo, target.width, target.height);
-        fullscreen_state(gl);
+        begin_fullscreen(gl, target.fbo, target.width, target.height);
         unsafe {
             gl.color_mask(false, false, false, false);
             gl.stencil_mask(0xFF);

@@ -19,7 +19,7 @@ use crate::renderer::geometry::GEOMETRY_VERT;
 use crate::renderer::mesh::{
     AttribLocations, BASE_TEXTURE_UNIT, EMISSIVE_TEXTURE_UNIT, GpuScene, set_culling,
 };
-use crate::renderer::pass::{bind_target, draw_fullscreen, fullscreen_state, model_wrapped};
+use crate::renderer::pass::{begin_fullscreen, bind_target, draw_fullscreen, model_wrapped};
 use crate::resolve::{COMPLEX_GLSL, COMPLEX_GLSL_NAME, Region};
 use glam::{DMat4, Mat4};
 use glow::HasContext;
@@ -182,8 +182,7 @@ impl SparseBuildPasses {
         gbuffer_fbo: glow::Framebuffer,
         vao: &VertexArray,
     ) -> Result<()> {
-        bind_target(gl, gbuffer_fbo, targets.width, targets.height);
-        fullscreen_state(gl);
+        begin_fullscreen(gl, gbuffer_fbo, targets.width, targets.height);
         unsafe {
             gl.color_mask(false, false, false, false);
             gl.enable(glow::DEPTH_TEST);

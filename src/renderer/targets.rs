@@ -4,6 +4,7 @@
 //! and those of [`AaMode::Complex`](super::AaMode::Complex): the HDR target
 //! with a stencil mask, and the coverage flags.
 
+use super::pass::begin_fullscreen;
 use crate::Result;
 use crate::gl::{
     Attachment, Format, Framebuffer, GlObject, Handle, Made, Texture2d, Texture2dMultisample,
@@ -28,6 +29,11 @@ impl ColorTarget {
         image::RgbaImage::from_raw(w, h, data).ok_or_else(|| {
             crate::Error::invalid(format!("{what}'s buffer does not hold {w}x{h} pixels"))
         })
+    }
+
+    /// Start a full-screen pass into it ([`begin_fullscreen`]).
+    pub(crate) fn begin_fullscreen(&self, gl: &glow::Context) {
+        begin_fullscreen(gl, self.fbo.raw(), self.texture.width, self.texture.height);
     }
 
     /// Allocate a `format` texture of `width`×`height` and its framebuffer.

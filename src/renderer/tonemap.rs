@@ -1,7 +1,7 @@
 //! The tonemap pass (`shaders_glsl/tonemap.frag`): linear HDR to sRGB-encoded
 //! RGBA8.
 
-use super::pass::{bind_target, draw_fullscreen, fullscreen_program, fullscreen_state};
+use super::pass::{draw_fullscreen, fullscreen_program};
 use super::targets::ColorTarget;
 use crate::Result;
 use crate::gl::{GlObject, Handle, Program, Texture2d, VertexArray, check_error};
@@ -53,13 +53,7 @@ impl TonemapPass {
         vao: &VertexArray,
         hdr: &Texture2d,
     ) -> Result<()> {
-        bind_target(
-            gl,
-            target.fbo.raw(),
-            target.texture.width,
-            target.texture.height,
-        );
-        fullscreen_state(gl);
+        target.begin_fullscreen(gl);
         unsafe {
             gl.active_texture(glow::TEXTURE0);
             gl.bind_texture(glow::TEXTURE_2D, Some(hdr.raw()));

@@ -24,16 +24,17 @@ pub struct GBuffer {
 }
 
 impl GBuffer {
-    /// Allocate the layout's textures at `width`×`height`.
-    pub fn new(
+    /// The layout's textures at `width`×`height` (colour `k` and depth),
+    /// labelled `gbuffer NAME`, for a G-buffer or for a host that attaches
+    /// new textures to its existing framebuffer on resize.
+    pub fn allocate_textures(
         gl: &glow::Context,
         layout: &GBufferLayout,
         width: u32,
         height: u32,
-    ) -> Result<Self> {
-        layout.validate()?;
+    ) -> Result<(Vec<Texture2d>, Texture2d)> {
         Made::build(gl, |made| {
-            let mut colors: Vec<Texture2d> = Vec::new();
+            let mut colors = Vec::with_capacity(layout.colors.len());
             for a in &layout.colors {
                 let label = format!("gbuffer {}", a.name);
                 colors.push(made.keep(Texture2d::new(gl, &label, a.format, width, height)?));
@@ -45,6 +46,21 @@ impl GBuffer {
                 width,
                 height,
             )?);
+            Ok((colors, depth))
+        })
+    }
+
+    /// Allocate the layout's textures at `width`×`height`.
+    pub fn new(
+        gl: &glow::Context,
+        layout: &GBufferLayout,
+        width: u32,
+        height: u32,
+    ) -> Result<Self> {
+        layout.validate()?;
+        let (colors, depth) = Self::allocate_textures(gl, layout, width, height)?;
+        Made::build(gl, |made| {
+            let (colors, depth) = (made.keep(colors), made.keep(depth));
             let mut attachments: Vec<(Attachment, TextureRef)> = colors
                 .iter()
                 .enumerate()
