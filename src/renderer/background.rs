@@ -67,11 +67,6 @@ impl BackgroundPass {
         draw_fullscreen(gl, vao);
         Ok(check_error(gl, "the background pass")?)
     }
-
-    /// Free the program.
-    pub(crate) fn destroy(self, gl: &glow::Context) {
-        self.program.destroy(gl);
-    }
 }
 
 impl GlObject for BackgroundPass {

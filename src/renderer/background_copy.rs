@@ -75,11 +75,6 @@ impl BackgroundCopyPass {
         unsafe { gl.draw_buffers(&mapping) };
         Ok(check_error(gl, "the background copy pass")?)
     }
-
-    /// Free the program.
-    pub(crate) fn destroy(self, gl: &glow::Context) {
-        self.program.destroy(gl);
-    }
 }
 
 impl GlObject for BackgroundCopyPass {

@@ -47,11 +47,6 @@ impl FxaaPass {
         draw_fullscreen(gl, vao);
         Ok(check_error(gl, "the FXAA pass")?)
     }
-
-    /// Free the program.
-    pub(crate) fn destroy(self, gl: &glow::Context) {
-        self.program.destroy(gl);
-    }
 }
 
 impl GlObject for FxaaPass {

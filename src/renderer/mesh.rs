@@ -1,6 +1,7 @@
 //! The scene on the GPU: one vertex array per object, the material textures,
 //! and the draw lists (G-buffer objects and forward transparent objects).
 
+use crate::gl::destroy_object;
 use crate::gl::{
     Buffer, Format, GlObject, Handle, Made, Program, Texture2d, VertexArray, check_error,
 };
@@ -127,14 +128,6 @@ impl GpuMesh {
         unsafe {
             gl.draw_elements(glow::TRIANGLES, self.index_count, glow::UNSIGNED_INT, 0);
         }
-    }
-
-    fn destroy(self, gl: &glow::Context) {
-        self.vao.destroy(gl);
-        self.positions.destroy(gl);
-        self.normals.destroy(gl);
-        self.uvs.destroy(gl);
-        self.indices.destroy(gl);
     }
 }
 
@@ -341,13 +334,7 @@ impl GpuScene {
 
     /// Free every buffer, vertex array and texture.
     pub(crate) fn destroy(self, gl: &glow::Context) {
-        for mesh in self.meshes {
-            mesh.destroy(gl);
-        }
-        for texture in self.textures {
-            texture.destroy(gl);
-        }
-        self.white.destroy(gl);
+        destroy_object(gl, self);
     }
 }
 

@@ -91,6 +91,7 @@ mod transparent;
 use crate::frame::{DepthMode as ResolveDepthMode, Frame as ResolveFrame};
 use crate::gbuffer::{GBuffer, GBufferLayout};
 use crate::gl::ColorAttachment;
+use crate::gl::destroy_object;
 use crate::gl::{
     Attachment, Capabilities, Framebuffer, GlObject, GpuTimer, Handle, Made, Texture2d, TextureRef,
     TimerKind, VertexArray, check_error, framebuffer_status_name,
@@ -274,15 +275,7 @@ impl Passes {
     }
 
     fn destroy(self, gl: &glow::Context) {
-        self.background.destroy(gl);
-        self.background_copy.destroy(gl);
-        self.geometry.destroy(gl);
-        self.lighting.destroy(gl);
-        self.transparent.destroy(gl);
-        self.tonemap.destroy(gl);
-        self.fxaa.destroy(gl);
-        self.fullscreen.destroy(gl);
-        self.timer.destroy(gl);
+        destroy_object(gl, self);
     }
 }
 
@@ -335,11 +328,7 @@ impl Frame {
     }
 
     fn destroy(self, gl: &glow::Context) {
-        if let Some(r) = self.retrofit {
-            r.destroy(gl);
-        }
-        self.targets.destroy(gl);
-        self.gbuffer.destroy(gl);
+        destroy_object(gl, self);
     }
 }
 

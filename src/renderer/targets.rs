@@ -6,6 +6,7 @@
 
 use super::pass::begin_fullscreen;
 use crate::Result;
+use crate::gl::destroy_object;
 use crate::gl::{
     Attachment, Format, Framebuffer, GlObject, Handle, Made, Texture2d, Texture2dMultisample,
     TextureRef,
@@ -58,8 +59,7 @@ impl ColorTarget {
 
     /// Free the framebuffer and the texture.
     pub(crate) fn destroy(self, gl: &glow::Context) {
-        self.fbo.destroy(gl);
-        self.texture.destroy(gl);
+        destroy_object(gl, self);
     }
 }
 
@@ -131,13 +131,7 @@ impl Targets {
 
     /// Free everything.
     pub(crate) fn destroy(self, gl: &glow::Context) {
-        self.background.destroy(gl);
-        self.hdr_with_depth.destroy(gl);
-        self.hdr.destroy(gl);
-        self.ldr.destroy(gl);
-        if let Some(t) = self.fxaa {
-            t.destroy(gl);
-        }
+        destroy_object(gl, self);
     }
 }
 

@@ -66,11 +66,6 @@ impl TonemapPass {
         draw_fullscreen(gl, vao);
         Ok(check_error(gl, "the tonemap pass")?)
     }
-
-    /// Free the program.
-    pub(crate) fn destroy(self, gl: &glow::Context) {
-        self.program.destroy(gl);
-    }
 }
 
 impl GlObject for TonemapPass {

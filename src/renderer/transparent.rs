@@ -109,11 +109,6 @@ impl TransparentPass {
         }
         Ok(check_error(gl, "the transparent pass")?)
     }
-
-    /// Free the program.
-    pub(crate) fn destroy(self, gl: &glow::Context) {
-        self.program.destroy(gl);
-    }
 }
 
 impl GlObject for TransparentPass {

@@ -6,9 +6,9 @@ use crate::common;
 use deferred_msaa::Error;
 use deferred_msaa_lab::context::{Backend, HeadlessContext};
 use deferred_msaa_lab::gl::{
-    Attachment, Capabilities, ExtraFns, Format, Framebuffer, GpuTimer, Made, Program, ShaderStage,
-    Texture2d, Texture2dMultisample, TextureRef, VertexArray, live_objects, preamble,
-    sample_positions,
+    Attachment, Capabilities, ExtraFns, Format, Framebuffer, GlObject, GpuTimer, Handle, Made,
+    Program, ShaderStage, Texture2d, Texture2dMultisample, TextureRef, VertexArray, destroy_object,
+    live_objects, preamble, sample_positions,
 };
 use deferred_msaa_lab::readback::Readback;
 use glow::HasContext;
@@ -219,6 +219,51 @@ fn a_failed_constructor_frees_what_it_made() {
     fbo.destroy(gl);
     texture.destroy(gl);
     assert_eq!(live_objects(), before);
+}
+
+#[test]
+fn a_composite_is_destroyed_by_what_it_lists() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    // A composite of composites, as the renderer's targets are: a vector, an
+    // option and a pair, freed by one call through their handles.
+    let parts = Made::build(gl, |made| {
+        let textures = made.keep(vec![
+            Texture2d::new(gl, "listed", Format::Rgba8, 8, 8)?,
+            Texture2d::new(gl, "listed", Format::R32f, 8, 8)?,
+        ]);
+        let fbo = made.keep(Some(Framebuffer::new(
+            gl,
+            "listed",
+            &[(Attachment::Color(0), TextureRef::from(&textures[0]))],
+            &[Some(0)],
+        )?));
+        let vao = made.keep(VertexArray::new(gl, "listed")?);
+        Ok::<_, Error>((textures, fbo, vao))
+    })
+    .expect("a working constructor");
+    let names: Vec<_> = parts.0.iter().map(|t| t.raw()).collect();
+    assert_ne!(live_objects(), before);
+    struct Parts((Vec<Texture2d>, Option<Framebuffer>, VertexArray));
+    impl GlObject for Parts {
+        fn handles(&self, out: &mut Vec<Handle>) {
+            let (textures, fbo, vao) = &self.0;
+            textures.handles(out);
+            fbo.handles(out);
+            vao.handles(out);
+        }
+    }
+    destroy_object(gl, Parts(parts));
+    assert_eq!(live_objects(), before, "everything listed is freed");
+    for t in names {
+        assert!(
+            !unsafe { gl.is_texture(t) },
+            "a texture's name is still in use"
+        );
+    }
 }
 
 #[test]

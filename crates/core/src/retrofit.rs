@@ -14,7 +14,7 @@ use crate::gl::Texture2d;
 use crate::gl::format::{ComponentType, FormatProperties, internal_format_name};
 use crate::gl::{
     Attachment, ColorAttachment, Format, Framebuffer, GlObject, Handle, HostImage, Made,
-    SavedState, SetupState, TextureRef, check_error,
+    SavedState, SetupState, TextureRef, check_error, destroy_object,
 };
 use crate::resolve::{
     ExtraOutputs, KeySource, NormalEncoding, ResolveInputs, ResolveParams, ResolveRule,
@@ -548,14 +548,16 @@ struct Built {
 
 impl Built {
     fn destroy(self, gl: &glow::Context) {
-        self.twin.destroy(gl);
-        self.target.destroy(gl);
-        if let Some(s) = self.stencil {
-            s.destroy(gl);
-        }
-        if let Some(s) = self.second {
-            s.destroy(gl);
-        }
+        destroy_object(gl, self);
+    }
+}
+
+impl GlObject for Built {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.twin.handles(out);
+        self.target.handles(out);
+        self.stencil.handles(out);
+        self.second.handles(out);
     }
 }
 
@@ -610,12 +612,6 @@ impl StencilCopyTargets {
                 pass,
             })
         })
-    }
-
-    fn destroy(self, gl: &glow::Context) {
-        self.pass.destroy(gl);
-        self.target.destroy(gl);
-        self.reference.destroy(gl);
     }
 }
 
@@ -1282,19 +1278,26 @@ impl MsaaRetrofit {
         result
     }
 
+    /// Put `built` in place of what the retrofit was built with; that is
+    /// returned.
+    fn swap_built(&mut self, built: Built) -> Built {
+        use std::mem::replace;
+        Built {
+            host: replace(&mut self.host, built.host),
+            twin: replace(&mut self.twin, built.twin),
+            target: replace(&mut self.target, built.target),
+            rules: replace(&mut self.rules, built.rules),
+            key: replace(&mut self.key, built.key),
+            warnings: replace(&mut self.warnings, built.warnings),
+            stencil: replace(&mut self.stencil, built.stencil),
+            normal: replace(&mut self.normal, built.normal),
+            second: replace(&mut self.second, built.second),
+        }
+    }
+
     fn rebuild_within(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
         let built = Self::build(gl, self.host.fbo, options)?;
-        let old = Built {
-            host: std::mem::replace(&mut self.host, built.host),
-            twin: std::mem::replace(&mut self.twin, built.twin),
-            target: std::mem::replace(&mut self.target, built.target),
-            rules: std::mem::replace(&mut self.rules, built.rules),
-            key: std::mem::replace(&mut self.key, built.key),
-            warnings: std::mem::replace(&mut self.warnings, built.warnings),
-            stencil: std::mem::replace(&mut self.stencil, built.stencil),
-            normal: std::mem::replace(&mut self.normal, built.normal),
-            second: std::mem::replace(&mut self.second, built.second),
-        };
+        let old = self.swap_built(built);
         let old_options = std::mem::replace(&mut self.options, options.clone());
         match self.prepare(gl) {
             Ok(()) => {
@@ -1303,18 +1306,7 @@ impl MsaaRetrofit {
             }
             Err(e) => {
                 // Put the working twins back.
-                let new = Built {
-                    host: std::mem::replace(&mut self.host, old.host),
-                    twin: std::mem::replace(&mut self.twin, old.twin),
-                    target: std::mem::replace(&mut self.target, old.target),
-                    rules: std::mem::replace(&mut self.rules, old.rules),
-                    key: std::mem::replace(&mut self.key, old.key),
-                    warnings: std::mem::replace(&mut self.warnings, old.warnings),
-                    stencil: std::mem::replace(&mut self.stencil, old.stencil),
-                    normal: std::mem::replace(&mut self.normal, old.normal),
-                    second: std::mem::replace(&mut self.second, old.second),
-                };
-                new.destroy(gl);
+                self.swap_built(old).destroy(gl);
                 self.options = old_options;
                 Err(e)
             }
@@ -1323,15 +1315,7 @@ impl MsaaRetrofit {
 
     /// Free everything this crate created (never the host's objects).
     pub fn destroy(self, gl: &glow::Context) {
-        self.twin.destroy(gl);
-        self.target.destroy(gl);
-        if let Some(s) = self.stencil {
-            s.destroy(gl);
-        }
-        if let Some(s) = self.second {
-            s.destroy(gl);
-        }
-        self.resolver.destroy(gl);
+        destroy_object(gl, self);
     }
 }
 

@@ -13,7 +13,7 @@
 use crate::gl::format::ComponentType;
 use crate::gl::{
     Attachment, Format, Framebuffer, FullscreenPass, GlObject, Handle, HostImage, Made,
-    ShaderSource, Texture2d, TextureRef, VertexArray, check_error,
+    ShaderSource, Texture2d, TextureRef, VertexArray, check_error, destroy_object,
 };
 use crate::retrofit::{HostAttachment, HostFramebuffer, HostImageKind, introspect_point};
 use crate::{Error, Result};
@@ -98,21 +98,6 @@ impl GlObject for OutputTarget {
         self.lit_second.handles(out);
         self.lit_first_fbo.handles(out);
         self.lit_second_fbo.handles(out);
-    }
-}
-
-impl OutputTarget {
-    fn destroy(self, gl: &glow::Context) {
-        if let Some(t) = self.target {
-            t.destroy(gl);
-        }
-        if let Some(t) = self.masked {
-            t.destroy(gl);
-        }
-        self.lit_first_fbo.destroy(gl);
-        self.lit_second_fbo.destroy(gl);
-        self.lit_first.destroy(gl);
-        self.lit_second.destroy(gl);
     }
 }
 
@@ -768,7 +753,7 @@ impl SecondLayer {
             return Ok(());
         }
         if let Some(old) = self.output.take() {
-            old.destroy(gl);
+            destroy_object(gl, old);
         }
         let (image, format) = match host {
             Some(fbo) => {
@@ -1037,37 +1022,6 @@ impl SecondLayer {
         }
         pass.draw(gl, &self.vao);
         Ok(())
-    }
-
-    /// Free everything.
-    pub(crate) fn destroy(self, gl: &glow::Context) {
-        for t in self.gbuffer.into_iter().chain(self.saved) {
-            t.destroy(gl);
-        }
-        self.coverage.destroy(gl);
-        if let Some(r) = self.reference {
-            r.destroy(gl);
-        }
-        if let Some(f) = self.flag {
-            f.destroy(gl);
-        }
-        self.stencil.destroy(gl);
-        self.select.destroy(gl);
-        self.write_depth.destroy(gl);
-        self.depth.destroy(gl);
-        self.saved_depth.destroy(gl);
-        self.target.destroy(gl);
-        self.saved_target.destroy(gl);
-        self.host_target.destroy(gl);
-        self.mix_linear.destroy(gl);
-        self.mix_tonemapped.destroy(gl);
-        if let Some(p) = self.mix_curve {
-            p.destroy(gl);
-        }
-        self.vao.destroy(gl);
-        if let Some(o) = self.output {
-            o.destroy(gl);
-        }
     }
 }
 

@@ -3,7 +3,7 @@
 use super::GBufferLayout;
 use crate::gl::{
     Attachment, Format, Framebuffer, GlObject, Handle, Made, Texture2d, Texture2dMultisample,
-    TextureRef,
+    TextureRef, destroy_object,
 };
 use crate::{Error, Result};
 
@@ -84,11 +84,7 @@ impl GBuffer {
 
     /// Free the framebuffer and its textures.
     pub fn destroy(self, gl: &glow::Context) {
-        self.fbo.destroy(gl);
-        for t in self.colors {
-            t.destroy(gl);
-        }
-        self.depth.destroy(gl);
+        destroy_object(gl, self);
     }
 }
 
@@ -230,10 +226,7 @@ impl MultisampleTwin {
 
     /// Free the framebuffer and the twins.
     pub fn destroy(self, gl: &glow::Context) {
-        self.fbo.destroy(gl);
-        for t in self.textures {
-            t.destroy(gl);
-        }
+        destroy_object(gl, self);
     }
 }
 

@@ -118,6 +118,18 @@ impl<T: GlObject> GlObject for Vec<T> {
     }
 }
 
+/// Free every GL object `object` owns, as its [`GlObject::handles`] lists
+/// them, newest first (as a failed [`Made::build`] frees them). A
+/// composite's `destroy` is this one call, so what it frees is what it
+/// lists and the two cannot drift apart.
+pub fn destroy_object(gl: &glow::Context, object: impl GlObject) {
+    let mut handles = Vec::new();
+    object.handles(&mut handles);
+    for handle in handles.into_iter().rev() {
+        handle.delete(gl);
+    }
+}
+
 /// The objects a constructor has made so far; see [`Made::build`].
 ///
 /// ```no_run

@@ -34,7 +34,7 @@ pub use format::Format;
 pub use framebuffer::{
     Attachment, ColorAttachment, Framebuffer, HostImage, framebuffer_status_name,
 };
-pub use made::{GlObject, Handle, Made};
+pub use made::{GlObject, Handle, Made, destroy_object};
 pub use pass::{FullscreenPass, draw_fullscreen_triangle};
 pub use program::{Program, ShaderStage, preamble};
 pub use query::{GpuTimer, SamplesPassedQuery, TimerKind};

@@ -3,7 +3,7 @@
 
 use super::{
     Attachment, Format, Framebuffer, GlObject, Handle, Made, Texture2d, Texture2dMultisample,
-    TextureRef,
+    TextureRef, destroy_object,
 };
 use crate::{Error, Result};
 
@@ -22,13 +22,6 @@ impl TargetTexture {
         match self {
             TargetTexture::Single(t) => TextureRef::from(t),
             TargetTexture::Multisample(t) => TextureRef::from(t),
-        }
-    }
-
-    fn destroy(self, gl: &glow::Context) {
-        match self {
-            TargetTexture::Single(t) => t.destroy(gl),
-            TargetTexture::Multisample(t) => t.destroy(gl),
         }
     }
 }
@@ -168,10 +161,7 @@ impl RenderTarget {
 
     /// Free the framebuffer, then the textures.
     pub fn destroy(self, gl: &glow::Context) {
-        self.fbo.destroy(gl);
-        for (_, t) in self.textures {
-            t.destroy(gl);
-        }
+        destroy_object(gl, self);
     }
 }
 

@@ -81,6 +81,14 @@ pub(crate) struct StencilPass {
     vao: VertexArray,
 }
 
+/// What it owns: its program and vertex array.
+impl crate::gl::GlObject for StencilPass {
+    fn handles(&self, out: &mut Vec<crate::gl::Handle>) {
+        self.program.handles(out);
+        self.vao.handles(out);
+    }
+}
+
 impl StencilPass {
     /// Build the pass for `method` (already resolved by [`StencilCopy::on`]).
     pub(crate) fn new(gl: &glow::Context, method: StencilCopy) -> Result<Self> {
@@ -109,13 +117,6 @@ impl StencilPass {
                 vao,
             })
         })
-    }
-
-    /// The objects it owns, for a constructor's [`Made`].
-    pub(crate) fn handles(&self, out: &mut Vec<crate::gl::Handle>) {
-        use crate::gl::GlObject;
-        self.program.handles(out);
-        self.vao.handles(out);
     }
 
     /// The method in use.
@@ -201,13 +202,5 @@ impl StencilPass {
         // The bit passes cleared with 0; the host's clear value comes back.
         unsafe { gl.clear_stencil(clear) };
         result.and_then(|()| check_error(gl, "copying the host's stencil"))
-    }
-
-    /// Free the program and vertex array.
-    pub(crate) fn destroy(self, gl: &glow::Context) {
-        if let Some(p) = self.program {
-            p.destroy(gl);
-        }
-        self.vao.destroy(gl);
     }
 }
