@@ -7,7 +7,7 @@ use crate::common;
 
 use deferred_msaa::resolve::NormalEncoding;
 use deferred_msaa::{ColorAttachment, Error, NormalAttachment};
-use deferred_msaa_lab::gl::{Attachment, Format, Texture2d, TextureRef, live_objects};
+use deferred_msaa_lab::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef, live_objects};
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
 use deferred_msaa_lab::resolve::{
@@ -685,5 +685,59 @@ fn second_layer_calls_out_of_order_are_errors() {
     assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
     msaa.destroy(gl);
     host.destroy(gl);
+    assert_eq!(live_objects(), before, "GL objects leaked");
+}
+
+/// A host with as many colours as the context has draw buffers, less one,
+/// cannot have two layers (the second resolve writes every colour, the
+/// coverage and the depth): refused in one line that names the count, at
+/// construction and by `set_options`, which keeps the working retrofit.
+#[test]
+fn two_layers_refuse_a_host_without_draw_buffers_to_spare() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let max = unsafe { gl.get_parameter_i32(glow::MAX_DRAW_BUFFERS) } as u32;
+    let colours: Vec<Texture2d> = (0..max - 1)
+        .map(|k| Texture2d::new(gl, &format!("wide host {k}"), Format::Rgba8, 16, 16).unwrap())
+        .collect();
+    let depth = Texture2d::new(gl, "wide host depth", Format::Depth32f, 16, 16).unwrap();
+    let mut attachments: Vec<(Attachment, TextureRef)> = colours
+        .iter()
+        .enumerate()
+        .map(|(k, t)| (Attachment::Color(k as u32), TextureRef::from(t)))
+        .collect();
+    attachments.push((Attachment::Depth, TextureRef::from(&depth)));
+    let draw: Vec<Option<u32>> = (0..max - 1).map(Some).collect();
+    let fbo = Framebuffer::new(gl, "wide host", &attachments, &draw).unwrap();
+    let two = RetrofitOptions {
+        resolve: ResolveSettings {
+            layers: 2,
+            ..ResolveSettings::default()
+        },
+        ..RetrofitOptions::default()
+    };
+    let expect_refusal = |e: Error| {
+        let text = e.to_string();
+        assert_eq!(text.lines().count(), 1, "{text}");
+        assert!(
+            text.contains(&format!("need {} draw buffers", max + 1))
+                && text.contains(&format!("the context has {max}")),
+            "{text}"
+        );
+    };
+    expect_refusal(MsaaRetrofit::new(gl, fbo.raw(), &two).unwrap_err());
+    let mut msaa = MsaaRetrofit::new(gl, fbo.raw(), &RetrofitOptions::default()).unwrap();
+    expect_refusal(msaa.set_options(gl, &two).unwrap_err());
+    assert_eq!(msaa.options(), &RetrofitOptions::default());
+    assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
+    msaa.destroy(gl);
+    fbo.destroy(gl);
+    for t in colours {
+        t.destroy(gl);
+    }
+    depth.destroy(gl);
     assert_eq!(live_objects(), before, "GL objects leaked");
 }
