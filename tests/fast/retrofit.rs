@@ -6,7 +6,7 @@
 use crate::common;
 
 use deferred_msaa::resolve::NormalEncoding;
-use deferred_msaa::{ColorAttachment, Error, NormalAttachment};
+use deferred_msaa::{ColorAttachment, Error, LayerMix, NormalAttachment};
 use deferred_msaa_lab::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef, live_objects};
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
@@ -739,5 +739,140 @@ fn two_layers_refuse_a_host_without_draw_buffers_to_spare() {
         t.destroy(gl);
     }
     depth.destroy(gl);
+    assert_eq!(live_objects(), before, "GL objects leaked");
+}
+
+/// The two lit layers mix by the second layer's coverage in the domain the
+/// host chose, on an HDR (RGBA16F) and an LDR (RGBA8) output: `Auto` is the
+/// tonemapped domain on the first and linear on the second, `Curve` is the
+/// host's own curve. Pixels the second layer does not cover keep the first
+/// lighting bit for bit. The toy host lights by a gain of 6, so the HDR
+/// values are where the domains differ.
+#[test]
+fn the_lit_layers_mix_by_coverage_in_the_chosen_domain() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let host = host(gl);
+    let mut readback = Readback::new(gl).unwrap();
+    const GAIN: f32 = 6.0;
+    let curve = "vec3 dmsaa_curve(vec3 x) { return x / (1.0 + x); }\n\
+                 vec3 dmsaa_curve_inverse(vec3 y) { return y / max(1.0 - y, vec3(1e-6)); }\n";
+    type Domain = fn([f64; 3]) -> [f64; 3];
+    let identity: Domain = |x| x;
+    let max3 = |x: [f64; 3]| x[0].max(x[1]).max(x[2]);
+    let tonemap: (Domain, Domain) = (
+        |x| x.map(|c| c / (1.0 + x[0].max(x[1]).max(x[2]).max(0.0))),
+        |y| y.map(|c| c / (1.0 - y[0].max(y[1]).max(y[2])).max(1e-6)),
+    );
+    let reinhard: (Domain, Domain) = (
+        |x| x.map(|c| c / (1.0 + c)),
+        |y| y.map(|c| c / (1.0 - c).max(1e-6)),
+    );
+    let cases: [(Format, LayerMix, (Domain, Domain)); 5] = [
+        (Format::Rgba16f, LayerMix::Auto, tonemap),
+        (Format::Rgba16f, LayerMix::Tonemapped, tonemap),
+        (Format::Rgba16f, LayerMix::Linear, (identity, identity)),
+        (Format::Rgba16f, LayerMix::Curve(curve.into()), reinhard),
+        (Format::Rgba8, LayerMix::Auto, (identity, identity)),
+    ];
+    for (format, layer_mix, (to, from)) in cases {
+        let label = format!("{} {layer_mix:?}", format.name());
+        let output = Texture2d::new(gl, "lit output", format, W, H).unwrap();
+        let fbo = Framebuffer::new(
+            gl,
+            "lit output",
+            &[(Attachment::Color(0), TextureRef::from(&output))],
+            &[Some(0)],
+        )
+        .unwrap();
+        let options = RetrofitOptions {
+            position_attachment: Some(ColorAttachment(1)),
+            resolve: ResolveSettings {
+                layers: 2,
+                ..ResolveSettings::default()
+            },
+            normal_attachment: Some(NormalAttachment {
+                attachment: ColorAttachment(2),
+                encoding: NormalEncoding::Xyz,
+            }),
+            layer_mix: layer_mix.clone(),
+            ..RetrofitOptions::default()
+        };
+        let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        host.draw(gl, &projection(), false);
+        msaa.resolve(gl, &frame()).unwrap();
+        let coverage = readback
+            .read(gl, msaa.second_layer_coverage().unwrap(), 1)
+            .unwrap();
+        host.light(gl, fbo.raw(), GAIN);
+        let lit_first = readback.read(gl, TextureRef::from(&output), 1).unwrap();
+        assert!(msaa.begin_second_layer(gl, Some(fbo.raw())).unwrap());
+        // The host's unchanged lighting, a second time, on the second layer.
+        host.light(gl, fbo.raw(), GAIN);
+        let lit_second = readback.read(gl, TextureRef::from(&output), 1).unwrap();
+        msaa.finish_second_layer(gl, Some(fbo.raw())).unwrap();
+        let mixed = readback.read(gl, TextureRef::from(&output), 1).unwrap();
+        let tolerance = |v: f64| match format {
+            Format::Rgba8 => 1.5 / 255.0,
+            _ => 1e-4 + 2e-3 * v.abs(),
+        };
+        let (mut covered, mut bad, mut domain_matters) = (0, Vec::new(), false);
+        for y in 0..H {
+            for x in 0..W {
+                let a = f64::from(coverage.get(0, x, y)[0]);
+                let (f, s, got) = (
+                    lit_first.get(0, x, y),
+                    lit_second.get(0, x, y),
+                    mixed.get(0, x, y),
+                );
+                if a == 0.0 {
+                    if got != f {
+                        bad.push(format!("({x},{y}) uncovered: {got:?}, was {f:?}"));
+                    }
+                    continue;
+                }
+                covered += 1;
+                let rgb = |v: [f32; 4]| [v[0], v[1], v[2]].map(f64::from);
+                let (tf, ts) = (to(rgb(f)), to(rgb(s)));
+                let want = from([0, 1, 2].map(|c| tf[c] + (ts[c] - tf[c]) * a));
+                let linear = [0, 1, 2].map(|c| rgb(f)[c] + (rgb(s)[c] - rgb(f)[c]) * a);
+                domain_matters |= (0..3).any(|c| (want[c] - linear[c]).abs() > 0.05);
+                let alpha = f64::from(f[3]) + (f64::from(s[3]) - f64::from(f[3])) * a;
+                let ok = (0..3).all(|c| (f64::from(got[c]) - want[c]).abs() <= tolerance(want[c]))
+                    && (f64::from(got[3]) - alpha).abs() <= tolerance(alpha);
+                if !ok {
+                    bad.push(format!(
+                        "({x},{y}) α {a}: {got:?}, want {want:?} (first {f:?}, second {s:?}, max3 {})",
+                        max3(rgb(s))
+                    ));
+                }
+            }
+        }
+        assert!(
+            covered >= 20,
+            "{label}: only {covered} pixels have a second layer"
+        );
+        assert!(
+            bad.is_empty(),
+            "{label}: {} pixels wrong: {:#?}",
+            bad.len(),
+            &bad[..bad.len().min(6)]
+        );
+        // Where the domain is not linear the check must tell it from linear.
+        let linear = to([2.0, 0.5, 0.1]) == [2.0, 0.5, 0.1];
+        assert!(
+            linear || domain_matters,
+            "{label}: no pixel where the domain changes the mix"
+        );
+        msaa.destroy(gl);
+        fbo.destroy(gl);
+        output.destroy(gl);
+    }
+    readback.destroy(gl);
+    host.destroy(gl);
     assert_eq!(live_objects(), before, "GL objects leaked");
 }

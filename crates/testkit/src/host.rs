@@ -1,12 +1,12 @@
 //! The toy host: a tiny deferred renderer written the way an engine would
-//! write one, with its own G-buffer textures and FBO and its own model
-//! shader that knows nothing of MSAA. The tests and the resolve benches
+//! write one, with its own G-buffer textures and FBO, its own model shader
+//! and its own lighting pass, none of which knows anything of MSAA. The tests and the resolve benches
 //! retrofit MSAA into it through the public API alone.
 
 use deferred_msaa::Result;
 use deferred_msaa::gl::{
-    Attachment, Buffer, Format, Framebuffer, Made, Program, ShaderStage, Texture2d, TextureRef,
-    VertexArray, preamble,
+    Attachment, Buffer, Format, Framebuffer, FullscreenPass, Made, Program, ShaderSource,
+    ShaderStage, Texture2d, TextureRef, VertexArray, draw_fullscreen_triangle, preamble,
 };
 use glow::HasContext;
 
@@ -64,6 +64,19 @@ void main() {
 }
 ";
 
+/// The host's lighting: its colour attachment times a gain (an HDR value
+/// for a gain above 1), where anything was drawn, onto whatever the output
+/// held. Per pixel, as deferred lighting is.
+const LIGHTING_FRAG: &str = "
+uniform sampler2D u_color;
+uniform float u_gain;
+out vec4 o_color;
+void main() {
+    vec4 c = texelFetch(u_color, ivec2(gl_FragCoord.xy), 0);
+    o_color = vec4(c.rgb * u_gain, c.a);
+}
+";
+
 /// One output of the host's model shader, a colour attachment of its G-buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Output {
@@ -118,6 +131,8 @@ pub struct Host {
     pub fbo: Framebuffer,
     program: Program,
     vao: VertexArray,
+    lighting: FullscreenPass,
+    empty: VertexArray,
     vbo: Option<Buffer>,
     vertices: i32,
     /// The image size.
@@ -179,12 +194,21 @@ impl Host {
                 &locations,
             )?);
             let vao = made.keep(VertexArray::new(gl, "host vao")?);
+            let lighting = made.keep(FullscreenPass::new(
+                gl,
+                "host lighting",
+                &ShaderSource::new().part("host lighting.frag", LIGHTING_FRAG),
+                &[("o_color", 0)],
+            )?);
+            let empty = made.keep(VertexArray::new(gl, "host full-screen triangle")?);
             Ok(Host {
                 colors,
                 depth,
                 fbo,
                 program,
                 vao,
+                lighting,
+                empty,
                 vbo: None,
                 vertices: 0,
                 width,
@@ -292,6 +316,27 @@ impl Host {
         }
     }
 
+    /// The host's lighting pass into `output` (its draw buffer 0): the
+    /// colour attachment times `gain`, per pixel. Needs a colour output.
+    pub fn light(&self, gl: &glow::Context, output: glow::Framebuffer, gain: f32) {
+        let program = self.lighting.program();
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(output));
+            gl.viewport(0, 0, self.width as i32, self.height as i32);
+            gl.disable(glow::DEPTH_TEST);
+            gl.active_texture(glow::TEXTURE0);
+            gl.bind_texture(glow::TEXTURE_2D, Some(self.color().raw()));
+        }
+        program.bind(gl);
+        program.set_i32(gl, "u_color", 0);
+        program.set_f32(gl, "u_gain", gain);
+        draw_fullscreen_triangle(gl, &self.empty);
+        unsafe {
+            gl.bind_texture(glow::TEXTURE_2D, None);
+            gl.use_program(None);
+        }
+    }
+
     /// Free every GL object the host made.
     pub fn destroy(self, gl: &glow::Context) {
         self.fbo.destroy(gl);
@@ -301,6 +346,8 @@ impl Host {
         self.depth.destroy(gl);
         self.program.destroy(gl);
         self.vao.destroy(gl);
+        self.lighting.destroy(gl);
+        self.empty.destroy(gl);
         if let Some(b) = self.vbo {
             b.destroy(gl);
         }
