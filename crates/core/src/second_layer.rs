@@ -234,21 +234,21 @@ fn mix_pass(gl: &glow::Context, kind: MixKind, curve: Option<&str>) -> Result<Fu
         &fragment,
         &[("o_color", 0)],
     )?;
-    unsafe {
-        let previous = gl.get_parameter_i32(glow::CURRENT_PROGRAM);
-        let p = pass.program();
-        p.bind(gl);
-        p.set_i32(gl, "u_first", 0);
-        p.set_i32(gl, "u_second", 1);
-        p.set_i32(gl, "u_coverage", 2);
-        gl.use_program(
-            u32::try_from(previous)
-                .ok()
-                .and_then(std::num::NonZeroU32::new)
-                .map(glow::NativeProgram),
-        );
-    }
+    set_units(
+        gl,
+        &pass,
+        &[("u_first", 0), ("u_second", 1), ("u_coverage", 2)],
+    );
     Ok(pass)
+}
+
+/// Point `pass`'s samplers at their texture units, once, at set-up.
+fn set_units(gl: &glow::Context, pass: &FullscreenPass, units: &[(&str, i32)]) {
+    pass.program().set_at_setup(gl, |p| {
+        for &(sampler, unit) in units {
+            p.set_i32(gl, sampler, unit);
+        }
+    });
 }
 
 /// A full-screen pass of `body` reading `sampler` from unit 0, with
@@ -262,17 +262,7 @@ fn single_input_pass(
     outputs: &[(&str, u32)],
 ) -> Result<FullscreenPass> {
     let pass = FullscreenPass::new(gl, label, &ShaderSource::new().part(name, body), outputs)?;
-    unsafe {
-        let previous = gl.get_parameter_i32(glow::CURRENT_PROGRAM);
-        pass.program().bind(gl);
-        pass.program().set_i32(gl, sampler, 0);
-        gl.use_program(
-            u32::try_from(previous)
-                .ok()
-                .and_then(std::num::NonZeroU32::new)
-                .map(glow::NativeProgram),
-        );
-    }
+    set_units(gl, &pass, &[(sampler, 0)]);
     Ok(pass)
 }
 
@@ -656,71 +646,12 @@ impl SecondLayer {
     /// Copy the colours and depth of `from` into `to`: with
     /// `glCopyImageSubData` where the context has it, bit for bit (a
     /// packed depth-stencil's stencil with its depth, unless `keep_stencil`,
-    /// when its depth alone is blitted), else by blits (the depth alone).
+    /// when its depth alone is blitted), else by blits (the stencil with the
+    /// depth unless `keep_stencil`).
     fn copy_set(&self, gl: &glow::Context, from: Set, to: Set, keep_stencil: bool) {
-        let (Some(src), Some(dst)) = (self.images(from), self.images(to)) else {
-            self.copy_gbuffer(
-                gl,
-                self.framebuffer(from),
-                self.framebuffer(to),
-                keep_stencil,
-            );
-            return;
-        };
+        let (src, dst) = (self.images(from), self.images(to));
+        let (a, b) = (self.framebuffer(from), self.framebuffer(to));
         let (w, h) = (self.width as i32, self.height as i32);
-        unsafe {
-            gl.disable(glow::FRAMEBUFFER_SRGB);
-            gl.disable(glow::SCISSOR_TEST);
-            gl.color_mask(true, true, true, true);
-            gl.depth_mask(true);
-        }
-        let mut blitted = false;
-        for (k, (s, d)) in src.iter().zip(&dst).enumerate() {
-            let depth = k == self.colors;
-            // The second layer's depth comes through its own pass.
-            if depth && (self.depth_bits == 0 || from == Set::Second || to == Set::Second) {
-                continue;
-            }
-            match (s, d) {
-                (Some(s), Some(d)) if !(depth && keep_stencil && self.host_stencil) => unsafe {
-                    gl.copy_image_sub_data(
-                        s.name, s.target, 0, 0, 0, s.layer, d.name, d.target, 0, 0, 0, d.layer, w,
-                        h, 1,
-                    );
-                },
-                _ => {
-                    let attachment = (!depth).then_some(k);
-                    let (a, b) = (self.framebuffer(from), self.framebuffer(to));
-                    self.copy(gl, a, b, attachment, !keep_stencil);
-                    blitted |= !depth;
-                }
-            }
-        }
-        if blitted {
-            self.restore_draw_buffers(gl, to);
-        }
-    }
-
-    /// A copy target's framebuffer draws to every colour again.
-    fn restore_draw_buffers(&self, gl: &glow::Context, to: Set) {
-        let all: Vec<u32> = (0..self.colors as u32)
-            .map(|k| glow::COLOR_ATTACHMENT0 + k)
-            .collect();
-        unsafe {
-            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(self.framebuffer(to).raw()));
-            gl.draw_buffers(&all);
-        }
-    }
-
-    /// Copy every colour attachment and the depth (and the stencil, unless
-    /// `keep_stencil`) of `from` into `to` by blits.
-    fn copy_gbuffer(
-        &self,
-        gl: &glow::Context,
-        from: &Framebuffer,
-        to: &Framebuffer,
-        keep_stencil: bool,
-    ) {
         unsafe {
             // Bits, not colours: no sRGB decode or encode on the way.
             gl.disable(glow::FRAMEBUFFER_SRGB);
@@ -728,21 +659,39 @@ impl SecondLayer {
             gl.color_mask(true, true, true, true);
             gl.depth_mask(true);
         }
-        for k in 0..self.colors {
-            self.copy(gl, from, to, Some(k), false);
+        let mut blitted = false;
+        for k in 0..=self.colors {
+            let depth = k == self.colors;
+            // The second layer's depth comes through its own pass.
+            if depth && (self.depth_bits == 0 || from == Set::Second || to == Set::Second) {
+                continue;
+            }
+            let image = |set: &Option<Vec<Option<CopyImage>>>| {
+                set.as_ref()
+                    .and_then(|images| images.get(k).copied().flatten())
+            };
+            match (image(&src), image(&dst)) {
+                (Some(s), Some(d)) if !(depth && keep_stencil && self.host_stencil) => unsafe {
+                    gl.copy_image_sub_data(
+                        s.name, s.target, 0, 0, 0, s.layer, d.name, d.target, 0, 0, 0, d.layer, w,
+                        h, 1,
+                    );
+                },
+                _ => {
+                    self.copy(gl, a, b, (!depth).then_some(k), !keep_stencil);
+                    blitted |= !depth;
+                }
+            }
         }
-        // The second layer's depth comes through its own pass.
-        let second = from.raw() == self.target.raw() || to.raw() == self.target.raw();
-        if self.depth_bits > 0 && !second {
-            self.copy(gl, from, to, None, !keep_stencil);
-        }
-        unsafe {
-            // The copies' own framebuffers draw to every colour again.
+        if blitted {
+            // A blit set the target's draw buffers to one colour: all again.
             let all: Vec<u32> = (0..self.colors as u32)
                 .map(|k| glow::COLOR_ATTACHMENT0 + k)
                 .collect();
-            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(to.raw()));
-            gl.draw_buffers(&all);
+            unsafe {
+                gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(b.raw()));
+                gl.draw_buffers(&all);
+            }
         }
     }
 

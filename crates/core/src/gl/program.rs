@@ -155,6 +155,20 @@ impl Program {
         Ok(program)
     }
 
+    /// Set uniforms that never change (sampler units, constants) once, at
+    /// set-up: `set` runs with the program bound, then whatever program was
+    /// current before (the host's) is current again.
+    pub fn set_at_setup(&self, gl: &glow::Context, set: impl FnOnce(&Program)) {
+        let previous = unsafe { gl.get_parameter_i32(glow::CURRENT_PROGRAM) };
+        self.bind(gl);
+        set(self);
+        let previous = u32::try_from(previous)
+            .ok()
+            .and_then(std::num::NonZeroU32::new)
+            .map(glow::NativeProgram);
+        unsafe { gl.use_program(previous) };
+    }
+
     /// Make it the current program.
     pub fn bind(&self, gl: &glow::Context) {
         unsafe { gl.use_program(Some(self.raw)) };

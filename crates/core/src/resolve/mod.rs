@@ -837,20 +837,12 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
     )?;
     // The samplers' units and +inf never change: set once here, not per
     // frame (a program keeps its uniforms).
-    unsafe {
-        let previous = gl.get_parameter_i32(glow::CURRENT_PROGRAM);
-        program.bind(gl);
-        program.set_i32(gl, "u_depth", 0);
+    program.set_at_setup(gl, |p| {
+        p.set_i32(gl, "u_depth", 0);
         for k in 0..key.attachments.len() {
-            program.set_i32(gl, &format!("u_att{k}"), 1 + k as i32);
+            p.set_i32(gl, &format!("u_att{k}"), 1 + k as i32);
         }
-        program.set_f32(gl, "u_infinity", f32::INFINITY);
-        gl.use_program(
-            u32::try_from(previous)
-                .ok()
-                .and_then(std::num::NonZeroU32::new)
-                .map(glow::NativeProgram),
-        );
-    }
+        p.set_f32(gl, "u_infinity", f32::INFINITY);
+    });
     Ok(program)
 }
