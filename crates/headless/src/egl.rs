@@ -16,6 +16,7 @@ use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use khronos_egl as k;
 
+use crate::loader::{open, symbol};
 use crate::{Error, Result};
 
 type EglBoolean = u32;
@@ -106,24 +107,6 @@ pub(crate) fn library() -> Result<&'static EglLib> {
         })
 }
 
-/// One line, whatever the loader said.
-fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
-/// Copies a symbol out of `lib`.
-///
-/// # Safety
-/// `T` must be the symbol's true function pointer type.
-unsafe fn symbol<T: Copy>(lib: &libloading::Library, name: &str) -> std::result::Result<T, String> {
-    let mut bytes = name.as_bytes().to_vec();
-    bytes.push(0);
-    // SAFETY: forwarded to the caller.
-    unsafe { lib.get::<T>(&bytes) }
-        .map(|s| *s)
-        .map_err(|e| format!("{name} is missing ({})", one_line(&e.to_string())))
-}
-
 /// Looks up an extension entry point through `eglGetProcAddress`.
 ///
 /// # Safety
@@ -143,25 +126,7 @@ unsafe fn proc_address<T: Copy>(get: FnGetProcAddress, name: &CStr) -> Option<T>
 
 impl EglLib {
     fn load(names: &[&str]) -> std::result::Result<EglLib, String> {
-        let mut failures = Vec::new();
-        let mut lib = None;
-        for name in names {
-            // SAFETY: loading libEGL runs its initialisers, which are sound.
-            match unsafe { libloading::Library::new(name) } {
-                Ok(l) => {
-                    lib = Some(l);
-                    break;
-                }
-                Err(e) => failures.push(one_line(&e.to_string())),
-            }
-        }
-        let Some(lib) = lib else {
-            return Err(format!(
-                "cannot load {} ({}); {INSTALL_HINT}",
-                names.first().copied().unwrap_or("libEGL"),
-                failures.join("; ")
-            ));
-        };
+        let lib = open(names, INSTALL_HINT)?;
         Self::from_library(lib)
             .map_err(|missing| format!("libEGL lacks an entry point: {missing}; {INSTALL_HINT}"))
     }

@@ -28,6 +28,7 @@
 
 mod egl;
 mod error;
+mod loader;
 mod osmesa;
 
 pub use error::{Error, Result};

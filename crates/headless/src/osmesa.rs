@@ -8,6 +8,7 @@ use std::cell::UnsafeCell;
 use std::ffi::{CStr, c_char, c_int, c_void};
 use std::sync::{Mutex, OnceLock};
 
+use crate::loader::{open, symbol};
 use crate::{Error, Result};
 
 type OsMesaCtx = *mut c_void;
@@ -69,32 +70,9 @@ pub(crate) fn library() -> Result<&'static OsMesaLib> {
         })
 }
 
-fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
-/// Copies a symbol out of `lib`.
-///
-/// # Safety
-/// `T` must be the symbol's true function pointer type.
-unsafe fn symbol<T: Copy>(lib: &libloading::Library, name: &str) -> std::result::Result<T, String> {
-    let mut bytes = name.as_bytes().to_vec();
-    bytes.push(0);
-    // SAFETY: forwarded to the caller.
-    unsafe { lib.get::<T>(&bytes) }
-        .map(|s| *s)
-        .map_err(|e| format!("{name} is missing ({})", one_line(&e.to_string())))
-}
-
 impl OsMesaLib {
     fn load(name: &str) -> std::result::Result<OsMesaLib, String> {
-        // SAFETY: loading libOSMesa runs its initialisers, which are sound.
-        let lib = unsafe { libloading::Library::new(name) }.map_err(|e| {
-            format!(
-                "cannot load {name} ({}); {INSTALL_HINT}",
-                one_line(&e.to_string())
-            )
-        })?;
+        let lib = open(&[name], INSTALL_HINT)?;
         // SAFETY (every `symbol` call): the types are osmesa.h's prototypes
         // (GLenum = u32, GLsizei = int, GLboolean = u8).
         let loaded = unsafe {
