@@ -1,4 +1,4 @@
-//! The memory safety valve (issue 7, part 4): the G-buffer's bytes are
+//! The memory safety valve: the G-buffer's bytes are
 //! estimated before allocating; over the budget the sample count steps
 //! down to the highest offered count that fits (or to single-sample), with
 //! a warning, or the request is refused when the budget is strict.

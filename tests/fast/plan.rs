@@ -1,4 +1,4 @@
-//! The scene-adaptive plan (issue 7): what each built-in scene leaves out,
+//! The scene-adaptive plan: what each built-in scene leaves out,
 //! that leaving it out changes nothing in the final image, `render
 //! --explain`, and the per-pixel view of which pixels took the resolve's
 //! slow path (`--view complex`, `complex_fraction`).

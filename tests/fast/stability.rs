@@ -1,4 +1,4 @@
-//! The stiff and extreme catalogue (issue: numerical stability): every case
+//! The stiff and extreme catalogue (numerical stability): every case
 //! asserts finite outputs and the right classification of geometry and
 //! background, through a host G-buffer retrofitted by the public API.
 

@@ -142,7 +142,7 @@ fn default_normal_threshold() -> f64 {
 /// [`ResolveSettings::normal_threshold`]'s default: the cosine of about 18°.
 pub const DEFAULT_NORMAL_THRESHOLD: f64 = 0.95;
 
-/// Selective anti-aliasing (issue 7): outside the selection a pixel takes one
+/// Selective anti-aliasing: outside the selection a pixel takes one
 /// sample — sample 0 of every attachment and of depth, exactly as a uniform
 /// pixel on the fast path does. The criteria combine: a pixel is resolved
 /// only when it passes every one that is set.
