@@ -309,10 +309,6 @@ impl Technique for Complex {
 pub(crate) struct Kind;
 
 impl super::Kind for Kind {
-    fn name(&self) -> &'static str {
-        "complex"
-    }
-
     fn methods(&self) -> &'static [&'static str] {
         &["complex"]
     }

@@ -179,10 +179,6 @@ impl Technique for Gbaa {
 pub(crate) struct Kind;
 
 impl super::Kind for Kind {
-    fn name(&self) -> &'static str {
-        "gbaa"
-    }
-
     fn methods(&self) -> &'static [&'static str] {
         &["gbaa"]
     }

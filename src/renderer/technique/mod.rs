@@ -69,12 +69,14 @@ pub(crate) static KINDS: [&dyn Kind; 6] = [
 /// and how they parse, and the facts the options, the plan, the bench and
 /// the command line ask of it. The defaults are `none`'s.
 pub(crate) trait Kind: Sync {
-    /// The technique's name: the method's, or `resolve` for the four
-    /// resolve methods. Methods of one technique can share a renderer.
-    fn name(&self) -> &'static str;
-
     /// The method names it renders, as `--method` and bench entries spell them.
     fn methods(&self) -> &'static [&'static str];
+
+    /// The technique's name: its one method's (`resolve` for the four
+    /// resolve methods). Methods of one technique can share a renderer.
+    fn name(&self) -> &'static str {
+        self.methods()[0]
+    }
 
     /// Whether it renders `aa`.
     fn renders(&self, aa: &AaMode) -> bool;

@@ -22,10 +22,6 @@ impl Technique for NoAntialiasing {
 pub(crate) struct Kind;
 
 impl super::Kind for Kind {
-    fn name(&self) -> &'static str {
-        "none"
-    }
-
     fn methods(&self) -> &'static [&'static str] {
         &["none"]
     }

@@ -143,10 +143,6 @@ impl Technique for PerSample {
 pub(crate) struct Kind;
 
 impl super::Kind for Kind {
-    fn name(&self) -> &'static str {
-        "per-sample"
-    }
-
     fn methods(&self) -> &'static [&'static str] {
         &["per-sample"]
     }

@@ -148,10 +148,6 @@ impl Technique for Sparse {
 pub(crate) struct Kind;
 
 impl super::Kind for Kind {
-    fn name(&self) -> &'static str {
-        "sparse"
-    }
-
     fn methods(&self) -> &'static [&'static str] {
         &["sparse"]
     }
