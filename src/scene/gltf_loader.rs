@@ -423,31 +423,35 @@ fn percent_decode(s: &str) -> Vec<u8> {
     out
 }
 
-/// Standard or URL-safe base64, padding optional, whitespace ignored.
-// Not the crate's importer: it takes strict base64 only (no whitespace, URL-safe letters or stray trailing bits) and no plain data URIs.
+/// Standard or URL-safe base64, padding optional, whitespace ignored, and
+/// nothing after the first `=` (lenient, as glTF writers in the wild are);
+/// the gltf crate's importer takes strict base64 only.
 fn decode_base64(s: &str) -> Result<Vec<u8>, String> {
-    let mut out = Vec::with_capacity(s.len() / 4 * 3);
-    let (mut acc, mut bits) = (0u32, 0u32);
-    for (pos, c) in s.bytes().enumerate() {
-        let v = match c {
-            b'A'..=b'Z' => c - b'A',
-            b'a'..=b'z' => c - b'a' + 26,
-            b'0'..=b'9' => c - b'0' + 52,
-            b'+' | b'-' => 62,
-            b'/' | b'_' => 63,
-            b'=' => break,
-            c if c.is_ascii_whitespace() => continue,
-            _ => return Err(format!("invalid base64 data at character {pos}")),
-        };
-        acc = (acc << 6) | u32::from(v);
-        bits += 6;
-        if bits >= 8 {
-            bits -= 8;
-            out.push((acc >> bits) as u8);
-            acc &= (1 << bits) - 1;
-        }
-    }
-    Ok(out)
+    use base64::Engine as _;
+    use base64::engine::{DecodePaddingMode, GeneralPurpose, GeneralPurposeConfig};
+    const LENIENT: GeneralPurpose = GeneralPurpose::new(
+        &base64::alphabet::STANDARD,
+        GeneralPurposeConfig::new()
+            .with_decode_padding_mode(DecodePaddingMode::RequireNone)
+            .with_decode_allow_trailing_bits(true),
+    );
+    let payload = s.split('=').next().unwrap_or("");
+    let standard: String = payload
+        .chars()
+        .filter(|c| !c.is_ascii_whitespace())
+        .map(|c| match c {
+            '-' => '+',
+            '_' => '/',
+            c => c,
+        })
+        .collect();
+    LENIENT.decode(standard.as_bytes()).map_err(|e| match e {
+        base64::DecodeError::InvalidByte(at, byte) => format!(
+            "invalid base64 data: {:?} at character {at} of the payload",
+            char::from(byte)
+        ),
+        other => format!("invalid base64 data: {other}"),
+    })
 }
 
 // Not gltf::import_buffers: it zero-pads buffers to four bytes (a view overrunning by up to 3 then reads zeros) and gives the BIN chunk to one buffer only.

@@ -69,20 +69,8 @@ fn glb(chunks: &[(&[u8; 4], &[u8])]) -> Vec<u8> {
 }
 
 fn standard_base64(bytes: &[u8]) -> String {
-    const LETTERS: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for group in bytes.chunks(3) {
-        let mut word = [0u8; 3];
-        word[..group.len()].copy_from_slice(group);
-        let bits = u32::from_be_bytes([0, word[0], word[1], word[2]]);
-        for k in 0..=group.len() {
-            out.push(char::from(LETTERS[(bits >> (18 - 6 * k) & 63) as usize]));
-        }
-        for _ in group.len()..3 {
-            out.push('=');
-        }
-    }
-    out
+    use base64::Engine as _;
+    base64::engine::general_purpose::STANDARD.encode(bytes)
 }
 
 fn from_json(doc: &Value) -> deferred_msaa_lab::Result<Scene> {
