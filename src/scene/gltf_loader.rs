@@ -402,25 +402,9 @@ fn display_uri(uri: &str) -> String {
     }
 }
 
+/// `%XX` escapes decoded; a `%` without two hex digits stays as it is.
 fn percent_decode(s: &str) -> Vec<u8> {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        let hex = |k: usize| b.get(k).and_then(|&c| (c as char).to_digit(16));
-        match (b.get(i), hex(i + 1), hex(i + 2)) {
-            (Some(b'%'), Some(h), Some(l)) => {
-                out.push((h * 16 + l) as u8);
-                i += 3;
-            }
-            (Some(&c), _, _) => {
-                out.push(c);
-                i += 1;
-            }
-            (None, _, _) => break,
-        }
-    }
-    out
+    percent_encoding::percent_decode_str(s).collect()
 }
 
 /// Standard or URL-safe base64, padding optional, whitespace ignored, and
