@@ -9,9 +9,9 @@
 //! the floor.
 
 use super::GBufferSlots;
+use super::geometry::model_wrapped;
 use super::geometry::{GEOMETRY_VERT, GeometryTarget, ModelDraw, draw_models};
 use super::mesh::{AttribLocations, GpuScene};
-use super::pass::model_wrapped;
 use crate::Result;
 use crate::gl::{GlObject, Handle, Program, ShaderSource, ShaderStage, check_error};
 use glam::{DMat4, Mat4};

@@ -231,3 +231,14 @@ pub(crate) fn draw_models(
     }
     unsafe { gl.bind_vertex_array(None) };
 }
+
+/// The model shader `geometry.frag` with its `main()` renamed `model_main`
+/// (every wrapper that records more per fragment calls it), then `wrapper`
+/// parts, after `header`'s version, extensions and defines. Each part keeps
+/// its own line numbers ([`ShaderSource`]).
+pub(crate) fn model_wrapped(header: ShaderSource, wrapper: &[(&str, &str)]) -> ShaderSource {
+    let model = header.part_renaming_main("geometry.frag", GEOMETRY_FRAG, "model_main");
+    wrapper
+        .iter()
+        .fold(model, |source, (name, text)| source.part(name, text))
+}

@@ -8,7 +8,7 @@
 
 use super::GBufferSlots;
 use super::geometry::GeometryPass;
-use super::pass::model_wrapped;
+use super::geometry::model_wrapped;
 use crate::gl::Capabilities;
 use glow::HasContext;
 

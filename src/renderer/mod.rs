@@ -69,6 +69,7 @@ mod background;
 mod background_copy;
 mod complex_mask;
 mod depth;
+pub mod frame_pass;
 mod fxaa;
 pub(crate) mod gbaa;
 mod gbaa_geometry;

@@ -1,7 +1,6 @@
 //! What the full-screen passes share: program building, the full-screen
 //! state, and binding a target.
 
-use super::geometry::GEOMETRY_FRAG;
 use crate::Result;
 use crate::gl::{FullscreenPass, Program, ShaderSource, VertexArray, draw_fullscreen_triangle};
 use glow::HasContext;
@@ -20,17 +19,6 @@ pub(crate) fn fullscreen_program(
         .defines(defines)
         .part(frag_name, frag_body);
     Ok(FullscreenPass::new(gl, label, &fragment, &[(output, 0)])?.into_program())
-}
-
-/// The model shader `geometry.frag` with its `main()` renamed `model_main`
-/// (every wrapper that records more per fragment calls it), then `wrapper`
-/// parts, after `header`'s version, extensions and defines. Each part keeps
-/// its own line numbers ([`ShaderSource`]).
-pub(crate) fn model_wrapped(header: ShaderSource, wrapper: &[(&str, &str)]) -> ShaderSource {
-    let model = header.part_renaming_main("geometry.frag", GEOMETRY_FRAG, "model_main");
-    wrapper
-        .iter()
-        .fold(model, |source, (name, text)| source.part(name, text))
 }
 
 /// Bind `fbo` to `GL_FRAMEBUFFER` with a `width`×`height` viewport.

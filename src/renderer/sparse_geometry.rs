@@ -16,10 +16,11 @@ use crate::gl::{
     VertexArray, check_error,
 };
 use crate::renderer::geometry::GEOMETRY_VERT;
+use crate::renderer::geometry::model_wrapped;
 use crate::renderer::mesh::{
     AttribLocations, BASE_TEXTURE_UNIT, EMISSIVE_TEXTURE_UNIT, GpuScene, set_culling,
 };
-use crate::renderer::pass::{begin_fullscreen, bind_target, draw_fullscreen, model_wrapped};
+use crate::renderer::pass::{begin_fullscreen, bind_target, draw_fullscreen};
 use crate::resolve::{COMPLEX_GLSL, COMPLEX_GLSL_NAME, Region};
 use glam::{DMat4, Mat4};
 use glow::HasContext;

@@ -13,10 +13,10 @@ use super::{
 use crate::frame::Frame as ResolveFrame;
 use crate::gl::{GpuTimer, TextureRef};
 use crate::renderer::complex_mask::{self, ComplexMaskPass, MaskTarget};
+use crate::renderer::frame_pass::Pass;
 use crate::renderer::geometry_coverage::CoverageGeometryPass;
 use crate::renderer::lighting_per_sample::PerSampleLightingPass;
 use crate::renderer::pass::{LightTarget, StencilSelect};
-use crate::renderer::plan::Pass;
 use crate::renderer::targets::ComplexTargets;
 use crate::renderer::{AaMode, GBufferSlots};
 use crate::retrofit::MsaaRetrofit;

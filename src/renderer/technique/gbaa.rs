@@ -7,8 +7,8 @@
 use super::{FrameParts, GBufferTarget, GeometryStep, Setup, Technique, TechniqueState};
 use crate::Result;
 use crate::gl::{GpuTimer, TextureRef, VertexArray};
+use crate::renderer::frame_pass::Pass;
 use crate::renderer::gbaa::{GbaaPasses, GbaaTargets, edge_bytes};
-use crate::renderer::plan::Pass;
 use crate::renderer::targets::{ColorTarget, Targets};
 use crate::renderer::{AaMode, RenderOptions, timed};
 use std::any::Any;

@@ -35,11 +35,11 @@ mod resolve;
 mod sparse;
 
 use super::background_copy::{BackgroundCopyPass, CopyTarget};
+use super::frame_pass::Pass;
 use super::geometry::{GeometryPass, GeometryTarget};
 use super::lighting::{LightBatch, LightingPass, StandIns};
 use super::mesh::GpuScene;
 use super::pass::{LightTarget, StencilSelect};
-use super::plan::Pass;
 use super::targets::{ColorTarget, Targets};
 use super::{AaMode, GBufferSlots, RenderOptions, timed};
 use crate::Result;

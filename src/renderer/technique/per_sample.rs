@@ -6,9 +6,9 @@
 use super::{ComplexPixelsInput, FrameParts, LightingStep, Setup, Technique, resolve_twins};
 use crate::frame::Frame as ResolveFrame;
 use crate::gl::GpuTimer;
+use crate::renderer::frame_pass::Pass;
 use crate::renderer::lighting_per_sample::{PerSampleLightingPass, SampleInputs};
 use crate::renderer::pass::{LightTarget, StencilSelect};
-use crate::renderer::plan::Pass;
 use crate::renderer::{AaMode, GBufferSlots};
 use crate::retrofit::MsaaRetrofit;
 use crate::{Error, Result};

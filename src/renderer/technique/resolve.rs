@@ -13,8 +13,8 @@ use crate::frame::Frame as ResolveFrame;
 use crate::gl::{
     Attachment, Format, Framebuffer, GlObject, GpuTimer, Handle, Made, Texture2d, TextureRef,
 };
+use crate::renderer::frame_pass::Pass;
 use crate::renderer::pass::{LightTarget, StencilSelect};
-use crate::renderer::plan::Pass;
 use crate::renderer::second_layer_mask::SecondLayerMaskPass;
 use crate::renderer::{AaMode, RenderOptions, slow_path, timed};
 use crate::resolve::{ResolveMethod, ResolveSettings, Window};

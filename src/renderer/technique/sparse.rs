@@ -5,8 +5,8 @@
 //! [`SparseOptions`](crate::renderer::SparseOptions)).
 
 use super::{FrameParts, GeometryStep, LightingStep, Setup, Technique, TechniqueState};
+use crate::renderer::frame_pass::Pass;
 use crate::renderer::pass::{LightTarget, StencilSelect};
-use crate::renderer::plan::Pass;
 use crate::renderer::sparse::{BuildParams, LightParams, SparseState};
 use crate::renderer::{AaMode, RenderOptions, SparseMemory, SparseOptions, SparseStats};
 use crate::{Error, Result};
