@@ -99,6 +99,7 @@ pub mod error;
 pub mod frame;
 pub mod gbuffer;
 pub mod gl;
+pub mod host;
 pub mod readback;
 pub mod resolve;
 pub mod retrofit;

@@ -15,7 +15,7 @@ use crate::gl::{
     Attachment, Format, Framebuffer, FullscreenPass, GlObject, Handle, HostImage, Made,
     ShaderSource, Texture2d, TextureRef, VertexArray, check_error, destroy_object,
 };
-use crate::retrofit::{HostAttachment, HostFramebuffer, HostImageKind, introspect_point};
+use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect_point};
 use crate::{Error, Result};
 use glow::HasContext;
 
