@@ -10,6 +10,7 @@ use std::rc::Rc;
 
 use deferred_msaa::Error as CoreError;
 use deferred_msaa_lab::Error;
+use deferred_msaa_lab::context::HeadlessContext;
 use deferred_msaa_lab::gbuffer::{GBuffer, GBufferLayout};
 use deferred_msaa_lab::gl::TextureRef;
 use deferred_msaa_lab::gl::{Capabilities, ExtraFns, live_objects};
@@ -100,6 +101,11 @@ fn save(img: &image::RgbaImage, name: &str) {
     }
 }
 
+/// A renderer of `scene` with `options` on `ctx`.
+fn renderer(ctx: &HeadlessContext, scene: &Scene, options: &RenderOptions) -> Renderer {
+    Renderer::new(ctx.gl(), |n| ctx.get_proc_address(n), scene, options).expect("renderer")
+}
+
 /// Render one frame; check the final image is not blank and every HDR value
 /// is finite; return the image.
 fn render_checked(gl: &glow::Context, renderer: &mut Renderer, what: &str) -> image::RgbaImage {
@@ -155,9 +161,7 @@ fn every_builtin_scene_renders_and_msaa_smooths_edges() {
     };
     for name in Scene::builtin_names() {
         let scene = Scene::load(&format!("builtin:{name}")).expect("builtin scene");
-        let mut renderer =
-            Renderer::new(gl, |n| ctx.get_proc_address(n), &scene, &with(AaMode::None))
-                .expect("renderer");
+        let mut renderer = renderer(&ctx, &scene, &with(AaMode::None));
         assert!(renderer.retrofit().is_none());
         let none = render_checked(gl, &mut renderer, &format!("{name} none"));
         renderer
@@ -190,15 +194,8 @@ fn lighting_and_model_shaders_do_not_change_with_msaa() {
     };
     let gl = ctx.gl();
     let scene = Scene::load("builtin:box").expect("scene");
-    let plain = Renderer::new(
-        gl,
-        |n| ctx.get_proc_address(n),
-        &scene,
-        &options(AaMode::None),
-    )
-    .expect("renderer without MSAA");
-    let msaa = Renderer::new(gl, |n| ctx.get_proc_address(n), &scene, &options(median()))
-        .expect("renderer with MSAA");
+    let plain = renderer(&ctx, &scene, &options(AaMode::None));
+    let msaa = renderer(&ctx, &scene, &options(median()));
     assert!(plain.retrofit().is_none() && msaa.retrofit().is_some());
     let source = plain.lighting_program_source();
     assert!(source.starts_with("#version 150 core\n"), "{source}");
@@ -212,8 +209,7 @@ fn lighting_and_model_shaders_do_not_change_with_msaa() {
     // per-pixel source stays the same, and the lighting math (lights, BRDF,
     // the shading of one G-buffer sample) is lighting.frag's, verbatim.
     for aa in [AaMode::PerSample, AaMode::Complex] {
-        let r = Renderer::new(gl, |n| ctx.get_proc_address(n), &scene, &options(aa))
-            .expect("per-sample renderer");
+        let r = renderer(&ctx, &scene, &options(aa));
         assert_eq!(r.lighting_program_source(), source, "{aa:?}");
         assert_eq!(r.geometry_program_source(), plain.geometry_program_source());
         let per_sample = r.per_sample_lighting_program_source();
@@ -272,8 +268,7 @@ fn decal_hook_sees_and_writes_the_resolved_gbuffer() {
     let scene = Scene::load("builtin:box").expect("scene");
     let layout = GBufferLayout::recommended();
     let color = layout.index_of("color").expect("color attachment") as u32;
-    let mut renderer = Renderer::new(gl, |n| ctx.get_proc_address(n), &scene, &options(median()))
-        .expect("renderer");
+    let mut renderer = renderer(&ctx, &scene, &options(median()));
     let before = {
         renderer.render(gl).expect("frame without decal");
         renderer.read_final(gl).expect("final image")
@@ -541,13 +536,7 @@ fn fxaa_softens_edges_and_timings_are_reported() {
     };
     let gl = ctx.gl();
     let scene = Scene::load("builtin:box").expect("scene");
-    let mut renderer = Renderer::new(
-        gl,
-        |n| ctx.get_proc_address(n),
-        &scene,
-        &options(AaMode::None),
-    )
-    .expect("renderer");
+    let mut renderer = renderer(&ctx, &scene, &options(AaMode::None));
     let plain = render_checked(gl, &mut renderer, "box none");
     renderer
         .set_options(
@@ -611,8 +600,7 @@ fn far_scene_keeps_its_model_with_reversed_z_and_warns_with_the_freespace_layout
     let scene = Scene::load("builtin:far").expect("scene");
 
     // The recommended layout, Auto: reversed-Z where the context allows it.
-    let mut renderer = Renderer::new(gl, |n| ctx.get_proc_address(n), &scene, &options(median()))
-        .expect("renderer");
+    let mut renderer = renderer(&ctx, &scene, &options(median()));
     if clip_control {
         assert_eq!(renderer.depth_mode(), DepthMode::Reversed);
         assert_eq!(renderer.clear_depth(), 0.0);
@@ -708,13 +696,7 @@ fn every_builtin_scene_looks_the_same_with_reversed_and_standard_depth() {
     }
     for name in Scene::builtin_names() {
         let scene = Scene::load(&format!("builtin:{name}")).expect("builtin scene");
-        let mut renderer = Renderer::new(
-            gl,
-            |n| ctx.get_proc_address(n),
-            &scene,
-            &with_depth(DepthMode::Reversed, median()),
-        )
-        .expect("renderer");
+        let mut renderer = renderer(&ctx, &scene, &with_depth(DepthMode::Reversed, median()));
         assert_eq!(renderer.depth_mode(), DepthMode::Reversed);
         assert!(
             renderer.warnings().is_empty(),
@@ -810,13 +792,7 @@ fn the_renderer_leaves_the_hosts_depth_state_as_it_found_it() {
         )
     };
     let scene = Scene::load("builtin:box").expect("scene");
-    let mut renderer = Renderer::new(
-        gl,
-        |n| ctx.get_proc_address(n),
-        &scene,
-        &with_depth(DepthMode::Standard, median()),
-    )
-    .expect("renderer");
+    let mut renderer = renderer(&ctx, &scene, &with_depth(DepthMode::Standard, median()));
     let standard = render_checked(gl, &mut renderer, "box standard");
 
     // A host with its own depth state.
@@ -860,7 +836,7 @@ fn the_renderer_leaves_the_hosts_depth_state_as_it_found_it() {
 
 fn render_with(
     gl: &glow::Context,
-    ctx: &deferred_msaa_lab::context::HeadlessContext,
+    ctx: &HeadlessContext,
     scene: &Scene,
     opts: &RenderOptions,
     what: &str,
@@ -915,11 +891,7 @@ fn downsample(img: &image::RgbaImage, factor: u32) -> image::RgbaImage {
 
 /// The scene rendered without MSAA at 4W×4H, tonemapped per pixel and
 /// box-filtered 4×4 in linear light: the 16-sample supersampled reference.
-fn supersampled(
-    gl: &glow::Context,
-    ctx: &deferred_msaa_lab::context::HeadlessContext,
-    scene: &Scene,
-) -> image::RgbaImage {
+fn supersampled(gl: &glow::Context, ctx: &HeadlessContext, scene: &Scene) -> image::RgbaImage {
     let big = RenderOptions {
         width: 4 * W,
         height: 4 * H,
@@ -936,13 +908,7 @@ fn per_sample_and_complex_render_every_builtin_scene() {
     let gl = ctx.gl();
     for name in Scene::builtin_names() {
         let scene = Scene::load(&format!("builtin:{name}")).expect("builtin scene");
-        let mut renderer = Renderer::new(
-            gl,
-            |n| ctx.get_proc_address(n),
-            &scene,
-            &options(AaMode::PerSample),
-        )
-        .expect("per-sample renderer");
+        let mut renderer = renderer(&ctx, &scene, &options(AaMode::PerSample));
         let per_sample = render_checked(gl, &mut renderer, &format!("{name} per-sample"));
         let pixels = u64::from(W * H);
         assert_eq!(renderer.per_sample_pixels(), Some(pixels), "{name}");
@@ -1054,13 +1020,7 @@ fn complex_marks_a_minority_of_pixels_and_the_stencil_limits_per_sample_lighting
     };
     let gl = ctx.gl();
     let scene = Scene::load("builtin:greebles").expect("scene");
-    let mut renderer = Renderer::new(
-        gl,
-        |n| ctx.get_proc_address(n),
-        &scene,
-        &options(AaMode::PerSample),
-    )
-    .expect("renderer");
+    let mut renderer = renderer(&ctx, &scene, &options(AaMode::PerSample));
     render_checked(gl, &mut renderer, "greebles per-sample");
     let all = renderer.per_sample_pixels().expect("a count");
     assert_eq!(all, u64::from(W * H));
@@ -1125,13 +1085,7 @@ fn complex_without_sample_mask_in_child() {
         &options(AaMode::PerSample),
         "per-sample, GL 3.2",
     );
-    let mut renderer = Renderer::new(
-        gl,
-        |n| ctx.get_proc_address(n),
-        &scene,
-        &options(AaMode::Complex),
-    )
-    .expect("complex renderer without gl_SampleMaskIn");
+    let mut renderer = renderer(&ctx, &scene, &options(AaMode::Complex));
     let complex = render_checked(gl, &mut renderer, "complex, GL 3.2");
     let fraction = renderer
         .technique::<Complex>()

@@ -15,11 +15,11 @@ use crate::gl::{
     Attachment, ColorAttachment, Format, Framebuffer, GlObject, Handle, HostImage, Made,
     SavedState, SetupState, TextureRef, check_error, destroy_object,
 };
+pub use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect};
 use crate::resolve::{
     ExtraOutputs, KeySource, NormalEncoding, ResolveInputs, ResolveParams, ResolveRule,
     ResolveSettings, ResolveSlot, Resolver, StencilCopy, StencilPass,
 };
-pub use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect};
 use crate::second_layer::{LayerMix, SecondLayer};
 use crate::{Error, Result};
 
