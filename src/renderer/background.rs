@@ -1,4 +1,4 @@
-//! The background pass (`shaders_glsl/background.frag`): the scene's
+//! The background pass (`background.frag`): the scene's
 //! background drawn single-sampled into its own RGBA16F texture.
 
 use super::pass::{draw_fullscreen, fullscreen_program};
@@ -9,7 +9,7 @@ use crate::scene::Background;
 use glam::{DMat3, DMat4, Mat4};
 
 /// The background shader's body.
-pub(crate) const BACKGROUND_FRAG: &str = include_str!("../../shaders_glsl/background.frag");
+pub(crate) const BACKGROUND_FRAG: &str = include_str!("background.frag");
 
 /// The background program.
 #[derive(Debug)]

@@ -1,4 +1,4 @@
-//! The background copy pass (`shaders_glsl/background_copy.frag`): the
+//! The background copy pass (`background_copy.frag`): the
 //! single-sampled background written into every sample of the G-buffer's
 //! emissive attachment (multisampled or not), as FreeSpace Open does; a blit
 //! cannot write a multisampled target.
@@ -9,8 +9,7 @@ use crate::gl::{GlObject, Handle, Program, Texture2d, VertexArray, check_error};
 use glow::HasContext;
 
 /// The copy shader's body.
-pub(crate) const BACKGROUND_COPY_FRAG: &str =
-    include_str!("../../shaders_glsl/background_copy.frag");
+pub(crate) const BACKGROUND_COPY_FRAG: &str = include_str!("background_copy.frag");
 
 /// The copy program.
 #[derive(Debug)]

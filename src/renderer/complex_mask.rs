@@ -1,4 +1,4 @@
-//! The complex-pixel detection pass (`shaders_glsl/complex_mask.frag`) of
+//! The complex-pixel detection pass (`complex_mask.frag`) of
 //! [`AaMode::Complex`](super::AaMode::Complex): a full-screen pass over the
 //! multisampled G-buffer that writes 1 into the stencil buffer of the HDR
 //! target for every complex pixel (a triangle edge crosses it, per the
@@ -14,7 +14,7 @@ use crate::{Error, Result};
 use glow::HasContext;
 
 /// The detection shader's body.
-pub(crate) const COMPLEX_MASK_FRAG: &str = include_str!("../../shaders_glsl/complex_mask.frag");
+pub(crate) const COMPLEX_MASK_FRAG: &str = include_str!("complex_mask.frag");
 
 /// Samples of one pixel whose view depths differ by more than this many
 /// pixel footprints (distance × tan(fov_y / height)) are different surfaces.

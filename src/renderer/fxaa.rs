@@ -1,4 +1,4 @@
-//! The FXAA-style post filter (`shaders_glsl/fxaa.frag`): luma-based edge
+//! The FXAA-style post filter (`fxaa.frag`): luma-based edge
 //! smoothing of the tonemapped image into a second RGBA8 target.
 
 use super::pass::{draw_fullscreen, fullscreen_program};
@@ -8,7 +8,7 @@ use crate::gl::{GlObject, Handle, Program, Texture2d, VertexArray, check_error};
 use glow::HasContext;
 
 /// The filter's body.
-pub(crate) const FXAA_FRAG: &str = include_str!("../../shaders_glsl/fxaa.frag");
+pub(crate) const FXAA_FRAG: &str = include_str!("fxaa.frag");
 
 /// The filter program.
 #[derive(Debug)]

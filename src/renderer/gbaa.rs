@@ -7,7 +7,7 @@
 //! the distance to the triangle's boundary the opposite way along that axis
 //! (`R16F`, [`GbaaTargets::far`]). Lighting, transparent objects and the
 //! tonemap run as for `none`, the tonemap into an sRGB texture
-//! ([`GbaaTargets::tonemapped`]); then the post pass (`shaders_glsl/gbaa.frag`)
+//! ([`GbaaTargets::tonemapped`]); then the post pass (`gbaa.frag`)
 //! blends each pixel crossed by an edge with the neighbour beyond it, by
 //! the fraction of the pixel on that side, in one bilinear fetch (two for a
 //! triangle thinner than a pixel), into the renderer's LDR image, where
@@ -32,7 +32,7 @@ use crate::gl::{
 use glow::HasContext;
 
 /// The post pass's body.
-pub(crate) const GBAA_FRAG: &str = include_str!("../../shaders_glsl/gbaa.frag");
+pub(crate) const GBAA_FRAG: &str = include_str!("gbaa.frag");
 
 /// Format of the edge buffer: the signed distance to the nearest edge, in
 /// `.r` along x or in `.g` along y.

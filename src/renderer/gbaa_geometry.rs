@@ -1,6 +1,6 @@
 //! The G-buffer pass of [`AaMode::Gbaa`](super::AaMode::Gbaa):
 //! `geometry.vert` (its outputs renamed by `#define`s), a geometry stage
-//! (`shaders_glsl/gbaa_geometry.geom`) that hands every fragment its
+//! (`gbaa_geometry.geom`) that hands every fragment its
 //! triangle's three screen-space edge lines, and the unchanged model shader
 //! `geometry.frag` with its `main` renamed and called from a wrapper
 //! (`gbaa_geometry.frag`) that also writes the distance to the nearest edge
@@ -17,9 +17,9 @@ use crate::gl::{GlObject, Handle, Program, ShaderSource, ShaderStage, check_erro
 use glam::{DMat4, Mat4};
 
 /// The geometry stage's body.
-pub(crate) const GBAA_GEOMETRY_GEOM: &str = include_str!("../../shaders_glsl/gbaa_geometry.geom");
+pub(crate) const GBAA_GEOMETRY_GEOM: &str = include_str!("gbaa_geometry.geom");
 /// The fragment wrapper's body (compiled after `geometry.frag` with `main` renamed).
-pub(crate) const GBAA_GEOMETRY_FRAG: &str = include_str!("../../shaders_glsl/gbaa_geometry.frag");
+pub(crate) const GBAA_GEOMETRY_FRAG: &str = include_str!("gbaa_geometry.frag");
 
 /// The value of an edge channel that holds no edge: farther than any
 /// distance the pass writes ([`REACH`]), so the post pass never blends by it.

@@ -1,4 +1,4 @@
-//! The G-buffer pass (`shaders_glsl/geometry.vert` + `geometry.frag`):
+//! The G-buffer pass (`geometry.vert` + `geometry.frag`):
 //! opaque and alpha-tested objects into the G-buffer. Program and state are
 //! the same with and without MSAA; only the bound framebuffer differs (the
 //! retrofit's multisampled twin, or the single-sample G-buffer).
@@ -13,19 +13,19 @@ use crate::gl::{GlObject, Handle, Program, ShaderSource, ShaderStage, check_erro
 use glam::{DMat4, Mat4};
 use glow::HasContext;
 
-/// The model vertex shader's body (`shaders_glsl/geometry.vert`, shared
+/// The model vertex shader's body (`geometry.vert`, shared
 /// with the transparent pass): attributes `a_position`, `a_normal`, `a_uv`;
 /// uniforms `u_model_view`, `u_normal_matrix`, `u_projection`. Compiled
 /// after [`preamble`](crate::gl::preamble) with no extensions or defines.
-pub const GEOMETRY_VERT: &str = include_str!("../../shaders_glsl/geometry.vert");
-/// The model fragment shader's body (`shaders_glsl/geometry.frag`): outputs
+pub const GEOMETRY_VERT: &str = include_str!("geometry.vert");
+/// The model fragment shader's body (`geometry.frag`): outputs
 /// `o_color`, `o_position`, `o_normal`, `o_specular`, `o_emissive`, bound by
 /// name to the layout's attachment numbers; material uniforms as set by the
 /// renderer. Compiled after [`preamble`](crate::gl::preamble) with no
 /// extensions, with and without MSAA alike; a layout the scene-adaptive
 /// plan trimmed adds `GBUFFER_NO_SPECULAR` / `GBUFFER_NO_EMISSIVE`, which
 /// drop those outputs (the full layout: no defines).
-pub const GEOMETRY_FRAG: &str = include_str!("../../shaders_glsl/geometry.frag");
+pub const GEOMETRY_FRAG: &str = include_str!("geometry.frag");
 
 /// The model program, its outputs bound to the layout's attachment numbers.
 #[derive(Debug)]

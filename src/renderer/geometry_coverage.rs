@@ -1,5 +1,5 @@
 //! The G-buffer pass of [`AaMode::Complex`](super::AaMode::Complex)
-//! (`shaders_glsl/geometry_coverage.frag`): the unchanged model shader
+//! (`geometry_coverage.frag`): the unchanged model shader
 //! `geometry.frag`, its `main()` renamed by a `#define` and called from a
 //! wrapper that also writes each fragment's coverage flag
 //! (`gl_SampleMaskIn` ≠ all samples) into an extra multisampled R8
@@ -13,8 +13,7 @@ use crate::gl::Capabilities;
 use glow::HasContext;
 
 /// The wrapper's body (compiled after `geometry.frag` with `main` renamed).
-pub(crate) const GEOMETRY_COVERAGE_FRAG: &str =
-    include_str!("../../shaders_glsl/geometry_coverage.frag");
+pub(crate) const GEOMETRY_COVERAGE_FRAG: &str = include_str!("geometry_coverage.frag");
 
 /// The extensions, in order of preference, that can give a GLSL 1.50
 /// shader `gl_SampleMaskIn`.

@@ -1,4 +1,4 @@
-//! The deferred lighting pass (`shaders_glsl/lighting.frag`): per-pixel
+//! The deferred lighting pass (`lighting.frag`): per-pixel
 //! lighting from the resolved single-sample G-buffer into the HDR target.
 //! Its source and defines do not depend on MSAA.
 
@@ -11,7 +11,7 @@ use crate::scene::{Light, LightKind};
 use glam::DMat4;
 use glow::HasContext;
 
-/// The deferred lighting fragment shader's body (`shaders_glsl/lighting.frag`;
+/// The deferred lighting fragment shader's body (`lighting.frag`;
 /// its first part is shared with the transparent pass). Compiled after
 /// [`preamble`](crate::gl::preamble) with [`lighting_defines`]; it reads the
 /// resolved G-buffer through `u_color`, `u_position`, `u_normal`,
@@ -21,7 +21,7 @@ use glow::HasContext;
 /// trimmed adds `GBUFFER_NO_SPECULAR` (`u_specular_constant` instead of
 /// `u_specular`) and `GBUFFER_NO_EMISSIVE` (`u_background`, the
 /// background's own texture, instead of `u_emissive`).
-pub const LIGHTING_FRAG: &str = include_str!("../../shaders_glsl/lighting.frag");
+pub const LIGHTING_FRAG: &str = include_str!("lighting.frag");
 
 /// Lights per batch (one draw each); sized to fit GL 3.2's minimum of 1024
 /// fragment uniform components with room to spare.

@@ -1,4 +1,4 @@
-//! The per-sample lighting pass (`shaders_glsl/lighting_per_sample.frag`) of
+//! The per-sample lighting pass (`lighting_per_sample.frag`) of
 //! methods [`AaMode::PerSample`](super::AaMode::PerSample) and
 //! [`AaMode::Complex`](super::AaMode::Complex): every sample of the
 //! multisampled G-buffer (the retrofit's twins) is lit with `texelFetch` and
@@ -21,8 +21,7 @@ use glow::HasContext;
 
 /// The per-sample lighting shader's body (compiled after `lighting.frag`
 /// with `LIGHTING_FUNCTIONS_ONLY`).
-pub(crate) const LIGHTING_PER_SAMPLE_FRAG: &str =
-    include_str!("../../shaders_glsl/lighting_per_sample.frag");
+pub(crate) const LIGHTING_PER_SAMPLE_FRAG: &str = include_str!("lighting_per_sample.frag");
 
 /// The multisampled G-buffer the per-sample passes read: the retrofit's
 /// twins of the renderer's attachments.

@@ -1,4 +1,4 @@
-//! The second layer's stencil mask (`shaders_glsl/second_layer_mask.frag`):
+//! The second layer's stencil mask (`second_layer_mask.frag`):
 //! the renderer, as a host of the retrofit, lights its second layer only
 //! where the layer's coverage is above 0, by a stencil test on the HDR
 //! target.
@@ -11,7 +11,7 @@ use crate::gl::{GlObject, Handle, Program, TextureRef, VertexArray, check_error}
 use glow::HasContext;
 
 /// The mask pass's fragment shader.
-pub const SECOND_LAYER_MASK_FRAG: &str = include_str!("../../shaders_glsl/second_layer_mask.frag");
+pub const SECOND_LAYER_MASK_FRAG: &str = include_str!("second_layer_mask.frag");
 
 /// The stencil value of pixels the second layer covers.
 pub(crate) const COVERED: u8 = 1;

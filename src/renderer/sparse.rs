@@ -2,7 +2,7 @@
 //! its redundancy, as per-pixel linked lists of G-buffer blocks in shader
 //! storage buffers. The design, the frame, selective anti-aliasing and the
 //! requirements are documented on [`SparseOptions`] (public); the layout of
-//! heads and blocks in `shaders_glsl/sparse.frag`.
+//! heads and blocks in `sparse.frag`.
 
 #[path = "sparse_geometry.rs"]
 mod sparse_geometry;
@@ -28,8 +28,8 @@ use std::cell::Cell;
 use std::collections::HashSet;
 
 /// The layout of heads and blocks and the region test, compiled in front
-/// of every sparse pass (`shaders_glsl/sparse.frag`).
-pub(crate) const SPARSE_FRAG: &str = include_str!("../../shaders_glsl/sparse.frag");
+/// of every sparse pass (`sparse.frag`).
+pub(crate) const SPARSE_FRAG: &str = include_str!("sparse.frag");
 
 /// The extensions every sparse pass is compiled with, in this order.
 pub(crate) const EXTENSIONS: &[&str] = &[

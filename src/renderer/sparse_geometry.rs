@@ -26,12 +26,11 @@ use glam::{DMat4, Mat4};
 use glow::HasContext;
 
 /// The pre-pass's fragment shader (the alpha test only).
-pub(crate) const SPARSE_DEPTH_FRAG: &str = include_str!("../../shaders_glsl/sparse_depth.frag");
+pub(crate) const SPARSE_DEPTH_FRAG: &str = include_str!("sparse_depth.frag");
 /// The set-up pass's body (after `sparse.frag`).
-pub(crate) const SPARSE_SETUP_FRAG: &str = include_str!("../../shaders_glsl/sparse_setup.frag");
+pub(crate) const SPARSE_SETUP_FRAG: &str = include_str!("sparse_setup.frag");
 /// The G-buffer pass's wrapper (after `geometry.frag` and `sparse.frag`).
-pub(crate) const SPARSE_GEOMETRY_FRAG: &str =
-    include_str!("../../shaders_glsl/sparse_geometry.frag");
+pub(crate) const SPARSE_GEOMETRY_FRAG: &str = include_str!("sparse_geometry.frag");
 
 /// A model program and where it reads its attributes.
 #[derive(Debug)]

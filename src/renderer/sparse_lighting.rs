@@ -1,5 +1,5 @@
 //! The lighting pass of [`AaMode::Sparse`](super::super::AaMode::Sparse)
-//! (`shaders_glsl/sparse_lighting.frag`): each block of each pixel's list
+//! (`sparse_lighting.frag`): each block of each pixel's list
 //! lit once with `lighting.frag`'s shading and every light (in the same
 //! std140 light block as the per-sample pass), weighted by its sample
 //! count and averaged after the tonemap curve as per-sample lighting does.
@@ -17,8 +17,7 @@ use glam::Mat4;
 use glow::HasContext;
 
 /// The lighting pass's body (after `lighting.frag`, `tonemap.frag` and `sparse.frag`).
-pub(crate) const SPARSE_LIGHTING_FRAG: &str =
-    include_str!("../../shaders_glsl/sparse_lighting.frag");
+pub(crate) const SPARSE_LIGHTING_FRAG: &str = include_str!("sparse_lighting.frag");
 
 /// The most samples per pixel the lighting pass sums (a `uint` mask of
 /// sample indices; 32 samples of 24-bit fixed point fit a `uint`).

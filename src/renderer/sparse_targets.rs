@@ -2,7 +2,7 @@
 //! multisampled depth-stencil of the pre-pass and its framebuffer, the
 //! per-pixel heads, the first-block area, the block pool and the two atomic
 //! counters (next pool block, overflowed pixels). The layout of heads and
-//! blocks is in `shaders_glsl/sparse.frag`.
+//! blocks is in `sparse.frag`.
 
 use super::SparseMemory;
 use crate::gl::{

@@ -1,4 +1,4 @@
-//! The tonemap pass (`shaders_glsl/tonemap.frag`): linear HDR to sRGB-encoded
+//! The tonemap pass (`tonemap.frag`): linear HDR to sRGB-encoded
 //! RGBA8.
 
 use super::pass::{draw_fullscreen, fullscreen_program};
@@ -10,7 +10,7 @@ use glow::HasContext;
 /// The tonemap shader's body; its first part (the curve, its inverse, the
 /// sRGB encoding) also goes into the per-sample lighting shader, compiled
 /// with `TONEMAP_FUNCTIONS_ONLY`.
-pub(crate) const TONEMAP_FRAG: &str = include_str!("../../shaders_glsl/tonemap.frag");
+pub(crate) const TONEMAP_FRAG: &str = include_str!("tonemap.frag");
 
 /// Exposure applied before the curve.
 pub(crate) const EXPOSURE: f32 = 1.0;

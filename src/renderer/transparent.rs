@@ -1,4 +1,4 @@
-//! The forward transparent pass (`shaders_glsl/transparent.frag`, with the
+//! The forward transparent pass (`transparent.frag`, with the
 //! model vertex shader `geometry.vert`): alpha-blended objects drawn
 //! single-sampled into the HDR target after lighting, sorted back to front,
 //! depth-tested against the resolved depth without writing it. The lights
@@ -16,7 +16,7 @@ use glam::{DMat4, Mat4};
 use glow::HasContext;
 
 /// The transparent shader's body.
-pub(crate) const TRANSPARENT_FRAG: &str = include_str!("../../shaders_glsl/transparent.frag");
+pub(crate) const TRANSPARENT_FRAG: &str = include_str!("transparent.frag");
 
 /// The transparent program.
 #[derive(Debug)]

@@ -11,7 +11,7 @@ use crate::gl::{
 use glow::HasContext;
 use std::collections::HashMap;
 
-const READBACK_FRAG: &str = include_str!("../shaders/readback.frag");
+const READBACK_FRAG: &str = include_str!("readback.frag");
 
 /// Float values of a texture, `[samples][height][width][4]`, row 0 = the TOP row.
 #[derive(Clone, Debug, PartialEq)]

@@ -2,7 +2,7 @@
 //! = 2): the crate's own single-sample G-buffer that the second cluster of
 //! each pixel is resolved into, its coverage, and the passes around the
 //! host's second lighting — copies of the host's G-buffer in and out, and
-//! the mix of the two lit layers (`shaders/second_layer.frag`).
+//! the mix of the two lit layers (`second_layer.frag`).
 //!
 //! The host's lighting runs twice, unchanged:
 //! [`MsaaRetrofit::begin_second_layer`](crate::MsaaRetrofit::begin_second_layer)
@@ -19,16 +19,16 @@ use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect_poi
 use crate::{Error, Result};
 use glow::HasContext;
 
-/// The mix pass's fragment shader: `shaders/second_layer.frag`.
-pub const SECOND_LAYER_FRAG: &str = include_str!("../shaders/second_layer.frag");
+/// The mix pass's fragment shader: `second_layer.frag`.
+pub const SECOND_LAYER_FRAG: &str = include_str!("second_layer.frag");
 
 /// The pass marking the pixels the second layer's resolve runs on:
-/// `shaders/second_layer_select.frag`.
-pub const SECOND_LAYER_SELECT_FRAG: &str = include_str!("../shaders/second_layer_select.frag");
+/// `second_layer_select.frag`.
+pub const SECOND_LAYER_SELECT_FRAG: &str = include_str!("second_layer_select.frag");
 
 /// The pass writing the second layer's depth into the host's:
-/// `shaders/second_layer_depth.frag`.
-pub const SECOND_LAYER_DEPTH_FRAG: &str = include_str!("../shaders/second_layer_depth.frag");
+/// `second_layer_depth.frag`.
+pub const SECOND_LAYER_DEPTH_FRAG: &str = include_str!("second_layer_depth.frag");
 
 /// The stencil value of the pixels the second layer's resolve runs on.
 const SELECTED: u8 = 1;

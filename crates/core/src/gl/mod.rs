@@ -47,7 +47,7 @@ use crate::{Error, Result};
 
 /// The full-screen triangle's vertex shader body (no vertex attributes:
 /// `gl_VertexID` places the three corners).
-pub const FULLSCREEN_VERT: &str = include_str!("../../shaders/fullscreen.vert");
+pub const FULLSCREEN_VERT: &str = include_str!("fullscreen.vert");
 use glow::HasContext;
 
 /// The name of a `glGetError` code.

@@ -1,6 +1,6 @@
 //! The resolve's CPU reference, in `f64`: the same math as
-//! `shaders/resolve.frag`, sample for sample (and the uniform-pixel and
-//! selection tests of `shaders/complex.glsl`, which every shader shares).
+//! `resolve.frag`, sample for sample (and the uniform-pixel and
+//! selection tests of `complex.glsl`, which every shader shares).
 //! Tests compare the GLSL against it; change both together.
 
 use super::{DepthProjection, NormalEncoding, ResolveMethod, ResolveRule, ResolveSettings, Window};

@@ -1,7 +1,7 @@
 //! The depth-aware resolve: a full-screen pass that reads every sample of a
 //! multisampled G-buffer and writes a single-sample one (DESIGN.md section 3).
 //!
-//! The math lives in two places only: `shaders/resolve.frag` and its CPU
+//! The math lives in two places only: `resolve.frag` and its CPU
 //! reference, [`cpu`]. This module builds the shader permutations (the sample
 //! count, attachment set and options are compile-time defines, cached by a
 //! typed key) and runs the pass.
@@ -28,7 +28,7 @@ use std::collections::HashMap;
 
 /// The resolve's fragment shader body; it needs [`COMPLEX_GLSL`] in front
 /// of it (see [`resolve_fragment_source`]).
-pub const RESOLVE_FRAG: &str = include_str!("../../shaders/resolve.frag");
+pub const RESOLVE_FRAG: &str = include_str!("resolve.frag");
 
 /// The shared definitions of a complex pixel and of the selective-AA
 /// selection test, as a [`ShaderSource`] part (`complex.glsl`, no `main`):
@@ -45,7 +45,7 @@ pub const RESOLVE_FRAG: &str = include_str!("../../shaders/resolve.frag");
 ///   near enough for [`Selection::max_depth`].
 ///
 /// The CPU reference (`resolve::cpu`) is the only other copy.
-pub const COMPLEX_GLSL: &str = include_str!("../../shaders/complex.glsl");
+pub const COMPLEX_GLSL: &str = include_str!("complex.glsl");
 
 /// The name [`COMPLEX_GLSL`] goes by in shader messages.
 pub const COMPLEX_GLSL_NAME: &str = "complex.glsl";

@@ -24,7 +24,7 @@ use crate::{Error, Result};
 use glow::HasContext;
 
 /// The pass's fragment shader body.
-pub const STENCIL_COPY_FRAG: &str = include_str!("../../shaders/stencil_copy.frag");
+pub const STENCIL_COPY_FRAG: &str = include_str!("stencil_copy.frag");
 
 /// How the host's stencil is written back after a resolve.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
