@@ -725,42 +725,34 @@ impl SecondLayer {
         }
         let (w, h) = (self.width, self.height);
         let output = Made::build(gl, |made| {
-            let target = match &image {
+            // The host's output image, alone and with the selection stencil
+            // that masks the mix.
+            let (target, masked) = match &image {
                 Some(image) => {
                     let images: Vec<(Attachment, HostImage)> = image
                         .host_image()
                         .map(|i| (Attachment::Color(0), i))
                         .into_iter()
                         .collect();
-                    Some(made.keep(Framebuffer::with_host_images(
+                    let colour = (Attachment::Color(0), image.texture_ref());
+                    let stencil = (Attachment::DepthStencil, TextureRef::from(&self.stencil));
+                    let target = made.keep(Framebuffer::with_host_images(
                         gl,
                         "second layer mix target (host output)",
-                        &[(Attachment::Color(0), image.texture_ref())],
+                        &[colour],
                         &images,
                         &[Some(0)],
-                    )?))
-                }
-                None => None,
-            };
-            let masked = match &image {
-                Some(image) => {
-                    let images: Vec<(Attachment, HostImage)> = image
-                        .host_image()
-                        .map(|i| (Attachment::Color(0), i))
-                        .into_iter()
-                        .collect();
-                    Some(made.keep(Framebuffer::with_host_images(
+                    )?);
+                    let masked = made.keep(Framebuffer::with_host_images(
                         gl,
                         "second layer mix target (host output, selection stencil)",
-                        &[
-                            (Attachment::Color(0), image.texture_ref()),
-                            (Attachment::DepthStencil, TextureRef::from(&self.stencil)),
-                        ],
+                        &[colour, stencil],
                         &images,
                         &[Some(0)],
-                    )?))
+                    )?);
+                    (Some(target), Some(masked))
                 }
-                None => None,
+                None => (None, None),
             };
             let lit_first = made.keep(Texture2d::new(gl, "lit first layer", format, w, h)?);
             let lit_second = made.keep(Texture2d::new(gl, "lit second layer", format, w, h)?);
