@@ -20,8 +20,9 @@ use serde_json::{Value, json};
 
 const ASSIMP_GLTF2: &str = "/usr/share/assimp/models/glTF2";
 
-fn shared_assets() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets")
+/// The models that travel with the repository (`assets/`, each with its licence).
+fn assets() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets")
 }
 
 /// A fresh scratch directory for one test.
@@ -949,11 +950,10 @@ fn find_model(dir: &Path) -> Option<PathBuf> {
     found.into_iter().next()
 }
 
-fn load_asset(dir: &Path) -> Option<Scene> {
-    let Some(path) = find_model(dir) else {
-        common::skip(&format!("no .gltf/.glb in {}", dir.display()));
-        return None;
-    };
+/// Load the model in `dir`, one of the repository's `assets/`: missing is a
+/// failure, not a skip, since the models travel with the repository.
+fn load_asset(dir: &Path) -> Scene {
+    let path = find_model(dir).unwrap_or_else(|| panic!("no .gltf/.glb in {}", dir.display()));
     let start = std::time::Instant::now();
     let scene = load_path(&path).unwrap_or_else(|e| panic!("{e}"));
     assert_sane(&scene);
@@ -970,23 +970,19 @@ fn load_asset(dir: &Path) -> Option<Scene> {
     for w in &scene.warnings {
         eprintln!("    warning: {w}");
     }
-    Some(scene)
+    scene
 }
 
 #[test]
-fn shared_box_loads() {
-    let Some(scene) = load_asset(&shared_assets().join("Box")) else {
-        return;
-    };
+fn box_asset_loads() {
+    let scene = load_asset(&assets().join("Box"));
     assert_eq!(scene.triangle_count(), 12);
     assert_camera_sees_bounds(&scene);
 }
 
 #[test]
-fn shared_flight_helmet_loads() {
-    let Some(scene) = load_asset(&shared_assets().join("FlightHelmet")) else {
-        return;
-    };
+fn flight_helmet_asset_loads() {
+    let scene = load_asset(&assets().join("FlightHelmet"));
     assert!(scene.has_textures(), "the helmet's base colour maps decode");
     assert!(scene.has_transparent() || scene.has_alpha_mask() || !scene.textures.is_empty());
     assert!(scene.triangle_count() > 10_000);
@@ -994,10 +990,8 @@ fn shared_flight_helmet_loads() {
 }
 
 #[test]
-fn shared_retro_ufo_loads() {
-    let Some(scene) = load_asset(&shared_assets().join("RetroUFO")) else {
-        return;
-    };
+fn retro_ufo_asset_loads() {
+    let scene = load_asset(&assets().join("RetroUFO"));
     assert!(scene.triangle_count() > 100);
 }
 
@@ -1011,9 +1005,7 @@ fn two_cylinder_engine_loads() {
         ));
         return;
     }
-    let Some(scene) = load_asset(&path) else {
-        return;
-    };
+    let scene = load_asset(&path);
     let n = scene.triangle_count();
     assert!(
         (100_000..150_000).contains(&n),
