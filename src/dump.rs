@@ -1,6 +1,6 @@
 //! Writing G-buffers to disk: NumPy `.npy` arrays (float32, little-endian,
 //! row 0 = the top of the image) and the `meta.json` that describes them
-//! (DESIGN.md section 4).
+//! (docs/cli.md, "dump").
 
 use crate::{Error, Result};
 use std::io::Write;

@@ -1,5 +1,5 @@
-//! The bench report: `report.json` (DESIGN.md section 4's schema, with a few
-//! extra keys) and `report.md` (a table per scene with ratios to `none`).
+//! The bench report: `report.json` (its schema: docs/bench.md,
+//! "report.json") and `report.md` (a table per scene with ratios to `none`).
 
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};

@@ -1,5 +1,5 @@
-//! A small deferred renderer that mirrors FreeSpace Open's frame (DESIGN.md
-//! section 2), for demos, tests and benchmarks.
+//! A small deferred renderer that mirrors FreeSpace Open's frame
+//! (docs/freespace-open.md), for demos, tests and benchmarks.
 //!
 //! It is written as a *host* of the retrofit: it owns an ordinary
 //! single-sample [`GBuffer`] like any engine, and multisampling comes only

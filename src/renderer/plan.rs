@@ -450,7 +450,7 @@ impl Plan {
         }
     }
 
-    /// The plan as JSON (`render --explain --json`; keys as DESIGN.md section 4).
+    /// The plan as JSON (`render --explain --json`; keys as docs/plan.md lists them).
     pub fn to_json(&self) -> serde_json::Value {
         serde_json::json!({
             "scene": self.scene,

@@ -1,7 +1,7 @@
 //! The resolve's GLSL against its CPU reference for N = 2, 4, 8 and 16.
 //!
 //! llvmpipe offers only 4x MSAA, so the same resolve body is compiled over
-//! `sampler2DArray` inputs (one layer per sample, DESIGN.md section 5) and fed
+//! `sampler2DArray` inputs (one layer per sample, docs/testing.md) and fed
 //! random and adversarial per-sample data: ties, all background, a single
 //! geometry sample, NaN and Inf values, denormals, equal depths with different
 //! colours, opposite normals, HDR values up to 65504.

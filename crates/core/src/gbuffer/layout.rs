@@ -47,7 +47,7 @@ pub struct GBufferLayout {
 }
 
 impl GBufferLayout {
-    /// FreeSpace Open's G-buffer exactly (DESIGN.md section 2): colour,
+    /// FreeSpace Open's G-buffer exactly (docs/freespace-open.md): colour,
     /// view-space position, normal with gloss in w (not normalised), specular,
     /// emissive, and 24-bit depth; the key comes from the FP16 position.
     pub fn freespace_open() -> Self {
@@ -198,7 +198,7 @@ mod tests {
         let fso = GBufferLayout::freespace_open();
         fso.validate().unwrap();
         assert_eq!(fso.bytes_per_sample(), 8 + 8 + 8 + 4 + 8 + 4);
-        // DESIGN.md: about 332 MB at 1080p 4x.
+        // FreeSpace Open's figure: about 332 MB at 1080p 4x.
         let mb = fso.bytes(1920, 1080, 4) as f64 / 1e6;
         assert!((mb - 332.0).abs() < 1.0, "{mb}");
     }

@@ -1,5 +1,6 @@
 //! The depth-aware resolve: a full-screen pass that reads every sample of a
-//! multisampled G-buffer and writes a single-sample one (DESIGN.md section 3).
+//! multisampled G-buffer and writes a single-sample one (its math:
+//! docs/resolve.md in the repository, "The math").
 //!
 //! The math lives in two places only: `resolve.frag` and its CPU
 //! reference, [`cpu`]. This module builds the shader permutations (the sample

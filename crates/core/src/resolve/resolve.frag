@@ -1,4 +1,4 @@
-// Depth-aware resolve of a multisampled G-buffer (DESIGN.md section 3).
+// Depth-aware resolve of a multisampled G-buffer (docs/resolve.md, "The math").
 // The CPU reference in src/resolve/cpu.rs implements the same math in f64;
 // change both together.
 //
@@ -330,7 +330,7 @@ float max3(vec3 v) {
 }
 
 // One attachment's running blend, a sample at a time. acc_step and
-// acc_finish are the blends of DESIGN.md section 3 (the CPU reference's
+// acc_finish are the blends of docs/resolve.md's "The math" (the CPU reference's
 // blend, blend_normal and blend_hdr), split so that one loop over the
 // samples can feed every attachment.
 struct Acc {

@@ -4,7 +4,7 @@ use std::fmt;
 use std::str::FromStr;
 
 /// How the reference sample of a pixel is chosen, and whether samples are
-/// weighted by closeness to it (DESIGN.md section 3).
+/// weighted by closeness to it (docs/resolve.md, "The math").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
@@ -116,7 +116,7 @@ pub struct ResolveSettings {
     /// take one sample, as a uniform pixel does (default: every pixel).
     pub selection: Selection,
     /// Resolved layers per pixel: 1 (the default) is the resolve of
-    /// DESIGN.md section 3; 2 also resolves the largest cluster of samples
+    /// docs/resolve.md's "The math"; 2 also resolves the largest cluster of samples
     /// outside the reference's into a second G-buffer with its coverage
     /// (the README's "second layer"), and splits clusters by normal as well
     /// as by depth where a normal attachment is named.
@@ -428,7 +428,7 @@ name_table!(Window, "window",
     Window::Smooth => "smooth",
 );
 
-/// The rule by which one attachment's samples become one value (DESIGN.md section 3).
+/// The rule by which one attachment's samples become one value (docs/resolve.md, "The math").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
