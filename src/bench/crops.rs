@@ -1,7 +1,8 @@
-//! `crops.png`: per scene, an overview of the reference with the crop
-//! marked, then the same crop of the reference and of every run side by
-//! side, magnified with nearest-neighbour sampling and labelled, like a
-//! paper's figure.
+//! The crop figures. `crops.png`: per scene, an overview of the reference
+//! with the crop marked, then the same crop of the reference and of every
+//! run side by side, magnified with nearest-neighbour sampling and
+//! labelled, like a paper's figure. The first run's side-by-side
+//! ([`side_by_side`]): every run's whole frame above its magnified crop.
 //!
 //! The crop is chosen automatically as the window where the methods'
 //! errors against the reference differ most (the sum over its pixels of
@@ -207,58 +208,184 @@ pub(crate) fn crops(output: &BenchOutput, path: &Path) -> Result<()> {
         width = width.max(x);
         y = row_y + th + GAP * 2;
     }
-    let height = y.max(GAP * 2);
-    let mut canvas = RgbImage::from_pixel(width, height, image::Rgb([255, 255, 255]));
-    for t in &tiles {
-        imageops::replace(&mut canvas, &t.image, t.x as i64, t.y as i64);
+    Figure {
+        tiles,
+        titles,
+        marks,
     }
-    {
-        let err = |e| plot_error("crops.png", e);
-        let root = BitMapBackend::with_buffer(&mut canvas, (width, height)).into_drawing_area();
-        for (title, ty) in &titles {
-            root.draw(&Text::new(
-                title.clone(),
-                (GAP as i32, *ty as i32 + 6),
-                (FAMILY, 18).into_font().color(&BLACK),
-            ))
-            .map_err(err)?;
-        }
-        for t in &tiles {
-            let ly = t.y as i32 - LABEL_H as i32;
-            root.draw(&Text::new(
-                t.lines[0].clone(),
-                (t.x as i32, ly + 2),
-                (FAMILY, 15).into_font().color(&BLACK),
-            ))
-            .map_err(err)?;
-            root.draw(&Text::new(
-                t.lines[1].clone(),
-                (t.x as i32, ly + 20),
-                (FAMILY, 13).into_font().color(&RGBColor(90, 90, 90)),
-            ))
-            .map_err(err)?;
-            root.draw(&Rectangle::new(
+    .save(width, y.max(GAP * 2), "crops.png", path)
+}
+
+/// Widest an overview tile of [`side_by_side`] gets.
+const OVERVIEW_W: u32 = 320;
+
+/// The first run's figure, per scene: a column for the reference and for
+/// each run, the whole frame on top (the crop marked in red) and below it
+/// the crop of most error spread ([`choose_crop`]), magnified with
+/// nearest-neighbour sampling; each run labelled with its FLIP against the
+/// reference and its frame time.
+pub(crate) fn side_by_side(output: &BenchOutput, path: &Path) -> Result<()> {
+    load_font()?;
+    let report = &output.report;
+    let mut figure = Figure {
+        tiles: Vec::new(),
+        titles: Vec::new(),
+        marks: Vec::new(),
+    };
+    let mut width = GAP;
+    let mut y = GAP;
+    for (scene, reference) in &output.references {
+        let (w, h) = reference.dimensions();
+        let runs: Vec<(&super::Run, &RgbaImage)> = report
+            .runs
+            .iter()
+            .zip(&output.images)
+            .filter(|(r, img)| &r.scene == scene && img.dimensions() == (w, h))
+            .collect();
+        let images: Vec<&RgbaImage> = runs.iter().map(|(_, img)| *img).collect();
+        let side = crop_side(w, h);
+        let (cx, cy) = choose_crop(reference, &images, side);
+        let (sw, sh) = (side.min(w), side.min(h));
+        // The overview at most OVERVIEW_W wide, never enlarged.
+        let ow = w.min(OVERVIEW_W);
+        let oh = ((ow as f64 * h as f64 / w as f64).round() as u32).max(1);
+        let k = (ow / sw.max(sh)).max(1);
+        let (tw, th) = (sw * k, sh * k);
+        let column = ow.max(tw) + GAP;
+        figure.titles.push((
+            format!(
+                "{scene}, {w}x{h}: each whole frame, and its {sw}x{sh} crop at ({cx}, {cy}) where the methods differ most, magnified {k}x"
+            ),
+            y,
+        ));
+        let overview_y = y + TITLE_H + LABEL_H;
+        let crop_y = overview_y + oh + GAP + LABEL_H;
+        let scale = (ow as f64 / w as f64, oh as f64 / h as f64);
+        let columns = std::iter::once((
+            [
+                "ssaa (reference)".to_string(),
+                format!("{} spp", report.reference.spp),
+            ],
+            reference,
+        ))
+        .chain(runs.iter().map(|(run, img)| {
+            let name = if run.samples > 1 {
+                format!("{} ({}x)", run.method, run.samples)
+            } else {
+                run.method.clone()
+            };
+            (
                 [
-                    (t.x as i32 - 1, t.y as i32 - 1),
-                    (
-                        (t.x + t.image.width()) as i32,
-                        (t.y + t.image.height()) as i32,
-                    ),
+                    name,
+                    format!("FLIP {:.4} · {:.1} ms", run.flip_mean, run.ms_total),
                 ],
-                RGBColor(160, 160, 160).stroke_width(1),
-            ))
-            .map_err(err)?;
+                *img,
+            )
+        }));
+        let mut x = GAP;
+        for (lines, img) in columns {
+            let frame = if ow == w {
+                rgb(img)
+            } else {
+                imageops::resize(&rgb(img), ow, oh, imageops::FilterType::Triangle)
+            };
+            figure.marks.push((
+                x + (cx as f64 * scale.0).floor() as u32,
+                overview_y + (cy as f64 * scale.1).floor() as u32,
+                ((sw as f64 * scale.0).ceil() as u32).max(2),
+                ((sh as f64 * scale.1).ceil() as u32).max(2),
+            ));
+            figure.tiles.push(Tile {
+                image: frame,
+                lines,
+                x,
+                y: overview_y,
+            });
+            let crop = imageops::crop_imm(img, cx, cy, sw, sh).to_image();
+            figure.tiles.push(Tile {
+                image: imageops::resize(&rgb(&crop), tw, th, imageops::FilterType::Nearest),
+                lines: [format!("crop, {k}x"), String::new()],
+                x,
+                y: crop_y,
+            });
+            x += column;
         }
-        for &(mx, my, mw, mh) in &marks {
-            root.draw(&Rectangle::new(
-                [(mx as i32, my as i32), ((mx + mw) as i32, (my + mh) as i32)],
-                RGBColor(230, 30, 30).stroke_width(2),
-            ))
-            .map_err(err)?;
-        }
-        root.present().map_err(err)?;
+        width = width.max(x);
+        y = crop_y + th + GAP * 2;
     }
-    save_rgb(canvas.into_raw(), width, height, path)
+    figure.save(width, y.max(GAP * 2), "the side-by-side", path)
+}
+
+/// Tiles with their labels, row titles and red marks, drawn on white.
+struct Figure {
+    tiles: Vec<Tile>,
+    /// A title and the top of its row.
+    titles: Vec<(String, u32)>,
+    /// Rectangles `(x, y, w, h)` outlined in red (where a crop was taken).
+    marks: Vec<(u32, u32, u32, u32)>,
+}
+
+impl Figure {
+    /// Draw the figure on a `width`×`height` canvas and save it as a PNG
+    /// (`what` names it in errors).
+    fn save(&self, width: u32, height: u32, what: &str, path: &Path) -> Result<()> {
+        let Figure {
+            tiles,
+            titles,
+            marks,
+        } = self;
+        let mut canvas = RgbImage::from_pixel(width, height, image::Rgb([255, 255, 255]));
+        for t in tiles {
+            imageops::replace(&mut canvas, &t.image, t.x as i64, t.y as i64);
+        }
+        {
+            let err = |e| plot_error(what, e);
+            let root = BitMapBackend::with_buffer(&mut canvas, (width, height)).into_drawing_area();
+            for (title, ty) in titles {
+                root.draw(&Text::new(
+                    title.clone(),
+                    (GAP as i32, *ty as i32 + 6),
+                    (FAMILY, 18).into_font().color(&BLACK),
+                ))
+                .map_err(err)?;
+            }
+            for t in tiles {
+                let ly = t.y as i32 - LABEL_H as i32;
+                root.draw(&Text::new(
+                    t.lines[0].clone(),
+                    (t.x as i32, ly + 2),
+                    (FAMILY, 15).into_font().color(&BLACK),
+                ))
+                .map_err(err)?;
+                root.draw(&Text::new(
+                    t.lines[1].clone(),
+                    (t.x as i32, ly + 20),
+                    (FAMILY, 13).into_font().color(&RGBColor(90, 90, 90)),
+                ))
+                .map_err(err)?;
+                root.draw(&Rectangle::new(
+                    [
+                        (t.x as i32 - 1, t.y as i32 - 1),
+                        (
+                            (t.x + t.image.width()) as i32,
+                            (t.y + t.image.height()) as i32,
+                        ),
+                    ],
+                    RGBColor(160, 160, 160).stroke_width(1),
+                ))
+                .map_err(err)?;
+            }
+            for &(mx, my, mw, mh) in marks {
+                root.draw(&Rectangle::new(
+                    [(mx as i32, my as i32), ((mx + mw) as i32, (my + mh) as i32)],
+                    RGBColor(230, 30, 30).stroke_width(2),
+                ))
+                .map_err(err)?;
+            }
+            root.present().map_err(err)?;
+        }
+        save_rgb(canvas.into_raw(), width, height, path)
+    }
 }
 
 #[cfg(test)]

@@ -319,6 +319,16 @@ pub fn write_outputs(output: &BenchOutput, dir: &Path) -> Result<()> {
     crops::crops(output, &dir.join("crops.png"))
 }
 
+/// Write the first run's side-by-side figure: per scene, the reference's
+/// and every run's whole frame above the same crop, magnified, each run
+/// labelled with its FLIP and frame time.
+pub fn write_side_by_side(output: &BenchOutput, path: &Path) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        prepare_output_dir(dir)?;
+    }
+    crops::side_by_side(output, path)
+}
+
 /// A file-name-safe form of a scene spec or method entry.
 fn file_stem(s: &str) -> String {
     let stem = s.rsplit(['/', '\\']).next().unwrap_or(s);

@@ -2,6 +2,7 @@
 //! `src/main.rs` only calls [`main`].
 
 mod bench;
+pub mod first_run;
 mod info;
 mod render;
 
@@ -13,7 +14,9 @@ use clap::{Parser, Subcommand};
 #[derive(Debug, Parser)]
 #[command(name = "deferred-msaa", version, about)]
 pub struct Cli {
-    /// What to do (default: render the built-in default scene).
+    /// What to do (default: the first run: the built-in default scene with
+    /// no MSAA, the one-layer resolve and the best method, side by side in
+    /// target/deferred-msaa/first-run.png).
     #[command(subcommand)]
     pub command: Option<Command>,
 }
@@ -121,7 +124,7 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Render(cmd)) => render::run_render(&cmd),
         Some(Command::Dump(cmd)) => render::run_dump(&cmd),
         Some(Command::Bench(cmd)) => bench::run(&cmd),
-        // The main job on the built-in default scene.
-        None => render::run_render(&render::RenderCmd::default_scene()?),
+        // The first run: what the crate does, shown on the default scene.
+        None => first_run::run(Backend::Egl, std::path::Path::new(first_run::FIRST_RUN_DIR)),
     }
 }

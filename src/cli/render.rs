@@ -110,22 +110,6 @@ pub struct DumpCmd {
     out: PathBuf,
 }
 
-impl RenderCmd {
-    /// `render` with every option at its default.
-    pub fn default_scene() -> Result<Self> {
-        use clap::Parser;
-        #[derive(Parser)]
-        struct Only {
-            #[command(flatten)]
-            cmd: RenderCmd,
-        }
-        // Parsing no arguments yields exactly the documented defaults.
-        Only::try_parse_from(["render"])
-            .map(|o| o.cmd)
-            .map_err(|e| Error::invalid(e.to_string()))
-    }
-}
-
 fn parse_region(s: &str) -> std::result::Result<Region, String> {
     s.parse().map_err(|e: deferred_msaa::Error| e.to_string())
 }

@@ -1,5 +1,5 @@
-//! The slow tier of the lab's integration tests, one binary: the bench as a
-//! user runs it, and the examples (the viewer under Xvfb, its thousand live
+//! The slow tier of the lab's integration tests, one binary: the bench and
+//! the first run as a user runs them, and the examples (the viewer under Xvfb, its thousand live
 //! mode switches). Every test here is `#[ignore]`d, so plain `cargo test`
 //! only lists them; `scripts/test` runs them with
 //! `cargo test --test slow -- --ignored`. The fast tier is `tests/fast`; both
@@ -10,3 +10,4 @@ mod common;
 
 mod bench;
 mod examples;
+mod first_run;
