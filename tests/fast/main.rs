@@ -26,4 +26,5 @@ mod scene;
 mod selective;
 mod sparse;
 mod stability;
+mod standalone;
 mod zoo;
