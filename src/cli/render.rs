@@ -530,6 +530,37 @@ pub fn run_dump(cmd: &DumpCmd) -> Result<()> {
         )?;
         let r = readback.read(gl, TextureRef::from(&gbuffer.depth), 1)?;
         crate::dump::write_npy(&dir.join("depth_resolved.npy"), &[h, w], &strip(&r, 1))?;
+        // With two layers: the second layer's resolved G-buffer, its depth
+        // and its coverage, as the second lighting reads them.
+        let second_layer = match renderer
+            .retrofit()
+            .and_then(|r| r.second_layer_gbuffer().zip(r.second_layer_coverage()))
+        {
+            None => serde_json::Value::Null,
+            Some(((colors, depth), coverage)) => {
+                let mut files = Vec::with_capacity(layout.colors.len());
+                for (k, a) in layout.colors.iter().enumerate() {
+                    let c = a.format.channels() as usize;
+                    let file = format!("{}_layer2_resolved.npy", a.name);
+                    let r = readback.read(gl, colors[k], 1)?;
+                    crate::dump::write_npy(&dir.join(&file), &[h, w, c], &strip(&r, c))?;
+                    files.push(serde_json::json!({ "name": a.name, "file": file }));
+                }
+                let r = readback.read(gl, depth, 1)?;
+                crate::dump::write_npy(
+                    &dir.join("depth_layer2_resolved.npy"),
+                    &[h, w],
+                    &strip(&r, 1),
+                )?;
+                let r = readback.read(gl, coverage, 1)?;
+                crate::dump::write_npy(&dir.join("layer2_coverage.npy"), &[h, w], &strip(&r, 1))?;
+                serde_json::json!({
+                    "attachments": files,
+                    "depth": "depth_layer2_resolved.npy",
+                    "coverage": "layer2_coverage.npy",
+                })
+            }
+        };
         save_png(&renderer.read_final(gl)?, &dir.join("final.png"))?;
 
         let camera = renderer.camera();
@@ -561,6 +592,8 @@ pub fn run_dump(cmd: &DumpCmd) -> Result<()> {
             "c": settings.c,
             "c_in": settings.c_in,
             "fast_path": settings.fast_path,
+            "layers": settings.layers,
+            "second_layer": second_layer,
             "key_source": key_source,
             "complex_fraction": complex_fraction,
             "attachments": layout.colors.iter().map(|a| serde_json::json!({

@@ -166,6 +166,106 @@ fn render_and_dump_write_what_they_say() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// The values of a float32 `.npy` file `dump` wrote, and its header.
+fn read_npy(path: &Path) -> (String, Vec<f32>) {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(&bytes[..6], b"\x93NUMPY");
+    let len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let header = String::from_utf8_lossy(&bytes[10..10 + len]).into_owned();
+    let data = bytes[10 + len..]
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    (header, data)
+}
+
+#[test]
+fn dump_with_two_layers_writes_the_second_layer() {
+    if common::egl_context().is_none() {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("dmsaa-cli-layers-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let dump = |layers: &str| {
+        let out = dir.join(format!("layers{layers}"));
+        let o = cli(&[
+            "dump",
+            "--scene",
+            "builtin:bars",
+            "--size",
+            "48x27",
+            "--layers",
+            layers,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let meta: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("meta.json")).unwrap()).unwrap();
+        (out, meta)
+    };
+
+    let (one, meta) = dump("1");
+    assert_eq!(meta["layers"].as_u64(), Some(1));
+    assert!(meta["second_layer"].is_null(), "{meta}");
+    assert!(!one.join("layer2_coverage.npy").exists());
+
+    let (two, meta) = dump("2");
+    assert_eq!(meta["layers"].as_u64(), Some(2));
+    let second = &meta["second_layer"];
+    let names: Vec<&str> = meta["attachments"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["name"].as_str().unwrap())
+        .collect();
+    let files = second["attachments"]
+        .as_array()
+        .expect("second_layer.attachments");
+    assert_eq!(
+        files
+            .iter()
+            .map(|f| f["name"].as_str().unwrap())
+            .collect::<Vec<_>>(),
+        names,
+        "one second-layer file per attachment, in order"
+    );
+    for (f, a) in files.iter().zip(meta["attachments"].as_array().unwrap()) {
+        let c = if a["format"] == "R32F" { 1 } else { 4 };
+        let (header, _) = read_npy(&two.join(f["file"].as_str().unwrap()));
+        assert!(header.contains(&format!("(27, 48, {c})")), "{header}");
+    }
+    let (header, coverage) = read_npy(&two.join(second["coverage"].as_str().unwrap()));
+    assert!(header.contains("(27, 48)"), "{header}");
+    let (_, depth) = read_npy(&two.join(second["depth"].as_str().unwrap()));
+    assert!(
+        coverage.iter().all(|a| (0.0..1.0).contains(a)),
+        "coverage in [0, 1)"
+    );
+    let covered = coverage.iter().filter(|&&a| a > 0.0).count();
+    assert!(
+        covered > 0 && covered < coverage.len() / 2,
+        "the bars' silhouettes have a second layer: {covered} of {} pixels",
+        coverage.len()
+    );
+    // Where nothing is covered the second layer holds the clear depth (a
+    // covered pixel may too: a bar's second layer can be the background).
+    let clear = meta["clear_depth"].as_f64().unwrap() as f32;
+    for (a, d) in coverage.iter().zip(&depth) {
+        if *a == 0.0 {
+            assert_eq!(*d, clear);
+        }
+    }
+    assert!(
+        coverage
+            .iter()
+            .zip(&depth)
+            .any(|(a, d)| *a > 0.0 && *d != clear),
+        "some second layer is a surface"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn refusals_are_one_line_with_a_non_zero_exit() {
     let cases: &[(&[&str], &str)] = &[

@@ -4,7 +4,9 @@
 //! compared by FLIP with `tests/golden/*.png`. Each scene is pinned twice: in
 //! the layout the first goldens were blessed with (`SCENE-4x-median`, normals
 //! blended) and in the shipped recommended layout (`SCENE-recommended-...`,
-//! normals selected). See `tests/common/golden.rs` for blessing
+//! normals selected), and the recommended layout again with two layers
+//! (`SCENE-recommended-4x-median-layers2`: the second layer's resolved
+//! attachments, depth and coverage too). See `tests/common/golden.rs` for blessing
 //! (`DEFERRED_MSAA_BLESS=1 cargo test --test fast -- goldens::`), the `blessed on`
 //! header and what a failure leaves behind.
 
@@ -109,13 +111,24 @@ fn options(layout: Layout, aa: AaMode, fxaa: bool) -> RenderOptions {
 }
 
 fn per_sample_golden(scene_name: &str, layout: Layout) {
+    per_sample_golden_of(scene_name, layout, 1);
+}
+
+/// Every sample and the resolve of `layers` layers: with two, the second
+/// layer's resolved attachments, its depth and its coverage too, pinned as
+/// the first layer's are (`SCENE-…-4x-median-layers2`).
+fn per_sample_golden_of(scene_name: &str, layout: Layout, layers: u32) {
     let Some(ctx) = common::egl_context() else {
         return;
     };
     let gl = ctx.gl();
     let before = live_objects();
     let scene = Scene::load(&format!("builtin:{scene_name}")).unwrap();
-    let opts = options(layout, AaMode::Resolve(ResolveSettings::default()), false);
+    let settings = ResolveSettings {
+        layers,
+        ..ResolveSettings::default()
+    };
+    let opts = options(layout, AaMode::Resolve(settings), false);
     let mut renderer = Renderer::new(gl, |n| ctx.get_proc_address(n), &scene, &opts).unwrap();
     renderer.render(gl).unwrap();
     let retrofit = renderer.retrofit().expect("multisampled");
@@ -144,6 +157,23 @@ fn per_sample_golden(scene_name: &str, layout: Layout) {
         .read(gl, TextureRef::from(&renderer.gbuffer().depth), 1)
         .unwrap();
     planes.push(plane("depth_resolved", &resolved_depth, 1));
+    if layers == 2 {
+        let (second, second_depth) = retrofit.second_layer_gbuffer().expect("two layers");
+        for (k, a) in opts.layout.colors.iter().enumerate() {
+            let c = a.format.channels() as usize;
+            let resolved = readback.read(gl, second[k], 1).unwrap();
+            planes.push(plane(&format!("{}_layer2_resolved", a.name), &resolved, c));
+        }
+        let depth2 = readback.read(gl, second_depth, 1).unwrap();
+        planes.push(plane("depth_layer2_resolved", &depth2, 1));
+        let coverage = retrofit.second_layer_coverage().expect("two layers");
+        let coverage = readback.read(gl, coverage, 1).unwrap();
+        assert!(
+            coverage.data.chunks_exact(4).any(|px| px[0] > 0.0),
+            "{scene_name}: the second layer covers nothing, so its golden would pin nothing"
+        );
+        planes.push(plane("layer2_coverage", &coverage, 1));
+    }
     // Every value must be finite: background keeps its clear values, no sentinels.
     for p in &planes {
         assert!(
@@ -152,8 +182,13 @@ fn per_sample_golden(scene_name: &str, layout: Layout) {
             p.name
         );
     }
+    let label = if layers == 1 {
+        "4x-median".to_string()
+    } else {
+        format!("4x-median-layers{layers}")
+    };
     check_samples(
-        &layout.name(scene_name, "4x-median"),
+        &layout.name(scene_name, &label),
         &planes,
         SAMPLES,
         &driver(&ctx),
@@ -357,4 +392,23 @@ fn png_goldens_record_and_ignore_their_blesser() {
         )
         .unwrap();
     assert_eq!(png_blessed_on(&plain), None);
+}
+
+// Two layers in the recommended layout: the second layer's G-buffer, depth
+// and coverage beside the first's, on the scenes with silhouettes against
+// something behind them.
+
+#[test]
+fn recommended_greebles_two_layer_samples() {
+    per_sample_golden_of("greebles", Layout::Recommended, 2);
+}
+
+#[test]
+fn recommended_thin_two_layer_samples() {
+    per_sample_golden_of("thin", Layout::Recommended, 2);
+}
+
+#[test]
+fn recommended_hull_two_layer_samples() {
+    per_sample_golden_of("hull", Layout::Recommended, 2);
 }
