@@ -30,6 +30,7 @@ use crate::zoo;
 pub mod harness;
 pub mod scene;
 
+pub mod fyrox;
 pub mod holes;
 pub mod layered;
 pub mod learnopengl;
@@ -134,6 +135,7 @@ fn no_host_gains_halo_pixels_with_two_layers() {
         zoo::layered::outcome(&ctx, 2),
         zoo::picking::outcome(&ctx, 2),
         zoo::holes::outcome(&ctx, 2),
+        zoo::fyrox::outcome(&ctx, 2),
     ];
     for outcome in &outcomes {
         outcome.assert_ok();
@@ -161,6 +163,7 @@ fn one_layer_gains_halo_pixels() {
         zoo::layered::outcome(&ctx, 1),
         zoo::picking::outcome(&ctx, 1),
         zoo::holes::outcome(&ctx, 1),
+        zoo::fyrox::outcome(&ctx, 1),
     ];
     for o in &outcomes {
         eprintln!("{}: {} new halo pixels with one layer", o.host, o.new_halos);
