@@ -469,8 +469,10 @@ struct SceneMeasures {
     reference: RgbaImage,
     /// The scene's bars as the reference shows them ([`bar_width`]).
     bars: Option<BarGauge>,
-    /// The pixels [`cluster_mask`] marks.
+    /// The pixels [`cluster_masks`] marks as holding two or more clusters.
     cluster_mask: Option<GrayImage>,
+    /// Those holding three or more.
+    three_cluster_mask: Option<GrayImage>,
 }
 
 /// One scene's results.
@@ -594,18 +596,21 @@ fn render_reference(
 }
 
 /// The pixels of `scene` at the bench's size that hold two or more surface
-/// clusters (silhouettes, creases), 255 where marked and 0 elsewhere: the
-/// mask each run's FLIP is split by (`flip_edges` over the marked pixels,
-/// `flip_interior` over the rest), made once per scene and shared by all
-/// its runs: the pixels whose second resolved layer covers any of them
-/// (`median:layers=2`, clusters by depth window and normal) in one frame
-/// at the first requested sample count; `None` when that count gives no
+/// clusters (silhouettes, creases), and those that hold three or more, 255
+/// where marked and 0 elsewhere: the masks each run's FLIP is split by
+/// (`flip_edges` over the first, `flip_interior` over the rest,
+/// `flip_three_clusters` over the second), made once per scene and shared
+/// by all its runs. Both come from one frame of `median:layers=2` (clusters
+/// by depth window and normal) at the first requested sample count: two or
+/// more where the second layer covers any of the pixel; three or more where
+/// the resolve's CPU reference, over the frame's samples read back, leaves
+/// samples outside both kept clusters. `None` when that count gives no
 /// multisampling.
-fn cluster_mask(
+fn cluster_masks(
     ctx: &HeadlessContext,
     config: &BenchConfig,
     scene: &Scene,
-) -> Result<Option<GrayImage>> {
+) -> Result<Option<(GrayImage, GrayImage)>> {
     let gl = ctx.gl();
     let two_layers = AaMode::Resolve(ResolveSettings {
         method: ResolveMethod::Median,
@@ -615,16 +620,54 @@ fn cluster_mask(
     let samples = config.samples.first().copied().unwrap_or(1);
     let options = render_options(config, two_layers, false, samples);
     let mut renderer = Renderer::new(gl, |name| ctx.get_proc_address(name), scene, &options)?;
-    let coverage = renderer
-        .render(gl)
-        .and_then(|_| renderer.read_second_layer_coverage(gl));
-    renderer.destroy(gl);
-    // Two clusters or more: the second layer covers some of the pixel.
-    Ok(coverage?.map(|mut c| {
-        c.pixels_mut()
+    let masks = (|| {
+        renderer.render(gl)?;
+        let Some(coverage) = renderer.read_second_layer_coverage(gl)? else {
+            return Ok(None);
+        };
+        let Some(retrofit) = renderer.retrofit() else {
+            return Ok(None);
+        };
+        let cpu = retrofit.cpu_reference(&renderer.resolve_frame())?;
+        let (depth, colors, _) = retrofit.inputs()?;
+        let mut readback = crate::readback::Readback::new(gl)?;
+        let read = (|| {
+            let colors = colors
+                .iter()
+                .map(|t| readback.read(gl, *t, 1))
+                .collect::<deferred_msaa::Result<Vec<_>>>()?;
+            Ok::<_, deferred_msaa::Error>((colors, readback.read(gl, depth, 1)?))
+        })();
+        readback.destroy(gl);
+        let (colors, depth) = read?;
+        let n = depth.samples;
+        let three = GrayImage::from_fn(depth.width, depth.height, |x, y| {
+            let px = crate::resolve::cpu::PixelSamples {
+                depth: (0..n).map(|s| f64::from(depth.get(s, x, y)[0])).collect(),
+                attachments: colors
+                    .iter()
+                    .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
+                    .collect(),
+            };
+            let first = cpu.resolve_pixel(&px);
+            let second = cpu.resolve_second_layer_at(&px, None);
+            let kept = |weights: &[f64]| weights.iter().filter(|&&w| w > 0.0).count();
+            let in_first = if first.complex {
+                kept(&first.weights)
+            } else {
+                n as usize
+            };
+            let outside = (n as usize).saturating_sub(in_first + kept(&second.weights));
+            image::Luma([if outside > 0 { 255 } else { 0 }])
+        });
+        // Two clusters or more: the second layer covers some of the pixel.
+        let mut two = coverage;
+        two.pixels_mut()
             .for_each(|p| p[0] = if p[0] > 0 { 255 } else { 0 });
-        c
-    }))
+        Ok(Some((two, three)))
+    })();
+    renderer.destroy(gl);
+    masks
 }
 
 /// The scene's bars as `reference` shows them; `None` for a scene without
@@ -667,10 +710,12 @@ fn bench_scene(
     pb.set_message(format!("{spec}: ssaa reference"));
     let reference = render_reference(ctx, &scene, config)?;
     pb.inc(1);
-    pb.set_message(format!("{spec}: cluster mask"));
+    pb.set_message(format!("{spec}: cluster masks"));
+    let (cluster_mask, three_cluster_mask) = cluster_masks(ctx, config, &scene)?.unzip();
     let measures = SceneMeasures {
         bars: bar_gauge(spec, &scene, config, &reference),
-        cluster_mask: cluster_mask(ctx, config, &scene)?,
+        cluster_mask,
+        three_cluster_mask,
         reference,
     };
 
@@ -837,6 +882,12 @@ fn time_scene(
             )?),
             None => None,
         };
+        let by_three = match &measures.three_cluster_mask {
+            Some(mask) => Some(compare::flip_by_mask(reference, &image, mask).ok_or_else(
+                || Error::invalid("bench: the cluster mask and the run differ in size"),
+            )?),
+            None => None,
+        };
         let bar_width_error_px = match &measures.bars {
             Some(gauge) => Some(gauge.width_error(&image)?),
             None => None,
@@ -902,6 +953,8 @@ fn time_scene(
             flip_edges: by_mask.and_then(|m| m.marked),
             flip_interior: by_mask.and_then(|m| m.unmarked),
             edge_pixel_share: by_mask.map(|m| m.marked_share),
+            flip_three_clusters: by_three.and_then(|m| m.marked),
+            three_cluster_share: by_three.map(|m| m.marked_share),
         };
         runs.push((run, image));
     }

@@ -125,6 +125,16 @@ pub struct Run {
     /// every run of a scene (extra key, `null` without the mask).
     #[serde(default)]
     pub edge_pixel_share: Option<f64>,
+    /// Mean FLIP over the scene's pixels with three or more surface
+    /// clusters (a thin bar in front of a crease in front of a wall: where
+    /// two layers still share a pixel among more surfaces; extra key,
+    /// `null` without the mask or when it marks no pixel).
+    #[serde(default)]
+    pub flip_three_clusters: Option<f64>,
+    /// The share of the image those pixels make, 0 to 1 (extra key, `null`
+    /// without the mask).
+    #[serde(default)]
+    pub three_cluster_share: Option<f64>,
 }
 
 impl Report {
@@ -222,12 +232,26 @@ impl Report {
                 .any(|r| r.flip_edges.is_some() || r.flip_interior.is_some());
             let bar_column = runs.iter().any(|r| r.bar_width_error_px.is_some());
             let layer_column = runs.iter().any(|r| r.second_layer_share.is_some());
+            let three_column = runs.iter().any(|r| r.flip_three_clusters.is_some());
             if let Some(share) = runs.iter().find_map(|r| r.edge_pixel_share) {
                 let _ = writeln!(
                     md,
                     "FLIP edges, FLIP interior: mean FLIP over the pixels the bench's cluster mask \
                      marks as holding two or more surface clusters (silhouettes, creases), \
                      {:.1} % of this scene's, and over the rest.\n",
+                    share * 100.0
+                );
+            }
+            if let Some(share) = runs
+                .iter()
+                .filter(|_| three_column)
+                .find_map(|r| r.three_cluster_share)
+            {
+                let _ = writeln!(
+                    md,
+                    "FLIP 3+ clusters: mean FLIP over the pixels holding three or more surface \
+                     clusters (where two layers still share a pixel among more surfaces), \
+                     {:.3} % of this scene's.\n",
                     share * 100.0
                 );
             }
@@ -257,6 +281,9 @@ impl Report {
             if edge_columns {
                 header.extend(["FLIP edges", "FLIP interior"]);
             }
+            if three_column {
+                header.push("FLIP 3+ clusters");
+            }
             if bar_column {
                 header.push("bar width error px");
             }
@@ -281,6 +308,9 @@ impl Report {
                 if edge_columns {
                     cells.push(cell(run.flip_edges, |v| format!("{v:.4}")));
                     cells.push(cell(run.flip_interior, |v| format!("{v:.4}")));
+                }
+                if three_column {
+                    cells.push(cell(run.flip_three_clusters, |v| format!("{v:.4}")));
                 }
                 if bar_column {
                     cells.push(cell(run.bar_width_error_px, |v| format!("{v:+.3}")));
@@ -434,6 +464,8 @@ pub(crate) mod tests {
             flip_edges: None,
             flip_interior: None,
             edge_pixel_share: None,
+            flip_three_clusters: None,
+            three_cluster_share: None,
         }
     }
 
@@ -468,6 +500,8 @@ pub(crate) mod tests {
                 "flip_edges",
                 "flip_interior",
                 "edge_pixel_share",
+                "flip_three_clusters",
+                "three_cluster_share",
             ] {
                 assert!(r.remove(key).is_some(), "{key}");
             }
@@ -498,6 +532,17 @@ pub(crate) mod tests {
         assert!(md.contains("3.4 % of this scene's"), "{md}");
         let median = md.lines().find(|l| l.starts_with("| `median`")).unwrap();
         assert!(median.contains("| 0.2500 | 0.0125 | -0.432 |"), "{median}");
+        assert!(!md.contains("3+ clusters"), "{md}");
+        let mut three = new.clone();
+        three.runs[1].flip_three_clusters = Some(0.0451);
+        three.runs[1].three_cluster_share = Some(0.00047);
+        let md3 = three.to_markdown();
+        assert!(md3.contains("0.047 % of this scene's"), "{md3}");
+        let median = md3.lines().find(|l| l.starts_with("| `median`")).unwrap();
+        assert!(
+            median.contains("| 0.2500 | 0.0125 | 0.0451 | -0.432 |"),
+            "{median}"
+        );
         let none = md.lines().find(|l| l.starts_with("| `none`")).unwrap();
         assert!(none.contains("| 0.0125 | – |"), "{none}");
         let header = md.lines().find(|l| l.starts_with("| method")).unwrap();

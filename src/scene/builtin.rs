@@ -35,6 +35,7 @@ pub(crate) const NAMES: &[&str] = &[
     "hull",
     "halo",
     "bars",
+    "ridges",
 ];
 
 /// Builds the built-in scene `name`, or `None` when there is none so named.
@@ -50,6 +51,7 @@ pub(crate) fn build(name: &str) -> Option<Scene> {
         "hull" => hull(),
         "halo" => halo(),
         "bars" => bars(),
+        "ridges" => ridges(),
         _ => return None,
     };
     Some(scene)
@@ -1491,14 +1493,51 @@ fn bars() -> Scene {
     let plate_mat = sb.material(Material::solid("plate", [0.45, 0.46, 0.5], 0.0, 0.6));
     let wall_mat = sb.material(Material::solid("wall", [0.03, 0.03, 0.035], 0.0, 0.9));
 
-    let eye = Vec3::new(0.0, 0.0, 10.0);
-    let fov_y = 30f32.to_radians();
-    // Bars lie in z = 0; world units per pixel there at the design height.
-    let unit_per_px = 2.0 * eye.z * (fov_y * 0.5).tan() / BARS_VIEW_HEIGHT_PX;
+    let (bar_mesh, bars) = slanted_bars();
+    sb.bars = bars;
+    sb.object("bars", bar_mesh, bar_mat, Mat4::IDENTITY);
+    // Ridges along its y, facets 21° either side of facing the camera, 5 cm
+    // from valley to crest; turned in the image plane so that no crease runs
+    // along a pixel row or column.
+    let plate_at = Mat4::from_translation(Vec3::new(2.6, 0.0, 0.0)) * Mat4::from_rotation_z(0.35);
+    sb.object(
+        "ridged plate",
+        ridged_plate(1.3, 1.9, 10),
+        plate_mat,
+        plate_at,
+    );
+    sb.object("wall", far_wall(), wall_mat, Mat4::IDENTITY);
+    bars_lights(&mut sb);
+    sb.finish(Background::Black, |_| bars_camera())
+}
 
-    // One bar per cell of a 3x2 grid on the left of the view, centred in
-    // its cell and four fifths as long as the cell lets it be.
-    let mut bar_mesh = MeshBuilder::default();
+/// Where `bars` and `ridges` are seen from: 10 units in front of the bars'
+/// plane, a 30° field of view.
+fn bars_camera() -> Camera {
+    Camera::look_at(
+        BARS_EYE,
+        Vec3::ZERO,
+        BARS_FOV_Y_DEG.to_radians(),
+        0.1,
+        Some(40.0),
+    )
+}
+
+/// The eye of [`bars_camera`].
+const BARS_EYE: Vec3 = Vec3::new(0.0, 0.0, 10.0);
+/// The vertical field of view of [`bars_camera`], in degrees.
+const BARS_FOV_Y_DEG: f32 = 30.0;
+
+/// The [`BARS`], one per cell of a 3x2 grid on the left of the view in the
+/// plane z = 0, each centred in its cell and four fifths as long as the cell
+/// lets it be, and the central 70 % of each as the bench measures it (the
+/// ends stay out of every scanline across it).
+fn slanted_bars() -> (MeshBuilder, Vec<Bar>) {
+    // World units per pixel in z = 0 at the design height.
+    let unit_per_px =
+        2.0 * BARS_EYE.z * (BARS_FOV_Y_DEG.to_radians() * 0.5).tan() / BARS_VIEW_HEIGHT_PX;
+    let mut mesh = MeshBuilder::default();
+    let mut bars = Vec::new();
     let (cell_w, cell_h, grid_left, grid_top) = (1.5f32, 2.4f32, -4.5f32, 2.4f32);
     for (k, &(width_px, slant_deg)) in BARS.iter().enumerate() {
         let centre = Vec3::new(
@@ -1513,27 +1552,29 @@ fn bars() -> Scene {
             0.4 * (cell_w / slant.sin().abs().max(1e-3)).min(cell_h / slant.cos().abs().max(1e-3));
         let half_width = across * (0.5 * width_px * unit_per_px);
         let (bottom, top) = (centre - along * half_length, centre + along * half_length);
-        bar_mesh.quad([
+        mesh.quad([
             bottom - half_width,
             bottom + half_width,
             top + half_width,
             top - half_width,
         ]);
-        // The central 70 %: the ends stay out of every scanline across it.
-        sb.bars.push(Bar {
+        bars.push(Bar {
             from: centre - along * (0.7 * half_length),
             to: centre + along * (0.7 * half_length),
             half_width,
         });
     }
-    sb.object("bars", bar_mesh, bar_mat, Mat4::IDENTITY);
+    (mesh, bars)
+}
 
-    // The plate: ridges along its y, facets 21° either side of facing the
-    // camera, 5 cm from valley to crest; turned in the image plane so that
-    // no crease runs along a pixel row or column.
-    let mut plate = MeshBuilder::default();
-    let (half_w, half_h, ridges, height) = (1.3f32, 1.9f32, 10, 0.05f32);
+/// A plate of `ridges` ridges along its y, `2 half_w` by `2 half_h`, in its
+/// plane z = 0: facets 21° either side of facing the camera (5 cm from
+/// valley to crest at the `bars` plate's pitch), close in depth but
+/// differing in normal.
+fn ridged_plate(half_w: f32, half_h: f32, ridges: u32) -> MeshBuilder {
     let pitch = 2.0 * half_w / ridges as f32;
+    let height = 0.05 * pitch / 0.26;
+    let mut plate = MeshBuilder::default();
     for r in 0..ridges {
         let x0 = -half_w + r as f32 * pitch;
         let (x1, x2) = (x0 + 0.5 * pitch, x0 + pitch);
@@ -1546,11 +1587,13 @@ fn bars() -> Scene {
             ]);
         }
     }
-    let plate_at = Mat4::from_translation(Vec3::new(2.6, 0.0, 0.0)) * Mat4::from_rotation_z(0.35);
-    sb.object("ridged plate", plate, plate_mat, plate_at);
+    plate
+}
 
-    // The wall: two triangles whose shared edge runs below the view, so
-    // that no triangle edge crosses the wall anywhere the camera sees.
+/// The dark wall at z = −10 behind `bars` and `ridges`: two triangles whose
+/// shared edge runs below the view, so that no triangle edge crosses the
+/// wall anywhere the camera sees.
+fn far_wall() -> MeshBuilder {
     let (wall_z, w, h) = (-10.0f32, 12.0f32, 7.0f32);
     let mut wall = MeshBuilder::default();
     let normal = Vec3::Z;
@@ -1570,10 +1613,12 @@ fn bars() -> Scene {
         ],
         normal,
     );
-    sb.object("wall", wall, wall_mat, Mat4::IDENTITY);
+    wall
+}
 
-    // A key low from the left, so that the plate's two facet directions
-    // differ clearly in light, and a weak fill from the right.
+/// `bars`' lights: a key low from the left, so that the plate's two facet
+/// directions differ clearly in light, and a weak fill from the right.
+fn bars_lights(sb: &mut SceneBuilder) {
     sb.lights.push(Light::directional(
         Vec3::new(0.8, -0.3, -1.0),
         rgb(1.0, 0.97, 0.92),
@@ -1584,9 +1629,35 @@ fn bars() -> Scene {
         rgb(0.75, 0.8, 1.0),
         0.4,
     ));
-    sb.finish(Background::Black, |_| {
-        Camera::look_at(eye, Vec3::ZERO, fov_y, 0.1, Some(40.0))
-    })
+}
+
+/// Three clusters in a pixel: `bars`' thin slanted bars in front of a
+/// ridged plate, 2 units behind them (far outside any resolve window), in
+/// front of the far wall. A pixel on a bar's edge over a crease holds the
+/// bar and both facets; over the plate's rim, the bar, a facet and the
+/// wall. Two layers keep two of the three; the bench's
+/// `flip_three_clusters` measures what that costs against per-sample
+/// lighting. The bars are not declared for the width measure: the plate,
+/// not the evenly lit wall, is behind them.
+fn ridges() -> Scene {
+    let mut sb = SceneBuilder::new("ridges");
+    let bar_mat = sb.material(Material::solid("bars", [0.8, 0.78, 0.74], 0.0, 0.8));
+    let plate_mat = sb.material(Material::solid("plate", [0.45, 0.46, 0.5], 0.0, 0.6));
+    let wall_mat = sb.material(Material::solid("wall", [0.03, 0.03, 0.035], 0.0, 0.9));
+    let (bar_mesh, _) = slanted_bars();
+    sb.object("bars", bar_mesh, bar_mat, Mat4::IDENTITY);
+    // Behind the bar grid, larger than it, ridges at twice `bars`' density.
+    let plate_at =
+        Mat4::from_translation(Vec3::new(-2.25, 0.0, -2.0)) * Mat4::from_rotation_z(0.35);
+    sb.object(
+        "ridged plate",
+        ridged_plate(2.6, 2.6, 40),
+        plate_mat,
+        plate_at,
+    );
+    sb.object("wall", far_wall(), wall_mat, Mat4::IDENTITY);
+    bars_lights(&mut sb);
+    sb.finish(Background::Black, |_| bars_camera())
 }
 
 #[cfg(test)]

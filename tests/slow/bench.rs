@@ -222,6 +222,30 @@ fn the_report_has_every_key_and_one_run_per_scene_method_and_count() {
         );
     }
 
+    // The cluster masks: pixels of three or more clusters are among those
+    // of two or more, and each scene's share is the same for every run.
+    for scene in SCENES {
+        let of_scene: Vec<&Value> = runs
+            .iter()
+            .filter(|r| r["scene"].as_str() == Some(scene))
+            .collect();
+        let two = of_scene[0]["edge_pixel_share"]
+            .as_f64()
+            .expect("edge_pixel_share");
+        let three = of_scene[0]["three_cluster_share"]
+            .as_f64()
+            .expect("three_cluster_share");
+        assert!(three <= two && two > 0.0, "{scene}: {three} of {two}");
+        for r in &of_scene {
+            assert_eq!(r["three_cluster_share"].as_f64(), Some(three), "{r}");
+            assert_eq!(
+                r["flip_three_clusters"].is_number(),
+                three > 0.0,
+                "flip_three_clusters is a number exactly when some pixel has three clusters: {r}"
+            );
+        }
+    }
+
     let md = std::fs::read_to_string(dir.join("report.md")).expect("report.md");
     for scene in SCENES {
         assert!(md.contains(&format!("## `{scene}`")), "{md}");

@@ -16,6 +16,7 @@ use crate::gl::{
     SavedState, SetupState, TextureRef, check_error, destroy_object,
 };
 pub use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect};
+use crate::resolve::cpu::{CpuKeySource, CpuResolve};
 use crate::resolve::{
     ExtraOutputs, KeySource, NormalEncoding, ResolveInputs, ResolveParams, ResolveRule,
     ResolveSettings, ResolveSlot, Resolver, StencilCopy, StencilPass,
@@ -665,6 +666,36 @@ impl MsaaRetrofit {
             points.push(ColorAttachment(n));
         }
         Ok((depth, colors, points))
+    }
+
+    /// The CPU reference of this retrofit's resolve of `frame`: the same
+    /// settings, rules, depth key, normal test, clear depth and pixel
+    /// footprint, for tools that analyse the resolve sample by sample (the
+    /// samples are [`MsaaRetrofit::inputs`] read back). A world-space key
+    /// needs the frame's view ([`Frame::with_view`]).
+    pub fn cpu_reference(&self, frame: &Frame) -> Result<CpuResolve> {
+        let params = self.params(frame)?;
+        let key_source = match self.key {
+            KeySource::Depth => CpuKeySource::Depth(params.projection),
+            KeySource::Position(slot) => CpuKeySource::Position(slot.0),
+            KeySource::WorldPosition(slot) => CpuKeySource::WorldPosition {
+                attachment: slot.0,
+                view_row: params.view_row.ok_or_else(|| {
+                    Error::invalid(
+                        "the depth key is a world-space position, so the CPU reference needs \
+                         the view matrix (Frame::with_view)",
+                    )
+                })?,
+            },
+        };
+        Ok(CpuResolve {
+            settings: params.settings,
+            rules: self.rules.clone(),
+            key_source,
+            clear_depth: params.projection.clear_depth,
+            footprint: params.footprint(),
+            normal: self.normal.map(|(slot, encoding)| (slot.0, encoding)),
+        })
     }
 
     /// The low-level parameters of a resolve of this frame.
