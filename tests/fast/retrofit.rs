@@ -346,14 +346,14 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
             .iter()
             .map(|t| readback.read(gl, TextureRef::from(*t), 1).unwrap())
             .collect();
-        let cpu = CpuResolve {
-            settings,
-            rules: msaa.rules().to_vec(),
-            key_source: CpuKeySource::Position(1),
-            clear_depth: 1.0,
-            footprint: footprint(),
-            normal: Some((2, NormalEncoding::Xyz)),
-        };
+        // The retrofit's own CPU reference, which the comparison below holds
+        // to the GPU's two layers.
+        let cpu = msaa.cpu_reference(&frame()).unwrap();
+        assert_eq!(cpu.settings, settings);
+        assert!(matches!(cpu.key_source, CpuKeySource::Position(1)));
+        assert_eq!(cpu.normal, Some((2, NormalEncoding::Xyz)));
+        assert_eq!(cpu.clear_depth, 1.0);
+        assert!((cpu.footprint - footprint()).abs() <= 1e-12 * footprint());
         let mut bad = Vec::new();
         for y in 0..H {
             for x in 0..W {
