@@ -1,6 +1,16 @@
 //! Accessors: the numbers an accessor holds, read from its buffer view with
 //! every offset, stride and count checked, sparse substitution and
 //! normalisation applied, as float vectors or as indices.
+//!
+//! Not gltf::mesh::Reader and gltf::accessor::Iter (gltf 1.4.1): `Iter::new`
+//! computes `offset + stride * (count - 1) + size` unchecked (a count of 0
+//! underflows, a huge one overflows), checks a stride smaller than the
+//! element with `debug_assert!` only and then panics reading each element
+//! from a slice shorter than it; `read_positions` and `read_normals` read `[f32; 3]` whatever the
+//! component type (quantised or normalised data come out as garbage);
+//! `read_indices` and `read_tex_coords` hit `unreachable!()` on component
+//! types they do not expect, which validation lets through; and a sparse
+//! index past the count is dropped silently.
 
 use gltf::accessor::{DataType, Dimensions};
 
@@ -10,14 +20,8 @@ use super::buffers::view_bytes;
 /// are allocated).
 const MAX_ZERO_ELEMENTS: usize = 1 << 22;
 
-fn component_size(t: DataType) -> usize {
-    match t {
-        DataType::I8 | DataType::U8 => 1,
-        DataType::I16 | DataType::U16 => 2,
-        DataType::U32 | DataType::F32 => 4,
-    }
-}
-
+// The crate spells these only as GL enums (`DataType::as_gl_enum`) and,
+// for dimensions, inside its serde impl: the names messages use are here.
 fn component_name(t: DataType) -> &'static str {
     match t {
         DataType::I8 => "BYTE",
@@ -74,7 +78,7 @@ fn read_elements(
     t: DataType,
     out: &mut Vec<f64>,
 ) -> Result<(), String> {
-    let cs = component_size(t);
+    let cs = t.size();
     let elem = cs * dims;
     if count == 0 {
         return Ok(());
@@ -112,7 +116,7 @@ fn read_accessor(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<f64>, 
     let t = acc.data_type();
     let dims = acc.dimensions().multiplicity();
     let count = acc.count();
-    let elem = component_size(t) * dims;
+    let elem = acc.size();
     let mut out = Vec::new();
     match acc.view() {
         Some(view) => {
@@ -148,7 +152,7 @@ fn read_accessor(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<f64>, 
         read_elements(
             data,
             indices.offset(),
-            component_size(it),
+            indices.index_type().size(),
             n,
             1,
             it,

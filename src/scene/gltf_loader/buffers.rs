@@ -7,7 +7,12 @@ use std::path::Path;
 use super::uri::{UriSource, display_uri, resolve_uri};
 
 /// Loads every buffer of the document, in order.
-// Not gltf::import_buffers: it zero-pads buffers to four bytes (a view overrunning by up to 3 then reads zeros) and gives the BIN chunk to one buffer only.
+// Not gltf::import_buffers (gltf 1.4.1): buffer::Data::from_source_and_blob
+// zero-pads each buffer to a multiple of four bytes before the byteLength
+// check, so a view overrunning the data by up to 3 bytes reads zeros
+// instead of failing; it `take`s the BIN chunk, so a second buffer naming
+// it fails with `MissingBlob`; and it resolves URIs with the importer's
+// scheme parser (see `uri`).
 pub(super) fn load_buffers(
     doc: &gltf::Document,
     base: Option<&Path>,

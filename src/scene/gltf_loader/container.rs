@@ -43,7 +43,10 @@ fn le_u32(bytes: &[u8], at: usize) -> Option<u32> {
 }
 
 /// Splits a `.glb` into its JSON and BIN chunks.
-// Not gltf::Glb::from_slice: it underflows on a declared length under 12 and refuses unknown chunk types, which the spec says to skip.
+// Not gltf::Glb::from_slice (gltf 1.4.1): it computes `header.length - 12`
+// unchecked, which underflows (a panic in debug builds) when the header
+// declares under 12 bytes, and it fails with `UnknownChunkType` on any chunk
+// other than JSON and BIN, which the spec says a reader skips.
 fn parse_glb(bytes: &[u8]) -> Result<Glb<'_>, String> {
     const JSON: u32 = 0x4E4F_534A;
     const BIN: u32 = 0x004E_4942;
@@ -158,11 +161,15 @@ pub(super) fn parse_document(json: &[u8]) -> Result<(gltf::Document, Vec<String>
     Ok((document, notes))
 }
 
-/// Readies primitives' POSITION accessors for validation, which indexes
-/// them unchecked and insists on their `min`/`max`: a POSITION naming a
-/// missing accessor is an error here, primitives without POSITION are left
+/// Readies primitives' POSITION accessors for validation: a POSITION naming
+/// a missing accessor is an error here, primitives without POSITION are left
 /// out, and absent or malformed bounds are replaced (they are never used:
 /// bounds are computed from the data).
+// gltf::Document::from_json (gltf-json 1.4.1, mesh.rs's
+// primitive_validate_hook) indexes `root.accessors[POSITION]` unchecked, a
+// panic on a dangling index, and fails the whole document for a primitive
+// without POSITION or a POSITION accessor without `min`/`max`, which many
+// exporters omit.
 fn prepare_positions(root: &mut gltf::json::Root, notes: &mut Vec<String>) -> Result<(), String> {
     use gltf::json::mesh::Semantic;
     use gltf::json::validation::Checked;

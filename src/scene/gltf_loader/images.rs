@@ -8,7 +8,12 @@ use super::buffers::view_bytes;
 use super::uri::{UriSource, display_uri, resolve_uri};
 
 /// Reads and decodes one image.
-// Not gltf::image::Data::from_source: it slices buffer views without bounds checks and refuses data URIs when loading from memory.
+// Not gltf::image::Data::from_source (gltf 1.4.1): it indexes
+// `buffer_data[view.buffer().index()][offset..offset + length]` unchecked,
+// a panic for a view past its buffer's end; it refuses every URI, data URIs
+// included, when there is no base folder (loading from memory); and without
+// the crate's `guess_mime_type` feature it picks the decoder from the
+// mimeType or the file extension alone, where this reads the bytes' magic.
 pub(super) fn decode_image(
     image: &gltf::Image,
     buffers: &[Vec<u8>],

@@ -4,7 +4,8 @@
 //! loader readies for the crate's validation. Everything that touches bytes
 //! from the file (the GLB container, buffers, URIs, accessors, images) is read
 //! here with explicit bounds checks, so a damaged file yields an error or a
-//! warning, never a panic; each place says what the crate (1.4) does instead.
+//! warning, never a panic; each place names the function of gltf 1.4.1 (the
+//! version in the lock file) it stands in for and what that does instead.
 //!
 //! What is honoured: the default scene's node tree with its transforms, mesh
 //! primitives in the triangle modes (strips and fans converted), positions,

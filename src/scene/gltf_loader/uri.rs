@@ -14,7 +14,13 @@ pub(super) enum UriSource {
 
 /// Resolves a URI against `base`, the folder of the file (`None` when
 /// loading from memory: then only data URIs are accepted).
-// Not the crate's importer: it panics on %-escapes that are not UTF-8, skips decoding file: paths and calls drive letters or a ':' in a path unsupported schemes.
+// Not the crate's importer (gltf 1.4.1, import.rs's private Scheme, behind
+// gltf::buffer::Data::from_source and gltf::image::Data::from_source):
+// it calls `urlencoding::decode(uri).unwrap()`, a panic on %-escapes that
+// are not UTF-8; it leaves `file:` paths undecoded; it calls every other URI
+// holding a ':' (a drive letter, a ':' in a file name) an unsupported scheme;
+// and it base64-decodes a data URI without `;base64,`, so percent-encoded
+// data URIs fail.
 pub(super) fn resolve_uri(uri: &str, base: Option<&Path>) -> Result<UriSource, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let Some((_, payload)) = rest.split_once(',') else {
@@ -74,8 +80,11 @@ fn percent_decode(s: &str) -> Vec<u8> {
 }
 
 /// Standard or URL-safe base64, padding optional, whitespace ignored, and
-/// nothing after the first `=` (lenient, as glTF writers in the wild are);
-/// the gltf crate's importer takes strict base64 only.
+/// nothing after the first `=` (lenient, as glTF writers in the wild are).
+// The importer of gltf 1.4.1 decodes with base64 0.13's `base64::decode`
+// (the standard alphabet): it refuses URL-safe characters, whitespace (line
+// breaks in wrapped payloads), non-zero trailing bits and text after the
+// padding.
 fn decode_base64(s: &str) -> Result<Vec<u8>, String> {
     use base64::Engine as _;
     use base64::engine::{DecodePaddingMode, GeneralPurpose, GeneralPurposeConfig};
