@@ -37,7 +37,7 @@ pub(super) fn resolve_uri(uri: &str, base: Option<&Path>) -> Result<UriSource, S
     }
     let Some(base) = base else {
         return Err(format!(
-            "external file '{}' cannot be read when loading from memory",
+            "external file {} cannot be read when loading from memory",
             display_uri(uri)
         ));
     };
@@ -111,4 +111,50 @@ fn decode_base64(s: &str) -> Result<Vec<u8>, String> {
         ),
         other => format!("invalid base64 data: {other}"),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn file(uri: &str, base: Option<&Path>) -> Result<PathBuf, String> {
+        match resolve_uri(uri, base)? {
+            UriSource::File(path) => Ok(path),
+            UriSource::Bytes(_) => Err(format!("{uri}: bytes, expected a file")),
+        }
+    }
+
+    #[test]
+    fn external_files_from_memory_are_named_once_quoted() {
+        let Err(msg) = file("quad.bin", None) else {
+            panic!("an external file from memory must be refused");
+        };
+        assert!(msg.contains("external file 'quad.bin' cannot"), "{msg}");
+    }
+
+    #[test]
+    fn file_uris_and_relative_paths_are_percent_decoded() {
+        let base = Path::new("models");
+        assert_eq!(file("a%20b.bin", Some(base)), Ok(base.join("a b.bin")));
+        assert_eq!(
+            file("file:///tmp/a%20b.bin", Some(base)),
+            Ok(PathBuf::from("/tmp/a b.bin"))
+        );
+        assert_eq!(file("C:/x.bin", Some(base)), Ok(base.join("C:/x.bin")));
+    }
+
+    #[test]
+    fn data_uris_decode_leniently() {
+        for uri in [
+            "data:,%41%42",
+            "data:;base64,QUI",
+            "data:;base64,Q U\nI=junk",
+        ] {
+            match resolve_uri(uri, None) {
+                Ok(UriSource::Bytes(b)) => assert_eq!(b, b"AB", "{uri}"),
+                Ok(UriSource::File(p)) => panic!("{uri}: a file {p:?}"),
+                Err(e) => panic!("{uri}: {e}"),
+            }
+        }
+    }
 }
