@@ -876,3 +876,135 @@ fn the_lit_layers_mix_by_coverage_in_the_chosen_domain() {
     host.destroy(gl);
     assert_eq!(live_objects(), before, "GL objects leaked");
 }
+
+/// `restore_first_layer: false`, for hosts that read nothing of their
+/// G-buffer after lighting: the lit image is bit for bit the one with the
+/// first layer restored, and the host's textures and depth hold the second
+/// layer afterwards instead of the first; the option changes without a
+/// rebuild, and switching it between `begin` and `finish` restores exactly
+/// when `begin` saved.
+#[test]
+fn without_restoring_the_first_layer_the_lit_image_is_the_same() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let host = host(gl);
+    let mut readback = Readback::new(gl).unwrap();
+    let output = Texture2d::new(gl, "lit output", Format::Rgba16f, W, H).unwrap();
+    let fbo = Framebuffer::new(
+        gl,
+        "lit output",
+        &[(Attachment::Color(0), TextureRef::from(&output))],
+        &[Some(0)],
+    )
+    .unwrap();
+    let options = RetrofitOptions {
+        position_attachment: Some(ColorAttachment(1)),
+        resolve: ResolveSettings {
+            layers: 2,
+            ..ResolveSettings::default()
+        },
+        normal_attachment: Some(NormalAttachment {
+            attachment: ColorAttachment(2),
+            encoding: NormalEncoding::Xyz,
+        }),
+        ..RetrofitOptions::default()
+    };
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
+    let gbuffer = |readback: &mut Readback| {
+        let mut planes: Vec<Vec<f32>> = [host.color(), host.position(), host.normal()]
+            .iter()
+            .map(|t| readback.read(gl, TextureRef::from(*t), 1).unwrap().data)
+            .collect();
+        planes.push(
+            readback
+                .read(gl, TextureRef::from(&host.depth), 1)
+                .unwrap()
+                .data,
+        );
+        planes
+    };
+    // One frame with the three calls; `flip` sets the option between begin
+    // and finish. Returns the mixed image, the host's G-buffer before begin
+    // and after finish, and the second layer's G-buffer.
+    let mut frame_with = |msaa: &mut MsaaRetrofit, restore: bool, flip: bool| {
+        let mut options = options.clone();
+        options.restore_first_layer = restore;
+        msaa.set_options(gl, &options).unwrap();
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        host.draw(gl, &projection(), false);
+        msaa.resolve(gl, &frame()).unwrap();
+        host.light(gl, fbo.raw(), 1.0);
+        let first = gbuffer(&mut readback);
+        assert!(msaa.begin_second_layer(gl, Some(fbo.raw())).unwrap());
+        if flip {
+            options.restore_first_layer = !restore;
+            msaa.set_options(gl, &options).unwrap();
+        }
+        host.light(gl, fbo.raw(), 1.0);
+        msaa.finish_second_layer(gl, Some(fbo.raw())).unwrap();
+        let mixed = readback
+            .read(gl, TextureRef::from(&output), 1)
+            .unwrap()
+            .data;
+        let after = gbuffer(&mut readback);
+        let (colors, depth) = msaa.second_layer_gbuffer().unwrap();
+        let mut second: Vec<Vec<f32>> = colors
+            .iter()
+            .map(|t| readback.read(gl, *t, 1).unwrap().data)
+            .collect();
+        second.push(readback.read(gl, depth, 1).unwrap().data);
+        (mixed, first, after, second)
+    };
+    // How many values of two sets of planes differ (bit for bit).
+    let differ = |a: &[Vec<f32>], b: &[Vec<f32>]| -> usize {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| {
+                p.iter()
+                    .zip(q)
+                    .filter(|(x, y)| x.to_bits() != y.to_bits())
+                    .count()
+            })
+            .sum()
+    };
+    let (mixed_restored, first, after, _) = frame_with(&mut msaa, true, false);
+    assert_eq!(
+        differ(&after, &first),
+        0,
+        "restored: the first layer is back"
+    );
+    let (mixed_kept, first, after, second) = frame_with(&mut msaa, false, false);
+    assert_eq!(
+        differ(
+            std::slice::from_ref(&mixed_kept),
+            std::slice::from_ref(&mixed_restored)
+        ),
+        0,
+        "the lit image does not change"
+    );
+    assert!(
+        differ(&after, &first) > 0,
+        "the second layer differs from the first somewhere"
+    );
+    assert_eq!(
+        differ(&after[..3], &second[..3]),
+        0,
+        "not restored: the host's colours are the second layer's"
+    );
+    // Turned off after begin: begin saved, so finish restores.
+    let (_, first, after, _) = frame_with(&mut msaa, true, true);
+    assert_eq!(differ(&after, &first), 0);
+    // Turned on after begin: nothing was saved, so nothing is put back.
+    let (mixed, first, after, _) = frame_with(&mut msaa, false, true);
+    assert_eq!(differ(&[mixed], &[mixed_restored]), 0);
+    assert!(differ(&after, &first) > 0);
+    msaa.destroy(gl);
+    fbo.destroy(gl);
+    output.destroy(gl);
+    readback.destroy(gl);
+    host.destroy(gl);
+    assert_eq!(live_objects(), before);
+}

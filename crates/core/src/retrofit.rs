@@ -60,6 +60,18 @@ pub struct RetrofitOptions {
     pub normal_attachment: Option<NormalAttachment>,
     /// How [`MsaaRetrofit::finish_second_layer`] mixes the two lit layers.
     pub layer_mix: LayerMix,
+    /// Whether [`MsaaRetrofit::finish_second_layer`] puts the first layer
+    /// (colours, depth and stencil) back into the host's G-buffer (the
+    /// default, `true`). A host whose passes after lighting read the
+    /// G-buffer or test against its depth or stencil (decals, transparent
+    /// objects drawn into the lit image with depth testing, screen-space
+    /// effects, picking) needs it. A host that touches none of them again
+    /// before its next geometry pass may set `false`:
+    /// [`MsaaRetrofit::begin_second_layer`] then does not copy the host's
+    /// G-buffer aside and `finish` does not copy it back, two full copies
+    /// fewer a frame, and the host's textures, depth and stencil hold the
+    /// second layer afterwards. The lit image is the same.
+    pub restore_first_layer: bool,
 }
 
 /// A host's normal attachment and its encoding.
@@ -83,6 +95,7 @@ impl Default for RetrofitOptions {
             memory_budget: None,
             normal_attachment: None,
             layer_mix: LayerMix::Auto,
+            restore_first_layer: true,
         }
     }
 }
@@ -754,7 +767,7 @@ impl MsaaRetrofit {
             return Ok(false);
         };
         let host = SetupState::capture(gl);
-        let mut result = second.begin(gl, output);
+        let mut result = second.begin(gl, output, self.options.restore_first_layer);
         // The host's stencil, for its lighting's tests: the second
         // cluster's seed sample's (the first layer's comes back in finish).
         if let (Ok(()), Some(s), Some(depth), Some(reference)) = (
@@ -773,8 +786,9 @@ impl MsaaRetrofit {
     /// [`MsaaRetrofit::begin_second_layer`]): write
     /// `mix(first, second, α)` into it ([`RetrofitOptions::layer_mix`]; the
     /// first layer exactly where `α` is 0) and put the first layer back into
-    /// the host's G-buffer textures and depth. The host's GL state is as it
-    /// was.
+    /// the host's G-buffer textures and depth (unless
+    /// [`RetrofitOptions::restore_first_layer`] was off at `begin`). The
+    /// host's GL state is as it was.
     pub fn finish_second_layer(
         &mut self,
         gl: &glow::Context,

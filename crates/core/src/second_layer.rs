@@ -197,6 +197,8 @@ pub(crate) struct SecondLayer {
     selected: std::cell::Cell<bool>,
     /// The second layer was resolved since the last `finish_second_layer`.
     pub(crate) resolved: bool,
+    /// `begin` copied the host's G-buffer aside, so `finish` puts it back.
+    host_saved: bool,
 }
 
 impl GlObject for SecondLayer {
@@ -463,6 +465,7 @@ impl SecondLayer {
                 vao,
                 output: None,
                 lighting: false,
+                host_saved: false,
                 selected: std::cell::Cell::new(false),
                 resolved: false,
             })
@@ -820,11 +823,14 @@ impl SecondLayer {
     }
 
     /// Keep the lit first layer from `output` and put the second layer into
-    /// the host's textures (the caller saves the host's state).
+    /// the host's textures (the caller saves the host's state); with
+    /// `restore`, copy the host's G-buffer aside first, for `finish` to put
+    /// back.
     pub(crate) fn begin(
         &mut self,
         gl: &glow::Context,
         output: Option<glow::Framebuffer>,
+        restore: bool,
     ) -> Result<()> {
         if self.lighting {
             return Err(Error::invalid(
@@ -838,7 +844,10 @@ impl SecondLayer {
         }
         self.output_for(gl, output)?;
         self.keep_lit(gl, true);
-        self.copy_set(gl, Set::Host, Set::Saved, false);
+        if restore {
+            self.copy_set(gl, Set::Host, Set::Saved, false);
+        }
+        self.host_saved = restore;
         // The host's stencil stays: its lighting may test it.
         self.copy_set(gl, Set::Second, Set::Host, true);
         self.depth_into_host(gl);
@@ -847,8 +856,9 @@ impl SecondLayer {
         Ok(())
     }
 
-    /// Mix the two lit layers into the output and put the first layer back
-    /// into the host's textures (the caller saves the host's state).
+    /// Mix the two lit layers into the output and, where `begin` saved it,
+    /// put the first layer back into the host's textures (the caller saves
+    /// the host's state).
     pub(crate) fn finish(
         &mut self,
         gl: &glow::Context,
@@ -869,7 +879,9 @@ impl SecondLayer {
         self.keep_lit(gl, false);
         self.draw_mix(gl)?;
         // Depth and stencil as they were before the second lighting.
-        self.copy_set(gl, Set::Saved, Set::Host, false);
+        if self.host_saved {
+            self.copy_set(gl, Set::Saved, Set::Host, false);
+        }
         check_error(gl, "mixing the two lit layers")
     }
 
