@@ -43,7 +43,7 @@ pub mod report;
 
 pub use methods::{MethodEntry, default_methods, parse_methods};
 use methods::{adds_geometry, adds_lighting};
-pub use report::{Reference, Report, Run, pareto_front};
+pub use report::{ProfileStep, Reference, Report, Run, pareto_front};
 
 use crate::compare;
 use crate::context::{Backend, GlVersion, HeadlessContext};
@@ -99,6 +99,10 @@ pub struct BenchConfig {
     pub layout: GBufferLayout,
     /// Show a progress bar on stderr (drawn only when stderr is a terminal).
     pub progress: bool,
+    /// After the timed frames, render `frames` more of each method that
+    /// resolves with the retrofit profiling its steps (`glFinish` around
+    /// each), and report each step's median ([`Run::profile`]).
+    pub profile: bool,
 }
 
 impl Default for BenchConfig {
@@ -117,6 +121,7 @@ impl Default for BenchConfig {
             warmup: 3,
             layout: GBufferLayout::recommended(),
             progress: false,
+            profile: false,
         }
     }
 }
@@ -501,6 +506,8 @@ struct Job<'a> {
     second_layer_share: Option<f64>,
     /// `sparse`: the pixels that fell back to one sample in the last frame.
     sparse_overflow_pixels: Option<u64>,
+    /// With `--profile`: the retrofit's steps, median milliseconds each.
+    profile: Option<Vec<ProfileStep>>,
 }
 
 /// Renderers shared by jobs of the same class, FXAA setting, sample count
@@ -813,6 +820,7 @@ fn time_scene(
                 complex_fraction: None,
                 second_layer_share: None,
                 sparse_overflow_pixels: None,
+                profile: None,
             });
         }
     }
@@ -849,6 +857,51 @@ fn time_scene(
                     .map(|s| u64::from(s.overflow_pixels));
             }
             pb.inc(1);
+        }
+    }
+
+    // The profile: more frames of each job with a retrofit, every step of
+    // the retrofit's (and the renderer's second-layer passes) timed between
+    // two glFinish calls; each step's median over the frames.
+    if config.profile {
+        for job in jobs.iter_mut().filter(|j| j.reported) {
+            let renderer = pool.get(job.slot)?;
+            if renderer.retrofit().is_none() {
+                continue;
+            }
+            if renderer.options() != &job.options {
+                renderer.set_options(gl, &job.options)?;
+            }
+            pb.set_message(format!(
+                "{spec}: {} {}x, profiling",
+                job.entry.label, job.samples
+            ));
+            renderer.set_profiling(true);
+            let mut samples: Vec<(&'static str, Vec<f64>)> = Vec::new();
+            let frames = (|| {
+                for _ in 0..config.frames {
+                    renderer.render(gl)?;
+                    let steps = renderer.retrofit().map(|r| r.profile().steps().to_vec());
+                    for (k, (name, ms)) in steps.unwrap_or_default().into_iter().enumerate() {
+                        match samples.get_mut(k) {
+                            Some((n, v)) if *n == name => v.push(ms),
+                            _ => samples.insert(k, (name, vec![ms])),
+                        }
+                    }
+                }
+                Ok::<_, Error>(())
+            })();
+            renderer.set_profiling(false);
+            frames?;
+            job.profile = Some(
+                samples
+                    .into_iter()
+                    .map(|(step, ms)| ProfileStep {
+                        step: step.to_string(),
+                        ms: median(ms),
+                    })
+                    .collect(),
+            );
         }
     }
 
@@ -942,6 +995,7 @@ fn time_scene(
             complex_fraction: job.complex_fraction,
             second_layer_share: job.second_layer_share,
             sparse_overflow_pixels: job.sparse_overflow_pixels,
+            profile: job.profile,
             full_ms_gbuffer_bytes: matches!(job.entry.method, AaMode::Sparse(_)).then(|| {
                 config
                     .layout

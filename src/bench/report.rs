@@ -38,6 +38,66 @@ pub struct Reference {
     pub spp: u32,
 }
 
+/// The profiles of `runs` (`bench --profile`) as one table, a row per step
+/// in the order they ran and a column per profiled run; `None` when no run
+/// has one.
+pub fn profile_table(runs: &[&Run]) -> Option<String> {
+    let profiled: Vec<(&Run, &Vec<ProfileStep>)> = runs
+        .iter()
+        .filter_map(|r| r.profile.as_ref().map(|p| (*r, p)))
+        .collect();
+    if profiled.is_empty() {
+        return None;
+    }
+    let mut steps: Vec<&str> = Vec::new();
+    for (_, profile) in &profiled {
+        for s in profile.iter() {
+            if !steps.contains(&s.step.as_str()) {
+                steps.push(&s.step);
+            }
+        }
+    }
+    let mut md = String::from(
+        "Profile (`--profile`): each step's median time in ms, over as many extra frames as were \
+         timed, each between two `glFinish` calls (a profiled frame is slower than a plain one: \
+         read the steps' shares).\n\n",
+    );
+    let names: Vec<String> = profiled
+        .iter()
+        .map(|(r, _)| format!("`{}`", r.method))
+        .collect();
+    let _ = writeln!(md, "| step | {} |", names.join(" | "));
+    let _ = writeln!(md, "|---|{}|", vec!["---:"; names.len()].join("|"));
+    for step in steps.iter().copied().chain(["total"]) {
+        let cells: Vec<String> = profiled
+            .iter()
+            .map(|(_, profile)| {
+                let ms: Vec<f64> = profile
+                    .iter()
+                    .filter(|s| step == "total" || s.step == step)
+                    .map(|s| s.ms)
+                    .collect();
+                if ms.is_empty() {
+                    "–".into()
+                } else {
+                    format!("{:.2}", ms.iter().sum::<f64>())
+                }
+            })
+            .collect();
+        let _ = writeln!(md, "| {step} | {} |", cells.join(" | "));
+    }
+    Some(md)
+}
+
+/// One step of a profiled frame ([`Run::profile`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ProfileStep {
+    /// What ran: `resolve`, `second layer: copy in`, …
+    pub step: String,
+    /// Its median time in milliseconds.
+    pub ms: f64,
+}
+
 /// One method on one scene at one sample count.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Run {
@@ -135,6 +195,13 @@ pub struct Run {
     /// without the mask).
     #[serde(default)]
     pub three_cluster_share: Option<f64>,
+    /// With `bench --profile`, for a method that resolves with the
+    /// retrofit: each of the retrofit's steps (and the renderer's own
+    /// second-layer passes), timed between two `glFinish` calls over as
+    /// many extra frames as were timed, the median of each (extra key;
+    /// absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile: Option<Vec<ProfileStep>>,
 }
 
 impl Report {
@@ -336,6 +403,9 @@ impl Report {
             if let Some(line) = lighting_orderings(&runs) {
                 let _ = writeln!(md, "{line}\n");
             }
+            if let Some(table) = profile_table(&runs) {
+                let _ = writeln!(md, "{table}");
+            }
             for run in runs.iter().filter(|r| r.full_ms_gbuffer_bytes.is_some()) {
                 let full = run.full_ms_gbuffer_bytes.unwrap_or(0);
                 let _ = writeln!(
@@ -466,6 +536,7 @@ pub(crate) mod tests {
             edge_pixel_share: None,
             flip_three_clusters: None,
             three_cluster_share: None,
+            profile: None,
         }
     }
 
@@ -489,6 +560,26 @@ pub(crate) mod tests {
     /// A report written before the edge split and the bar width loads,
     /// with those keys `null`, and its Markdown has no columns for them;
     /// a run that has them gets its columns, and the scene its share line.
+    #[test]
+    fn the_profile_table_has_a_row_per_step_and_a_column_per_profiled_run() {
+        let none = run("none", 1.0);
+        assert_eq!(profile_table(&[&none]), None);
+        let step = |step: &str, ms: f64| ProfileStep {
+            step: step.into(),
+            ms,
+        };
+        let mut one = run("median", 1.0);
+        one.profile = Some(vec![step("resolve", 2.0)]);
+        let mut two = run("median:layers=2", 1.0);
+        two.profile = Some(vec![step("resolve", 3.0), step("second layer: mix", 1.25)]);
+        let table = profile_table(&[&none, &one, &two]).unwrap();
+        let rows: Vec<&str> = table.lines().filter(|l| l.starts_with('|')).collect();
+        assert_eq!(rows[0], "| step | `median` | `median:layers=2` |");
+        assert_eq!(rows[2], "| resolve | 2.00 | 3.00 |");
+        assert_eq!(rows[3], "| second layer: mix | – | 1.25 |");
+        assert_eq!(rows[4], "| total | 2.00 | 4.25 |");
+    }
+
     #[test]
     fn edge_and_bar_columns_appear_only_where_runs_have_them() {
         let old = report(vec![run("none", 1.0), run("median", 1.0)]);

@@ -45,6 +45,11 @@ pub struct BenchCmd {
     /// Also write every measured image (and the reference) into DIR/images/.
     #[arg(long)]
     images: bool,
+    /// After the timed frames, time each step of the retrofit (and the
+    /// renderer's second-layer passes) between glFinish calls over as many
+    /// frames again, and print each step's median (`profile` in report.json).
+    #[arg(long)]
+    profile: bool,
     /// The folder to write report.json, report.md, error_vs_time.png and crops.png into.
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
@@ -84,6 +89,7 @@ impl BenchCmd {
                 GBufferLayout::recommended()
             },
             progress: std::io::stderr().is_terminal(),
+            profile: self.profile,
         };
         config.validate()?;
         Ok(config)
@@ -118,6 +124,9 @@ pub fn run(cmd: &BenchCmd) -> Result<()> {
             line.push_str(&format!(", bar width {error:+.3} px"));
         }
         println!("{line}");
+        for step in r.profile.iter().flatten() {
+            println!("    {:>8.2} ms  {}", step.ms, step.step);
+        }
     }
     println!(
         "report -> {} (report.json, report.md, error_vs_time.png, crops.png)",

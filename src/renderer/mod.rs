@@ -1104,6 +1104,15 @@ impl Renderer {
         self.frame.retrofit.as_ref()
     }
 
+    /// Profile the retrofit's steps from the next frame on, or stop
+    /// ([`MsaaRetrofit::set_profiling`]); the renderer times its own
+    /// second-layer passes into the same profile. Nothing with no retrofit.
+    pub fn set_profiling(&mut self, on: bool) {
+        if let Some(retrofit) = self.frame.retrofit.as_mut() {
+            retrofit.set_profiling(on);
+        }
+    }
+
     /// The camera's projection at this size in the frame's depth mode:
     /// standard GL depth (−1..1, [`Camera::projection`]), or reversed-Z for
     /// `GL_ZERO_TO_ONE` (near → 1; far → 0, or 0 at infinity).

@@ -1008,3 +1008,86 @@ fn without_restoring_the_first_layer_the_lit_image_is_the_same() {
     host.destroy(gl);
     assert_eq!(live_objects(), before);
 }
+
+/// The profile (`set_profiling`): off, nothing is recorded; on, every step
+/// of the three calls is, in order, with a host's own step timed into the
+/// same profile between them, and the lit image is bit for bit the one
+/// made without profiling; a new resolve starts a new profile.
+#[test]
+fn profiling_times_each_step_and_changes_nothing() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let host = host(gl);
+    let mut readback = Readback::new(gl).unwrap();
+    let output = Texture2d::new(gl, "lit output", Format::Rgba16f, W, H).unwrap();
+    let fbo = Framebuffer::new(
+        gl,
+        "lit output",
+        &[(Attachment::Color(0), TextureRef::from(&output))],
+        &[Some(0)],
+    )
+    .unwrap();
+    let options = RetrofitOptions {
+        position_attachment: Some(ColorAttachment(1)),
+        resolve: ResolveSettings {
+            layers: 2,
+            ..ResolveSettings::default()
+        },
+        ..RetrofitOptions::default()
+    };
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
+    let mut frame_of = |msaa: &mut MsaaRetrofit| {
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        host.draw(gl, &projection(), false);
+        msaa.resolve(gl, &frame()).unwrap();
+        host.light(gl, fbo.raw(), 1.0);
+        assert!(msaa.begin_second_layer(gl, Some(fbo.raw())).unwrap());
+        msaa.profile_mut()
+            .time(gl, "the host's second lighting", || {
+                host.light(gl, fbo.raw(), 1.0)
+            });
+        msaa.finish_second_layer(gl, Some(fbo.raw())).unwrap();
+        let image = readback
+            .read(gl, TextureRef::from(&output), 1)
+            .unwrap()
+            .data;
+        let steps: Vec<&str> = msaa.profile().steps().iter().map(|(n, _)| *n).collect();
+        let times_ok = msaa.profile().steps().iter().all(|(_, ms)| *ms >= 0.0);
+        (image, steps.join(", "), times_ok)
+    };
+    let (plain, steps, _) = frame_of(&mut msaa);
+    assert_eq!(steps, "", "nothing is recorded unless asked");
+    msaa.set_profiling(true);
+    let (profiled, steps, times_ok) = frame_of(&mut msaa);
+    assert!(times_ok);
+    assert_eq!(
+        steps,
+        "resolve, second layer: selection, second layer: resolve, \
+         second layer: keep lit first layer, second layer: save host G-buffer, \
+         second layer: copy in, second layer: depth into host, the host's second lighting, \
+         second layer: keep lit second layer, second layer: mix, \
+         second layer: restore host G-buffer"
+    );
+    assert!(
+        plain
+            .iter()
+            .zip(&profiled)
+            .all(|(a, b)| a.to_bits() == b.to_bits()),
+        "profiling changes the image"
+    );
+    // The next frame's profile replaces this one's, it does not add to it.
+    let (_, again, _) = frame_of(&mut msaa);
+    assert_eq!(again, steps);
+    msaa.set_profiling(false);
+    let (_, off, _) = frame_of(&mut msaa);
+    assert_eq!(off, "");
+    msaa.destroy(gl);
+    fbo.destroy(gl);
+    output.destroy(gl);
+    readback.destroy(gl);
+    host.destroy(gl);
+    assert_eq!(live_objects(), before);
+}

@@ -548,3 +548,57 @@ fn bad_input_is_refused_in_one_line() {
     assert!(!Path::new(&dir).join("report.json").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `bench --profile`: every method that resolves with the retrofit gets
+/// its steps in report.json and on stdout, the second layer's among them
+/// for two layers; `none` gets none.
+#[test]
+#[ignore = "slow tier: scripts/test runs it"]
+fn the_profile_lists_each_step_of_the_retrofit() {
+    if common::egl_context().is_none() {
+        return;
+    }
+    let (dir, report) = bench(
+        "profile",
+        SIZE,
+        &[
+            "--scene",
+            HALO,
+            "--methods",
+            "none,median,median:layers=2",
+            "--frames",
+            "2",
+            "--warmup",
+            "0",
+            "--profile",
+        ],
+    );
+    let steps = |method: &str| -> Vec<String> {
+        run(&report, HALO, method)["profile"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .map(|s| {
+                        assert!(s["ms"].as_f64().is_some_and(|ms| ms >= 0.0), "{s}");
+                        s["step"].as_str().unwrap().to_string()
+                    })
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    assert!(steps("none").is_empty());
+    assert_eq!(steps("median"), ["resolve"]);
+    let two = steps("median:layers=2");
+    for step in [
+        "resolve",
+        "second layer: selection",
+        "second layer: resolve",
+        "second layer: copy in",
+        "second layer: the renderer's second lighting",
+        "second layer: mix",
+        "second layer: restore host G-buffer",
+    ] {
+        assert!(two.iter().any(|s| s == step), "{step} missing from {two:?}");
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -100,6 +100,7 @@ pub mod frame;
 pub mod gbuffer;
 pub mod gl;
 pub mod host;
+pub mod profile;
 pub mod readback;
 pub mod resolve;
 pub mod retrofit;

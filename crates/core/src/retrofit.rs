@@ -16,6 +16,7 @@ use crate::gl::{
     SavedState, SetupState, TextureRef, check_error, destroy_object,
 };
 pub use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect};
+use crate::profile::StepProfile;
 use crate::resolve::cpu::{CpuKeySource, CpuResolve};
 use crate::resolve::{
     ExtraOutputs, KeySource, NormalEncoding, ResolveInputs, ResolveParams, ResolveRule,
@@ -130,6 +131,8 @@ pub struct MsaaRetrofit {
     normal: Option<(ResolveSlot, NormalEncoding)>,
     /// The second layer, with two layers.
     second: Option<SecondLayer>,
+    /// The last profiled frame's steps ([`MsaaRetrofit::set_profiling`]).
+    profile: StepProfile,
 }
 
 /// What [`MsaaRetrofit::build`] makes from the host's framebuffer.
@@ -325,6 +328,7 @@ impl MsaaRetrofit {
             stencil: built.stencil,
             normal: built.normal,
             second: built.second,
+            profile: StepProfile::default(),
         };
         if let Err(e) = retrofit.prepare(gl) {
             retrofit.destroy(gl);
@@ -532,7 +536,7 @@ impl MsaaRetrofit {
     fn prepare(&mut self, gl: &glow::Context) -> Result<()> {
         let extra = self.extra_outputs();
         self.run_resolver(gl, None, None, extra)?;
-        self.run_second_layer(gl, None)
+        self.run_second_layer(gl, None, &mut StepProfile::default())
     }
 
     /// The second layer's resolve under `params` (or, without, only its
@@ -541,6 +545,7 @@ impl MsaaRetrofit {
         &mut self,
         gl: &glow::Context,
         params: Option<&ResolveParams>,
+        profile: &mut StepProfile,
     ) -> Result<()> {
         let Some(second) = &self.second else {
             return Ok(());
@@ -564,17 +569,22 @@ impl MsaaRetrofit {
                 second.has_reference(),
             ),
             Some(params) => {
-                let state = SavedState::capture(gl, 1);
-                let selected = second.select(gl, params.projection.clear_depth as f32);
-                state.restore(gl);
-                self.resolver.run_second_layer(
-                    gl,
-                    &inputs,
-                    second.target(),
-                    params,
-                    second.has_reference(),
-                    selected?,
-                )
+                let selected = profile.time(gl, "second layer: selection", || {
+                    let state = SavedState::capture(gl, 1);
+                    let selected = second.select(gl, params.projection.clear_depth as f32);
+                    state.restore(gl);
+                    selected
+                });
+                profile.time(gl, "second layer: resolve", || {
+                    self.resolver.run_second_layer(
+                        gl,
+                        &inputs,
+                        second.target(),
+                        params,
+                        second.has_reference(),
+                        selected?,
+                    )
+                })
             }
         }
     }
@@ -728,21 +738,62 @@ impl MsaaRetrofit {
     pub fn resolve(&mut self, gl: &glow::Context, frame: &Frame) -> Result<()> {
         let params = self.params(frame)?;
         let extra = self.extra_outputs();
-        self.run_resolver(gl, None, Some(&params), extra)?;
+        // A frame begins: its profile replaces the last one's.
+        let mut profile = std::mem::take(&mut self.profile);
+        profile.clear();
+        let result = self.resolve_profiled(gl, &params, extra, &mut profile);
+        self.profile = profile;
+        result
+    }
+
+    fn resolve_profiled(
+        &mut self,
+        gl: &glow::Context,
+        params: &ResolveParams,
+        extra: ExtraOutputs,
+        profile: &mut StepProfile,
+    ) -> Result<()> {
+        profile.time(gl, "resolve", || {
+            self.run_resolver(gl, None, Some(params), extra)
+        })?;
         if let (Some(s), Some(depth)) = (&self.stencil, self.twin.depth()) {
-            s.pass
-                .run(gl, depth, &self.twin.fbo, &s.reference, &s.target)?;
+            profile.time(gl, "stencil copy", || {
+                s.pass
+                    .run(gl, depth, &self.twin.fbo, &s.reference, &s.target)
+            })?;
         }
         if self.second.as_ref().is_some_and(|s| s.lighting) {
             return Err(Error::invalid(
                 "resolve was called between begin_second_layer and finish_second_layer",
             ));
         }
-        self.run_second_layer(gl, Some(&params))?;
+        self.run_second_layer(gl, Some(params), profile)?;
         if let Some(second) = &mut self.second {
             second.resolved = true;
         }
         Ok(())
+    }
+
+    /// Time each of the retrofit's steps from the next frame on (between
+    /// two `glFinish` calls, which slow the frame: for finding where time
+    /// goes, not for frame times), or stop. [`MsaaRetrofit::profile`] has
+    /// the steps of the frame since the last `resolve`.
+    pub fn set_profiling(&mut self, on: bool) {
+        self.profile.set_enabled(on);
+    }
+
+    /// The steps timed since the last `resolve` while profiling: the
+    /// resolve, the stencil copy, the second layer's selection and resolve,
+    /// and each copy and the mix of `begin_second_layer` and
+    /// `finish_second_layer`. Empty when not profiling.
+    pub fn profile(&self) -> &StepProfile {
+        &self.profile
+    }
+
+    /// The profile, for a host to time its own passes into it
+    /// ([`StepProfile::time`]).
+    pub fn profile_mut(&mut self) -> &mut StepProfile {
+        &mut self.profile
     }
 
     /// With two layers ([`ResolveSettings::layers`] = 2), after the host lit
@@ -767,7 +818,8 @@ impl MsaaRetrofit {
             return Ok(false);
         };
         let host = SetupState::capture(gl);
-        let mut result = second.begin(gl, output, self.options.restore_first_layer);
+        let profile = &mut self.profile;
+        let mut result = second.begin(gl, output, self.options.restore_first_layer, profile);
         // The host's stencil, for its lighting's tests: the second
         // cluster's seed sample's (the first layer's comes back in finish).
         if let (Ok(()), Some(s), Some(depth), Some(reference)) = (
@@ -776,7 +828,9 @@ impl MsaaRetrofit {
             self.twin.depth(),
             second.reference(),
         ) {
-            result = s.pass.run(gl, depth, &self.twin.fbo, reference, &s.target);
+            result = profile.time(gl, "second layer: seed stencil", || {
+                s.pass.run(gl, depth, &self.twin.fbo, reference, &s.target)
+            });
         }
         host.restore(gl);
         result.map(|()| true)
@@ -800,7 +854,7 @@ impl MsaaRetrofit {
             ));
         };
         let host = SetupState::capture(gl);
-        let result = second.finish(gl, output);
+        let result = second.finish(gl, output, &mut self.profile);
         host.restore(gl);
         result
     }

@@ -16,6 +16,7 @@ use crate::gl::{
     ShaderSource, Texture2d, TextureRef, VertexArray, check_error, destroy_object,
 };
 use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect_point};
+use crate::profile::StepProfile;
 use crate::{Error, Result};
 use glow::HasContext;
 
@@ -831,6 +832,7 @@ impl SecondLayer {
         gl: &glow::Context,
         output: Option<glow::Framebuffer>,
         restore: bool,
+        profile: &mut StepProfile,
     ) -> Result<()> {
         if self.lighting {
             return Err(Error::invalid(
@@ -843,14 +845,22 @@ impl SecondLayer {
             ));
         }
         self.output_for(gl, output)?;
-        self.keep_lit(gl, true);
+        profile.time(gl, "second layer: keep lit first layer", || {
+            self.keep_lit(gl, true)
+        });
         if restore {
-            self.copy_set(gl, Set::Host, Set::Saved, false);
+            profile.time(gl, "second layer: save host G-buffer", || {
+                self.copy_set(gl, Set::Host, Set::Saved, false)
+            });
         }
         self.host_saved = restore;
         // The host's stencil stays: its lighting may test it.
-        self.copy_set(gl, Set::Second, Set::Host, true);
-        self.depth_into_host(gl);
+        profile.time(gl, "second layer: copy in", || {
+            self.copy_set(gl, Set::Second, Set::Host, true)
+        });
+        profile.time(gl, "second layer: depth into host", || {
+            self.depth_into_host(gl)
+        });
         check_error(gl, "keeping the first layer and copying in the second")?;
         self.lighting = true;
         Ok(())
@@ -863,6 +873,7 @@ impl SecondLayer {
         &mut self,
         gl: &glow::Context,
         output: Option<glow::Framebuffer>,
+        profile: &mut StepProfile,
     ) -> Result<()> {
         if !self.lighting {
             return Err(Error::invalid(
@@ -876,11 +887,15 @@ impl SecondLayer {
         }
         self.lighting = false;
         self.resolved = false;
-        self.keep_lit(gl, false);
-        self.draw_mix(gl)?;
+        profile.time(gl, "second layer: keep lit second layer", || {
+            self.keep_lit(gl, false)
+        });
+        profile.time(gl, "second layer: mix", || self.draw_mix(gl))?;
         // Depth and stencil as they were before the second lighting.
         if self.host_saved {
-            self.copy_set(gl, Set::Saved, Set::Host, false);
+            profile.time(gl, "second layer: restore host G-buffer", || {
+                self.copy_set(gl, Set::Saved, Set::Host, false)
+            });
         }
         check_error(gl, "mixing the two lit layers")
     }

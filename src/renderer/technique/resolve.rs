@@ -168,8 +168,15 @@ impl Technique for Resolve {
                 height: hdr.texture.height,
                 stencil: StencilSelect::All,
             };
-            let masked = mask.draw(gl, target, step.fullscreen, coverage)?;
-            step.light_per_pixel_into(gl, masked)?;
+            // The renderer's own steps go into the retrofit's profile
+            // beside the retrofit's (when profiling).
+            let profile = retrofit.profile_mut();
+            let masked = profile.time(gl, "second layer: the renderer's mask", || {
+                mask.draw(gl, target, step.fullscreen, coverage)
+            })?;
+            profile.time(gl, "second layer: the renderer's second lighting", || {
+                step.light_per_pixel_into(gl, masked)
+            })?;
             Ok(retrofit.finish_second_layer(gl, output)?)
         })
     }
