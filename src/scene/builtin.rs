@@ -1488,24 +1488,33 @@ const BARS: [(f32, f32); 6] = [
 /// scene declares each bar's central stretch ([`Scene::bars`]), with
 /// nothing but wall around it.
 fn bars() -> Scene {
-    let mut sb = SceneBuilder::new("bars");
+    // The plate: ridges along its y, facets 21° either side of facing the
+    // camera, 5 cm from valley to crest; turned in the image plane so that
+    // no crease runs along a pixel row or column.
+    let plate_at = Mat4::from_translation(Vec3::new(2.6, 0.0, 0.0)) * Mat4::from_rotation_z(0.35);
+    bars_with_plate("bars", ridged_plate(1.3, 1.9, 10), plate_at, true)
+}
+
+/// `bars` and `ridges`: the [`BARS`], a ridged `plate` placed by
+/// `plate_at`, the far wall, the lights and the camera; with
+/// `declare_bars`, the bars' central stretches for the bench's width
+/// measure.
+fn bars_with_plate(
+    name: &'static str,
+    plate: MeshBuilder,
+    plate_at: Mat4,
+    declare_bars: bool,
+) -> Scene {
+    let mut sb = SceneBuilder::new(name);
     let bar_mat = sb.material(Material::solid("bars", [0.8, 0.78, 0.74], 0.0, 0.8));
     let plate_mat = sb.material(Material::solid("plate", [0.45, 0.46, 0.5], 0.0, 0.6));
     let wall_mat = sb.material(Material::solid("wall", [0.03, 0.03, 0.035], 0.0, 0.9));
-
     let (bar_mesh, bars) = slanted_bars();
-    sb.bars = bars;
+    if declare_bars {
+        sb.bars = bars;
+    }
     sb.object("bars", bar_mesh, bar_mat, Mat4::IDENTITY);
-    // Ridges along its y, facets 21° either side of facing the camera, 5 cm
-    // from valley to crest; turned in the image plane so that no crease runs
-    // along a pixel row or column.
-    let plate_at = Mat4::from_translation(Vec3::new(2.6, 0.0, 0.0)) * Mat4::from_rotation_z(0.35);
-    sb.object(
-        "ridged plate",
-        ridged_plate(1.3, 1.9, 10),
-        plate_mat,
-        plate_at,
-    );
+    sb.object("ridged plate", plate, plate_mat, plate_at);
     sb.object("wall", far_wall(), wall_mat, Mat4::IDENTITY);
     bars_lights(&mut sb);
     sb.finish(Background::Black, |_| bars_camera())
@@ -1640,24 +1649,10 @@ fn bars_lights(sb: &mut SceneBuilder) {
 /// lighting. The bars are not declared for the width measure: the plate,
 /// not the evenly lit wall, is behind them.
 fn ridges() -> Scene {
-    let mut sb = SceneBuilder::new("ridges");
-    let bar_mat = sb.material(Material::solid("bars", [0.8, 0.78, 0.74], 0.0, 0.8));
-    let plate_mat = sb.material(Material::solid("plate", [0.45, 0.46, 0.5], 0.0, 0.6));
-    let wall_mat = sb.material(Material::solid("wall", [0.03, 0.03, 0.035], 0.0, 0.9));
-    let (bar_mesh, _) = slanted_bars();
-    sb.object("bars", bar_mesh, bar_mat, Mat4::IDENTITY);
     // Behind the bar grid, larger than it, ridges at twice `bars`' density.
     let plate_at =
         Mat4::from_translation(Vec3::new(-2.25, 0.0, -2.0)) * Mat4::from_rotation_z(0.35);
-    sb.object(
-        "ridged plate",
-        ridged_plate(2.6, 2.6, 40),
-        plate_mat,
-        plate_at,
-    );
-    sb.object("wall", far_wall(), wall_mat, Mat4::IDENTITY);
-    bars_lights(&mut sb);
-    sb.finish(Background::Black, |_| bars_camera())
+    bars_with_plate("ridges", ridged_plate(2.6, 2.6, 40), plate_at, false)
 }
 
 #[cfg(test)]

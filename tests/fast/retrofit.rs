@@ -72,6 +72,20 @@ fn host(gl: &glow::Context) -> Host {
     host
 }
 
+/// The image a host's lighting writes, and its framebuffer: what the
+/// second-layer calls are given as the output.
+fn lit_output(gl: &glow::Context, format: Format) -> (Texture2d, Framebuffer) {
+    let output = Texture2d::new(gl, "lit output", format, W, H).unwrap();
+    let fbo = Framebuffer::new(
+        gl,
+        "lit output",
+        &[(Attachment::Color(0), TextureRef::from(&output))],
+        &[Some(0)],
+    )
+    .unwrap();
+    (output, fbo)
+}
+
 fn frame() -> deferred_msaa::Frame {
     deferred_msaa_testkit::projection::frame(&projection(), false)
 }
@@ -780,14 +794,7 @@ fn the_lit_layers_mix_by_coverage_in_the_chosen_domain() {
     ];
     for (format, layer_mix, (to, from)) in cases {
         let label = format!("{} {layer_mix:?}", format.name());
-        let output = Texture2d::new(gl, "lit output", format, W, H).unwrap();
-        let fbo = Framebuffer::new(
-            gl,
-            "lit output",
-            &[(Attachment::Color(0), TextureRef::from(&output))],
-            &[Some(0)],
-        )
-        .unwrap();
+        let (output, fbo) = lit_output(gl, format);
         let options = RetrofitOptions {
             position_attachment: Some(ColorAttachment(1)),
             resolve: ResolveSettings {
@@ -892,14 +899,7 @@ fn without_restoring_the_first_layer_the_lit_image_is_the_same() {
     let before = live_objects();
     let host = host(gl);
     let mut readback = Readback::new(gl).unwrap();
-    let output = Texture2d::new(gl, "lit output", Format::Rgba16f, W, H).unwrap();
-    let fbo = Framebuffer::new(
-        gl,
-        "lit output",
-        &[(Attachment::Color(0), TextureRef::from(&output))],
-        &[Some(0)],
-    )
-    .unwrap();
+    let (output, fbo) = lit_output(gl, Format::Rgba16f);
     let options = RetrofitOptions {
         position_attachment: Some(ColorAttachment(1)),
         resolve: ResolveSettings {
@@ -1022,14 +1022,7 @@ fn profiling_times_each_step_and_changes_nothing() {
     let before = live_objects();
     let host = host(gl);
     let mut readback = Readback::new(gl).unwrap();
-    let output = Texture2d::new(gl, "lit output", Format::Rgba16f, W, H).unwrap();
-    let fbo = Framebuffer::new(
-        gl,
-        "lit output",
-        &[(Attachment::Color(0), TextureRef::from(&output))],
-        &[Some(0)],
-    )
-    .unwrap();
+    let (output, fbo) = lit_output(gl, Format::Rgba16f);
     let options = RetrofitOptions {
         position_attachment: Some(ColorAttachment(1)),
         resolve: ResolveSettings {
