@@ -1,5 +1,7 @@
 //! Image error measures: FLIP (NVIDIA's perceptual metric, through nv-flip),
-//! its mean split by a pixel mask, PSNR, and the paper's halo count.
+//! its mean split by a pixel mask, PSNR, the paper's halo count, and the
+//! motion bench's frame-to-frame measures (the temporal error and the edge
+//! sharpness, docs/motion.md).
 
 use image::RgbaImage;
 
@@ -132,9 +134,192 @@ pub fn halo_pixels(reference: &RgbaImage, test: &RgbaImage, threshold: f32) -> u
         .count()
 }
 
+/// An 8-bit sRGB value as linear light, 0 to 1.
+fn srgb_to_linear(v: u8) -> f32 {
+    let c = f32::from(v) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// CIELAB (D65 white) of an 8-bit sRGB pixel: the space whose differences
+/// FLIP's colour pipeline measures (by the HyAB distance), here without
+/// FLIP's spatial filtering, so that one pixel's change stays that
+/// pixel's.
+pub fn lab(p: &image::Rgba<u8>) -> [f32; 3] {
+    let (r, g, b) = (
+        srgb_to_linear(p[0]),
+        srgb_to_linear(p[1]),
+        srgb_to_linear(p[2]),
+    );
+    // Linear sRGB to XYZ, relative to the D65 white.
+    let x = (0.412_456_4 * r + 0.357_576_1 * g + 0.180_437_5 * b) / 0.950_47;
+    let y = 0.212_672_9 * r + 0.715_152_2 * g + 0.072_175 * b;
+    let z = (0.019_333_9 * r + 0.119_192 * g + 0.950_304_1 * b) / 1.088_83;
+    let f = |t: f32| {
+        const D: f32 = 6.0 / 29.0;
+        if t > D * D * D {
+            t.cbrt()
+        } else {
+            t / (3.0 * D * D) + 4.0 / 29.0
+        }
+    };
+    let (fx, fy, fz) = (f(x), f(y), f(z));
+    [116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)]
+}
+
+/// The temporal error of one pair of consecutive frames: the mean over
+/// pixels of the HyAB size of `(I_t − I_{t−1}) − (R_t − R_{t−1})` in
+/// CIELAB (`|ΔL| + √(Δa² + Δb²)`), over 100 — change of the test images
+/// that the reference does not have (flicker, crawl), or change the
+/// reference has that they lack (lag). 0 when the test changes as the
+/// reference does; a pixel flickering between black and white where the
+/// reference holds still adds 1. `None` when the four sizes differ or are
+/// empty.
+pub fn temporal_error(
+    reference_before: &RgbaImage,
+    reference: &RgbaImage,
+    test_before: &RgbaImage,
+    test: &RgbaImage,
+) -> Option<f64> {
+    let size = reference.dimensions();
+    if [reference_before, test_before, test]
+        .iter()
+        .any(|i| i.dimensions() != size)
+        || size.0 == 0
+        || size.1 == 0
+    {
+        return None;
+    }
+    let mut sum = 0.0f64;
+    for (((r0, r1), t0), t1) in reference_before
+        .pixels()
+        .zip(reference.pixels())
+        .zip(test_before.pixels())
+        .zip(test.pixels())
+    {
+        let (r0, r1, t0, t1) = (lab(r0), lab(r1), lab(t0), lab(t1));
+        let d: [f32; 3] = std::array::from_fn(|c| (t1[c] - t0[c]) - (r1[c] - r0[c]));
+        sum += f64::from(d[0].abs() + (d[1] * d[1] + d[2] * d[2]).sqrt());
+    }
+    Some(sum / 100.0 / (f64::from(size.0) * f64::from(size.1)))
+}
+
+/// The reference's edges for [`edge_sharpness`]: pixels whose luminance
+/// gradient (central differences) is at least this, per pixel.
+pub const EDGE_GRADIENT: f32 = 0.05;
+
+/// The luminance gradient magnitude at each pixel (central differences,
+/// one-sided at the border).
+fn gradients(img: &RgbaImage) -> Vec<f32> {
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let l: Vec<f32> = img.pixels().map(luminance).collect();
+    let mut g = vec![0.0; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let at = |x: usize, y: usize| l[y * w + x];
+            let (x0, x1) = (x.saturating_sub(1), (x + 1).min(w - 1));
+            let (y0, y1) = (y.saturating_sub(1), (y + 1).min(h - 1));
+            let gx = (at(x1, y) - at(x0, y)) / (x1 - x0).max(1) as f32;
+            let gy = (at(x, y1) - at(x, y0)) / (y1 - y0).max(1) as f32;
+            g[y * w + x] = (gx * gx + gy * gy).sqrt();
+        }
+    }
+    g
+}
+
+/// How sharp `test`'s edges are against the reference's: the mean
+/// luminance gradient magnitude of `test` over the reference's edge
+/// pixels (gradient at least [`EDGE_GRADIENT`]), over the reference's
+/// mean there. 1 is as sharp as the reference; below 1 blurred (a
+/// temporal filter's smear), above 1 harsher (aliased steps). `None` when
+/// the sizes differ or the reference has no edge.
+pub fn edge_sharpness(reference: &RgbaImage, test: &RgbaImage) -> Option<f64> {
+    if reference.dimensions() != test.dimensions() || reference.width() == 0 {
+        return None;
+    }
+    let (gr, gt) = (gradients(reference), gradients(test));
+    let (mut sr, mut st, mut n) = (0.0f64, 0.0f64, 0usize);
+    for (r, t) in gr.iter().zip(&gt) {
+        if *r >= EDGE_GRADIENT {
+            sr += f64::from(*r);
+            st += f64::from(*t);
+            n += 1;
+        }
+    }
+    (n > 0 && sr > 0.0).then(|| st / sr)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_temporal_error_is_zero_for_the_reference_and_counts_a_flicker() {
+        let still = RgbaImage::from_pixel(8, 4, image::Rgba([90, 120, 200, 255]));
+        let mut moved = still.clone();
+        moved.put_pixel(3, 1, image::Rgba([10, 200, 30, 255]));
+        // The reference against itself, moving or not: nothing.
+        assert_eq!(temporal_error(&still, &moved, &still, &moved), Some(0.0));
+        assert_eq!(temporal_error(&still, &still, &still, &still), Some(0.0));
+        // One pixel flickering black to white where the reference holds:
+        // ΔL* = 100 over 32 pixels.
+        let black = image::Rgba([0, 0, 0, 255]);
+        let white = image::Rgba([255, 255, 255, 255]);
+        let mut before = still.clone();
+        before.put_pixel(0, 0, black);
+        let mut after = still.clone();
+        after.put_pixel(0, 0, white);
+        let e = temporal_error(&still, &still, &before, &after).unwrap();
+        assert!((e - 1.0 / 32.0).abs() < 1e-4, "{e}");
+        // A method that lags: the reference changes, it does not.
+        let lag = temporal_error(&still, &moved, &still, &still).unwrap();
+        assert!(lag > 0.0);
+        assert_eq!(
+            temporal_error(&still, &still, &still, &RgbaImage::new(2, 2)),
+            None
+        );
+    }
+
+    #[test]
+    fn lab_matches_known_values() {
+        let l = lab(&image::Rgba([255, 255, 255, 255]));
+        assert!(
+            (l[0] - 100.0).abs() < 0.01 && l[1].abs() < 0.01 && l[2].abs() < 0.01,
+            "{l:?}"
+        );
+        assert_eq!(lab(&image::Rgba([0, 0, 0, 255])), [0.0, 0.0, 0.0]);
+        // sRGB red: L* 53.24, a* 80.09, b* 67.20.
+        let r = lab(&image::Rgba([255, 0, 0, 255]));
+        assert!(
+            (r[0] - 53.24).abs() < 0.05 && (r[1] - 80.09).abs() < 0.1 && (r[2] - 67.20).abs() < 0.1,
+            "{r:?}"
+        );
+    }
+
+    #[test]
+    fn a_blurred_edge_is_less_sharp_than_the_reference() {
+        let edge = RgbaImage::from_fn(16, 8, |x, _| {
+            let v = if x < 8 { 0 } else { 255 };
+            image::Rgba([v, v, v, 255])
+        });
+        assert_eq!(edge_sharpness(&edge, &edge), Some(1.0));
+        let blurred = RgbaImage::from_fn(16, 8, |x, _| {
+            let v = match x {
+                0..=6 => 0,
+                7 => 85,
+                8 => 170,
+                _ => 255,
+            };
+            image::Rgba([v, v, v, 255])
+        });
+        let s = edge_sharpness(&edge, &blurred).unwrap();
+        assert!(s < 1.0, "{s}");
+        let flat = RgbaImage::from_pixel(16, 8, image::Rgba([9, 9, 9, 255]));
+        assert_eq!(edge_sharpness(&flat, &edge), None);
+    }
 
     #[test]
     fn identical_images_have_no_error() {

@@ -16,6 +16,10 @@
 //! their options) share one [`Renderer`]; `none`, `+fxaa` and each sample
 //! count get their own, so no frame pays for re-allocated targets.
 //!
+//! With [`BenchConfig::motion`] (`bench --motion SPEC`) every method
+//! renders a camera path instead, against the reference of every frame
+//! ([`motion`]; docs/motion.md).
+//!
 //! Outputs ([`write_outputs`]): `report.json` and `report.md`
 //! ([`report`]), `error_vs_time.png` (FLIP mean against frame time per
 //! scene, Pareto front marked) and `crops.png` (the same crop of every method
@@ -35,15 +39,17 @@
 
 pub mod bar_width;
 
+mod animation;
 mod crops;
 pub mod layers;
 pub mod methods;
+pub mod motion;
 mod plot;
 pub mod report;
 
 pub use methods::{MethodEntry, default_methods, parse_methods};
 use methods::{adds_geometry, adds_lighting};
-pub use report::{ProfileStep, Reference, Report, Run, pareto_front};
+pub use report::{MotionMeasures, ProfileStep, Reference, Report, Run, pareto_front};
 
 use crate::compare;
 use crate::context::{Backend, GlVersion, HeadlessContext};
@@ -52,12 +58,12 @@ use crate::gl::TimerKind;
 use crate::renderer::technique::Sparse;
 use crate::renderer::{AaMode, FrameTimings, RenderOptions, Renderer};
 use crate::resolve::{ResolveMethod, ResolveSettings};
-use crate::scene::{Aabb, Light, Scene};
+use crate::scene::{Aabb, Light, MotionSpec, Scene};
 use crate::{Error, Result};
 use bar_width::BarGauge;
 use glam::Vec3;
 use glow::HasContext;
-use image::{GrayImage, RgbaImage};
+use image::{GrayImage, RgbImage, RgbaImage};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::Path;
 
@@ -103,6 +109,10 @@ pub struct BenchConfig {
     /// resolves with the retrofit profiling its steps (`glFinish` around
     /// each), and report each step's median ([`Run::profile`]).
     pub profile: bool,
+    /// Render a camera path instead of still frames (`--motion`): every
+    /// method renders each of its frames, measured against the reference
+    /// of every frame ([`Run::motion`]); `frames` does not apply.
+    pub motion: Option<MotionSpec>,
 }
 
 impl Default for BenchConfig {
@@ -122,6 +132,7 @@ impl Default for BenchConfig {
             layout: GBufferLayout::recommended(),
             progress: false,
             profile: false,
+            motion: None,
         }
     }
 }
@@ -305,8 +316,11 @@ pub struct BenchOutput {
     pub report: Report,
     /// Each scene's reference image, in scene order.
     pub references: Vec<(String, RgbaImage)>,
-    /// The final image of each run, parallel to [`Report::runs`].
+    /// The final image of each run, parallel to [`Report::runs`] (with
+    /// `--motion`, its frame at the scene's own camera).
     pub images: Vec<RgbaImage>,
+    /// With `--motion`: per scene, the animated crop strip's frames.
+    pub animations: Vec<(String, Vec<RgbImage>)>,
 }
 
 /// Create the report folder and load the plots' font, so that a bench does
@@ -316,12 +330,25 @@ pub fn prepare_output_dir(dir: &Path) -> Result<()> {
     plot::load_font()
 }
 
-/// Write `report.json`, `report.md`, `error_vs_time.png` and `crops.png` into `dir`.
+/// Write `report.json`, `report.md`, `error_vs_time.png` and `crops.png`
+/// into `dir`; after a motion bench also `temporal_error_vs_time.png` and
+/// each scene's animated crop strip, `motion-SCENE.png` (an APNG).
 pub fn write_outputs(output: &BenchOutput, dir: &Path) -> Result<()> {
     prepare_output_dir(dir)?;
     output.report.write(dir)?;
     plot::error_vs_time(&output.report, &dir.join("error_vs_time.png"))?;
+    if output.report.motion.is_some() {
+        plot::temporal_error_vs_time(&output.report, &dir.join("temporal_error_vs_time.png"))?;
+    }
+    for (scene, frames) in &output.animations {
+        animation::write_apng(frames, &dir.join(motion_strip_name(scene)))?;
+    }
     crops::crops(output, &dir.join("crops.png"))
+}
+
+/// The file name of a scene's animated crop strip.
+pub fn motion_strip_name(scene: &str) -> String {
+    format!("motion-{}.png", file_stem(scene))
 }
 
 /// Write the first run's side-by-side figure: per scene, the reference's
@@ -406,7 +433,7 @@ pub fn run(config: &BenchConfig) -> Result<BenchOutput> {
     } else {
         config
     };
-    let rounds = (config.warmup + config.frames) as u64;
+    let rounds = (config.warmup + config.motion.map_or(config.frames, |m| m.frames)) as u64;
     let ms_entries = config
         .methods
         .iter()
@@ -442,6 +469,7 @@ pub fn run(config: &BenchConfig) -> Result<BenchOutput> {
         frames: config.frames,
         warmup: config.warmup,
         extra_lights: config.lights,
+        motion: config.motion.map(|m| m.to_string()),
         layout: if config.layout == GBufferLayout::freespace_open() {
             "freespace-open".into()
         } else if config.layout == GBufferLayout::recommended() {
@@ -452,6 +480,7 @@ pub fn run(config: &BenchConfig) -> Result<BenchOutput> {
     };
     let mut references = Vec::new();
     let mut images = Vec::new();
+    let mut animations = Vec::new();
     for spec in &config.scenes {
         let measured = bench_scene(&ctx, config, spec, &pb, rounds)?;
         references.push((spec.clone(), measured.reference));
@@ -459,12 +488,16 @@ pub fn run(config: &BenchConfig) -> Result<BenchOutput> {
             report.runs.push(run);
             images.push(image);
         }
+        if let Some(frames) = measured.animation {
+            animations.push((spec.clone(), frames));
+        }
     }
     pb.finish_and_clear();
     Ok(BenchOutput {
         report,
         references,
         images,
+        animations,
     })
 }
 
@@ -484,6 +517,8 @@ struct SceneMeasures {
 struct SceneResult {
     reference: RgbaImage,
     runs: Vec<(Run, RgbaImage)>,
+    /// With `--motion`: the animated crop strip's frames.
+    animation: Option<Vec<RgbImage>>,
 }
 
 /// One (entry, sample count) to time.
@@ -729,13 +764,17 @@ fn bench_scene(
     let mut pool = Pool::default();
     let result = time_scene(ctx, config, spec, &scene, &measures, &mut pool, pb, rounds);
     pool.destroy(ctx.gl());
-    let runs = result?;
+    let (runs, animation) = result?;
     pb.inc(1);
     Ok(SceneResult {
         reference: measures.reference,
         runs,
+        animation,
     })
 }
+
+/// A scene's runs with their images, and with `--motion` its crop strip.
+type TimedScene = (Vec<(Run, RgbaImage)>, Option<Vec<RgbImage>>);
 
 #[allow(clippy::too_many_arguments)]
 fn time_scene(
@@ -747,7 +786,7 @@ fn time_scene(
     pool: &mut Pool,
     pb: &ProgressBar,
     rounds: u64,
-) -> Result<Vec<(Run, RgbaImage)>> {
+) -> Result<TimedScene> {
     let gl = ctx.gl();
     // The jobs, with a hidden `none` as the lighting (and G-buffer pass)
     // baseline when a method that adds to them has no `none` entry beside it.
@@ -825,8 +864,15 @@ fn time_scene(
         }
     }
 
-    // Round-robin: every job renders once per round.
-    for round in 0..rounds {
+    // A camera path, or still frames round-robin: every job renders once
+    // per round.
+    let path = match config.motion {
+        Some(motion) => Some(motion::run_path(
+            ctx, config, motion, spec, scene, pool, &mut jobs, pb,
+        )?),
+        None => None,
+    };
+    for round in (0..rounds).filter(|_| path.is_none()) {
         let timed = round >= config.warmup as u64;
         let last = round + 1 == rounds;
         for job in jobs.iter_mut() {
@@ -922,7 +968,12 @@ fn time_scene(
     pb.set_message(format!("{spec}: measuring error"));
     let reference = &measures.reference;
     let mut runs = Vec::new();
-    for job in jobs.into_iter().filter(|j| j.reported) {
+    let tracks: Vec<Option<&motion::Track>> = match &path {
+        Some(p) => p.tracks.iter().map(Some).collect(),
+        None => jobs.iter().map(|_| None).collect(),
+    };
+    let mut columns = Vec::new();
+    for (job, track) in jobs.into_iter().zip(tracks).filter(|(j, _)| j.reported) {
         let image = job
             .image
             .ok_or_else(|| Error::invalid("bench: a run has no final image"))?;
@@ -1009,10 +1060,32 @@ fn time_scene(
             edge_pixel_share: by_mask.map(|m| m.marked_share),
             flip_three_clusters: by_three.and_then(|m| m.marked),
             three_cluster_share: by_three.map(|m| m.marked_share),
+            motion: match (track, &path, config.motion) {
+                (Some(track), Some(p), Some(m)) => Some(motion::measures(track, m.frames, p.px)),
+                _ => None,
+            },
         };
+        if let Some(track) = track {
+            columns.push(animation::Column {
+                label: format!("{} {}x", run.method, run.samples),
+                crops: &track.crops,
+            });
+        }
         runs.push((run, image));
     }
-    Ok(runs)
+    let animation = match &path {
+        Some(p) => {
+            let (x, y, side) = p.crop;
+            let mut all = vec![animation::Column {
+                label: format!("ssaa, {side}px at ({x}, {y})"),
+                crops: &p.reference_crops,
+            }];
+            all.extend(columns);
+            animation::strip_frames(&all)?
+        }
+        None => None,
+    };
+    Ok((runs, animation))
 }
 
 #[cfg(test)]

@@ -64,6 +64,38 @@ const PANEL: (u32, u32) = (1000, 560);
 
 /// Draw `error_vs_time.png`.
 pub(crate) fn error_vs_time(report: &Report, path: &Path) -> Result<()> {
+    against_time(report, path, &FLIP_MEAN)
+}
+
+/// Draw `temporal_error_vs_time.png`: the motion bench's temporal error
+/// against frame time, per scene.
+pub(crate) fn temporal_error_vs_time(report: &Report, path: &Path) -> Result<()> {
+    against_time(report, path, &TEMPORAL_ERROR)
+}
+
+/// A measure plotted against frame time.
+struct Measure {
+    /// What the caption calls it.
+    name: &'static str,
+    /// The y axis.
+    y_desc: &'static str,
+    /// Its value for a run (not finite: no point).
+    value: fn(&Run) -> f64,
+}
+
+const FLIP_MEAN: Measure = Measure {
+    name: "error",
+    y_desc: "FLIP mean against ssaa (lower is better)",
+    value: |r| r.flip_mean,
+};
+
+const TEMPORAL_ERROR: Measure = Measure {
+    name: "temporal error",
+    y_desc: "temporal error against ssaa (lower is better)",
+    value: |r| r.motion.as_ref().map_or(f64::NAN, |m| m.temporal_error),
+};
+
+fn against_time(report: &Report, path: &Path, measure: &Measure) -> Result<()> {
     load_font()?;
     let scenes = report.scenes();
     let (w, h) = (PANEL.0, PANEL.1 * scenes.len().max(1) as u32);
@@ -74,7 +106,7 @@ pub(crate) fn error_vs_time(report: &Report, path: &Path) -> Result<()> {
         let panels = root.split_evenly((scenes.len().max(1), 1));
         for (area, scene) in panels.iter().zip(&scenes) {
             let runs: Vec<&Run> = report.runs_of(scene).collect();
-            draw_panel(area, report, scene, &runs)?;
+            draw_panel(area, report, scene, &runs, measure)?;
         }
         root.present().map_err(|e| plot_error("the plot", e))?;
     }
@@ -101,9 +133,13 @@ fn draw_panel(
     report: &Report,
     scene: &str,
     runs: &[&Run],
+    measure: &Measure,
 ) -> Result<()> {
     let err = |e| plot_error("the error-against-time plot", e);
-    let points: Vec<(f64, f64)> = runs.iter().map(|r| (r.ms_total, r.flip_mean)).collect();
+    let points: Vec<(f64, f64)> = runs
+        .iter()
+        .map(|r| (r.ms_total, (measure.value)(r)))
+        .collect();
     let front = pareto_front(&points);
     let finite = || {
         points
@@ -136,8 +172,8 @@ fn draw_panel(
     let mut chart = ChartBuilder::on(area)
         .caption(
             format!(
-                "{scene}: error against frame time ({size}, {})",
-                report.renderer
+                "{scene}: {} against frame time ({size}, {})",
+                measure.name, report.renderer
             ),
             (FAMILY, 20),
         )
@@ -149,7 +185,7 @@ fn draw_panel(
     chart
         .configure_mesh()
         .x_desc(format!("frame time, ms (median, {timer})"))
-        .y_desc("FLIP mean against ssaa (lower is better)")
+        .y_desc(measure.y_desc)
         .label_style((FAMILY, 14))
         .axis_desc_style((FAMILY, 15))
         .light_line_style(RGBColor(235, 235, 235))

@@ -27,6 +27,10 @@ pub struct Report {
     pub extra_lights: u32,
     /// `recommended` or `freespace-open` (extra key).
     pub layout: String,
+    /// With `bench --motion`: the camera path every run followed, e.g.
+    /// `pan:frames=24,px=0.5` (extra key; absent for still frames).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion: Option<String>,
 }
 
 /// The reference the error measures compare against.
@@ -36,6 +40,50 @@ pub struct Reference {
     pub method: String,
     /// Samples per pixel (16).
     pub spp: u32,
+}
+
+/// The motion table of one scene's runs (`bench --motion`): a row per run
+/// with a [`MotionMeasures`]; `None` when no run has one.
+pub fn motion_table(runs: &[&Run], path: Option<&str>) -> Option<String> {
+    let moving: Vec<(&Run, &MotionMeasures)> = runs
+        .iter()
+        .filter_map(|r| r.motion.as_ref().map(|m| (*r, m)))
+        .collect();
+    let (_, first) = moving.first()?;
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "In motion (`{}`, {} frames at {:.2} px per frame; the reference is rendered for every frame; \
+         docs/motion.md defines each measure): FLIP over the frames, its worst frame, the temporal \
+         error (change the reference does not have, or lacks), the thin bars' width jitter, the \
+         frames until the error settles, and edge sharpness against the reference (1 as sharp).\n",
+        path.unwrap_or("?"),
+        first.frames,
+        first.px_per_frame
+    );
+    let _ = writeln!(
+        md,
+        "| method | samples | AA ms | FLIP mean | worst frame | temporal error | bar jitter px | settle frames | sharpness |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
+    for (r, m) in moving {
+        let _ = writeln!(
+            md,
+            "| `{}` | {} | {:.2} | {:.4} | {:.4} (#{}) | {:.5} | {} | {} | {} |",
+            r.method,
+            r.samples,
+            r.ms_aa,
+            m.flip_mean,
+            m.flip_worst,
+            m.flip_worst_frame,
+            m.temporal_error,
+            m.bar_width_jitter_px
+                .map_or("–".to_string(), |j| format!("{j:.3}")),
+            m.settle_frames,
+            m.sharpness.map_or("–".to_string(), |s| format!("{s:.3}")),
+        );
+    }
+    Some(md)
 }
 
 /// The profiles of `runs` (`bench --profile`) as one table, a row per step
@@ -202,6 +250,48 @@ pub struct Run {
     /// absent otherwise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub profile: Option<Vec<ProfileStep>>,
+    /// With `bench --motion`: the measures over the camera path's frames
+    /// (docs/motion.md; extra key, absent for still frames). The run's
+    /// other error fields are then those of the path's middle frame, the
+    /// scene's own camera.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion: Option<MotionMeasures>,
+}
+
+/// What a run shows along a camera path (docs/motion.md has each formula).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MotionMeasures {
+    /// Frames along the path.
+    pub frames: u32,
+    /// The mean image motion per frame of the scene's bounds, in pixels, as
+    /// the path measures it.
+    pub px_per_frame: f64,
+    /// The mean over the frames of each frame's mean FLIP against that
+    /// frame's reference.
+    pub flip_mean: f64,
+    /// The worst frame's mean FLIP, and its index from 0.
+    pub flip_worst: f64,
+    /// The index of that frame.
+    pub flip_worst_frame: u32,
+    /// The mean over pixels and consecutive frame pairs of the HyAB size of
+    /// `(I_t − I_{t−1}) − (R_t − R_{t−1})` in CIELAB, over 100: flicker and
+    /// crawl the reference does not have, or lag behind it.
+    pub temporal_error: f64,
+    /// On a scene with thin bars: the mean over the bars of the standard
+    /// deviation over the frames of the bar's measured width less the
+    /// reference's in that frame, in pixels (`null` without bars).
+    #[serde(default)]
+    pub bar_width_jitter_px: Option<f64>,
+    /// The first frame from which every frame's FLIP stays within 10 % of
+    /// the median FLIP of the path's second half: how long a method's error
+    /// takes to settle after the path starts (0 for a method without
+    /// history, unless its error varies that much along the path).
+    pub settle_frames: u32,
+    /// The mean over the frames of the run's edge sharpness against that
+    /// frame's reference (`compare::edge_sharpness`: 1 as sharp, below 1
+    /// blurred; `null` when the reference has no edge).
+    #[serde(default)]
+    pub sharpness: Option<f64>,
 }
 
 impl Report {
@@ -403,6 +493,9 @@ impl Report {
             if let Some(line) = lighting_orderings(&runs) {
                 let _ = writeln!(md, "{line}\n");
             }
+            if let Some(table) = motion_table(&runs, self.motion.as_deref()) {
+                let _ = writeln!(md, "{table}");
+            }
             if let Some(table) = profile_table(&runs) {
                 let _ = writeln!(md, "{table}");
             }
@@ -537,6 +630,7 @@ pub(crate) mod tests {
             flip_three_clusters: None,
             three_cluster_share: None,
             profile: None,
+            motion: None,
         }
     }
 
@@ -554,6 +648,7 @@ pub(crate) mod tests {
             warmup: 1,
             extra_lights: 0,
             layout: "recommended".into(),
+            motion: None,
         }
     }
 

@@ -3,6 +3,7 @@
 use super::CommonArgs;
 use crate::bench::{self, BenchConfig, DEFAULT_SCENES};
 use crate::gbuffer::GBufferLayout;
+use crate::scene::MotionSpec;
 use crate::{Error, Result};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -50,9 +51,20 @@ pub struct BenchCmd {
     /// frames again, and print each step's median (`profile` in report.json).
     #[arg(long)]
     profile: bool,
+    /// Render a camera path around the scene's camera instead of still
+    /// frames: `pan`, `orbit` or `dolly`, with `:frames=N` (default 24)
+    /// and `px=F`, the mean image motion per frame (default 0.5), e.g.
+    /// `orbit:frames=48,px=0.5`. Every method renders every frame against
+    /// the reference of each; --frames does not apply (docs/motion.md).
+    #[arg(long, value_name = "SPEC", value_parser = parse_motion)]
+    motion: Option<MotionSpec>,
     /// The folder to write report.json, report.md, error_vs_time.png and crops.png into.
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
+}
+
+fn parse_motion(s: &str) -> std::result::Result<MotionSpec, String> {
+    s.parse().map_err(|e: Error| e.to_string())
 }
 
 fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
@@ -90,6 +102,7 @@ impl BenchCmd {
             },
             progress: std::io::stderr().is_terminal(),
             profile: self.profile,
+            motion: self.motion,
         };
         config.validate()?;
         Ok(config)
@@ -123,14 +136,27 @@ pub fn run(cmd: &BenchCmd) -> Result<()> {
         if let Some(error) = r.bar_width_error_px {
             line.push_str(&format!(", bar width {error:+.3} px"));
         }
+        if let Some(m) = &r.motion {
+            line.push_str(&format!(
+                "; in motion: FLIP {:.4} (worst {:.4}), temporal error {:.5}",
+                m.flip_mean, m.flip_worst, m.temporal_error
+            ));
+            if let Some(j) = m.bar_width_jitter_px {
+                line.push_str(&format!(", bar jitter {j:.3} px"));
+            }
+        }
         println!("{line}");
         for step in r.profile.iter().flatten() {
             println!("    {:>8.2} ms  {}", step.ms, step.step);
         }
     }
-    println!(
-        "report -> {} (report.json, report.md, error_vs_time.png, crops.png)",
-        dir.display()
-    );
+    let mut written = String::from("report.json, report.md, error_vs_time.png, crops.png");
+    if output.report.motion.is_some() {
+        written.push_str(", temporal_error_vs_time.png");
+        for (scene, _) in &output.animations {
+            written.push_str(&format!(", {}", bench::motion_strip_name(scene)));
+        }
+    }
+    println!("report -> {} ({written})", dir.display());
     Ok(())
 }

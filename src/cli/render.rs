@@ -9,7 +9,7 @@ use crate::renderer::plan::{Plan, PlanContext};
 use crate::renderer::technique::{self, Gbaa};
 use crate::renderer::{AaMode, DepthMode, RenderOptions, Renderer, SparseOptions};
 use crate::resolve::{Region, ResolveMethod, ResolveSettings, Selection, Window};
-use crate::scene::Scene;
+use crate::scene::{Aabb, CameraPath, MotionSpec, Scene};
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -88,9 +88,16 @@ pub struct RenderArgs {
 pub struct RenderCmd {
     #[command(flatten)]
     render: RenderArgs,
-    /// The PNG to write (default: target/deferred-msaa/render.png).
+    /// The PNG to write (default: target/deferred-msaa/render.png); with
+    /// --motion, the folder to write the frames into (default:
+    /// target/deferred-msaa/motion), as frame-000.png, frame-001.png, ...
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Render a camera path around the scene's camera, a frame per
+    /// camera: `pan`, `orbit` or `dolly`, with `:frames=N` and `px=F`
+    /// (mean image motion per frame), e.g. `orbit:frames=48,px=0.5`.
+    #[arg(long, value_name = "SPEC", value_parser = parse_motion, conflicts_with = "explain")]
+    motion: Option<MotionSpec>,
     /// Print the scene-adaptive plan (attachments, passes, what is left out
     /// and why, G-buffer bytes) instead of rendering.
     #[arg(long)]
@@ -108,6 +115,10 @@ pub struct DumpCmd {
     /// The folder to write the arrays, final.png and meta.json into.
     #[arg(long)]
     out: PathBuf,
+}
+
+fn parse_motion(s: &str) -> std::result::Result<MotionSpec, String> {
+    s.parse().map_err(|e: Error| e.to_string())
 }
 
 fn parse_region(s: &str) -> std::result::Result<Region, String> {
@@ -235,6 +246,8 @@ impl RenderArgs {
 struct Session {
     ctx: HeadlessContext,
     renderer: Option<Renderer>,
+    /// The scene's bounds, for camera paths.
+    bounds: Aabb,
 }
 
 impl Session {
@@ -254,6 +267,7 @@ impl Session {
         Ok(Session {
             ctx,
             renderer: Some(renderer),
+            bounds: scene.bounds,
         })
     }
 
@@ -364,7 +378,7 @@ fn resolved_view(session: &Session, view: &str) -> Result<image::RgbaImage> {
 /// The `complex` view: which pixels the method treated as complex (the
 /// resolve's slow path; `complex`'s per-sample pixels), white on black.
 fn complex_view(session: &mut Session) -> Result<image::RgbaImage> {
-    let Session { ctx, renderer } = session;
+    let Session { ctx, renderer, .. } = session;
     let renderer = renderer
         .as_mut()
         .ok_or_else(|| Error::invalid("the renderer is gone"))?;
@@ -387,7 +401,7 @@ fn complex_view(session: &mut Session) -> Result<image::RgbaImage> {
 /// The `layers` view: the second layer's coverage `α` as grey (black
 /// where a pixel has one cluster of samples).
 fn layers_view(session: &mut Session) -> Result<image::RgbaImage> {
-    let Session { ctx, renderer } = session;
+    let Session { ctx, renderer, .. } = session;
     let renderer = renderer
         .as_mut()
         .ok_or_else(|| Error::invalid("the renderer is gone"))?;
@@ -435,14 +449,11 @@ pub fn run_render(cmd: &RenderCmd) -> Result<()> {
     if cmd.explain {
         return run_explain(cmd);
     }
+    if let Some(motion) = cmd.motion {
+        return run_motion(cmd, motion);
+    }
     let mut session = Session::open(&cmd.render)?;
-    let img = if cmd.render.view == "complex" {
-        complex_view(&mut session)?
-    } else if cmd.render.view == "layers" {
-        layers_view(&mut session)?
-    } else {
-        resolved_view(&session, &cmd.render.view)?
-    };
+    let img = view(&mut session, &cmd.render.view)?;
     let out = cmd
         .out
         .clone()
@@ -462,6 +473,61 @@ pub fn run_render(cmd: &RenderCmd) -> Result<()> {
     Ok(())
 }
 
+/// The image `--view` names of the session's last frame.
+fn view(session: &mut Session, name: &str) -> Result<image::RgbaImage> {
+    match name {
+        "complex" => complex_view(session),
+        "layers" => layers_view(session),
+        _ => resolved_view(session, name),
+    }
+}
+
+/// `render --motion`: a frame per camera of the path, written as
+/// `frame-NNN.png` into the output folder.
+fn run_motion(cmd: &RenderCmd, motion: MotionSpec) -> Result<()> {
+    let dir = cmd
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("target/deferred-msaa/motion"));
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::invalid(format!(
+            "--out {}: with --motion, --out names a folder for the frames, and this is a file",
+            dir.display()
+        )));
+    }
+    let mut session = Session::open(&cmd.render)?;
+    let (w, h) = cmd.render.size;
+    let base = *session.renderer()?.camera();
+    let path = CameraPath::new(motion, &base, &session.bounds, w, h)?;
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    for (k, camera) in path.cameras.iter().enumerate() {
+        if let Session {
+            ctx,
+            renderer: Some(r),
+            ..
+        } = &mut session
+        {
+            r.set_camera(*camera);
+            r.render(ctx.gl())?;
+        }
+        let img = view(&mut session, &cmd.render.view)?;
+        save_png(&img, &dir.join(format!("frame-{k:03}.png")))?;
+    }
+    let measured = path.measured_px(&session.bounds, w, h).unwrap_or(motion.px);
+    println!(
+        "{}: {}x{} {} {}x, {} ({} frames, {measured:.2} px per frame) -> {}",
+        cmd.render.scene,
+        w,
+        h,
+        cmd.render.method,
+        session.renderer()?.samples(),
+        motion.kind.name(),
+        path.cameras.len(),
+        dir.display()
+    );
+    Ok(())
+}
+
 /// Run `dump`.
 pub fn run_dump(cmd: &DumpCmd) -> Result<()> {
     if cmd.render.method == "sparse" {
@@ -477,6 +543,7 @@ pub fn run_dump(cmd: &DumpCmd) -> Result<()> {
         Session {
             ctx,
             renderer: Some(r),
+            ..
         } => r.complex_pixel_fraction(ctx.gl())?,
         Session { renderer: None, .. } => None,
     };

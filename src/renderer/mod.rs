@@ -563,6 +563,31 @@ impl Renderer {
         &self.camera
     }
 
+    /// Render the next frames from `camera` (a camera path, a viewer's
+    /// orbit): nothing is rebuilt, and what a technique keeps from frame to
+    /// frame stays. The layout's precision is checked again for the new
+    /// camera, and what changed is logged and kept ([`Renderer::warnings`]).
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.camera = camera;
+        let mut warnings = depth::warnings(
+            &self.options.layout,
+            &self.camera,
+            self.depth_mode,
+            self.extent,
+        );
+        warnings.extend(self.plan.warnings.iter().cloned());
+        if warnings != self.warnings {
+            for w in warnings.iter().filter(|w| !self.warnings.contains(w)) {
+                log::warn!(
+                    "scene `{}` ({} depth): {w}",
+                    self.scene_name,
+                    self.depth_mode
+                );
+            }
+            self.warnings = warnings;
+        }
+    }
+
     /// The depth convention in effect: [`RenderOptions::depth_mode`] as
     /// decided for this context and layout, never [`DepthMode::Auto`].
     pub fn depth_mode(&self) -> DepthMode {

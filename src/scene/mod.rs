@@ -26,11 +26,13 @@ mod builtin;
 mod camera;
 mod geometry;
 mod gltf_loader;
+pub mod motion;
 
 use glam::{Mat4, Vec3};
 
 pub use bar::{Bar, ImageBar};
 pub use camera::Camera;
+pub use motion::{CameraPath, MotionSpec, PathKind};
 
 /// The scene used when none is named.
 pub const DEFAULT_SCENE: &str = "builtin:greebles";

@@ -529,6 +529,12 @@ fn bad_input_is_refused_in_one_line() {
         ),
         (vec!["bench", "--frames", "0", "--report", d], "--frames"),
         (vec!["bench", "--samples", "0", "--report", d], "--samples"),
+        (vec!["bench", "--motion", "spin", "--report", d], "spin"),
+        (
+            vec!["bench", "--motion", "pan:frames=1", "--report", d],
+            "frames",
+        ),
+        (vec!["bench", "--motion", "orbit:px=0", "--report", d], "px"),
     ];
     for (args, needle) in &cases {
         let o = cli(args);
@@ -601,4 +607,98 @@ fn the_profile_lists_each_step_of_the_retrofit() {
         assert!(two.iter().any(|s| s == step), "{step} missing from {two:?}");
     }
     let _ = std::fs::remove_dir_all(dir);
+}
+
+/// `bench --motion`: every run follows the camera path and carries its
+/// measures, the crop strip has a frame per path frame, and on the thin
+/// bars the two-layer resolve changes from frame to frame more like the
+/// reference than no MSAA does (errors asserted, never times).
+#[test]
+#[ignore = "slow tier: scripts/test runs it"]
+fn the_motion_bench_measures_every_frame_against_its_reference() {
+    if common::egl_context().is_none() {
+        return;
+    }
+    const BARS: &str = "builtin:bars";
+    let (dir, report) = bench(
+        "motion",
+        "128x72",
+        &[
+            "--scene",
+            BARS,
+            "--methods",
+            "none,median:layers=2,per-sample",
+            "--warmup",
+            "0",
+            "--motion",
+            "pan:frames=5",
+        ],
+    );
+    assert_eq!(report["motion"], "pan:frames=5,px=0.5");
+    for method in ["none", "median:layers=2", "per-sample"] {
+        let m = &run(&report, BARS, method)["motion"];
+        assert_eq!(m["frames"], 5, "{method}: {m}");
+        let px = m["px_per_frame"].as_f64().unwrap();
+        assert!((px - 0.5).abs() < 0.01, "{method}: {px}");
+        let (mean, worst) = (
+            m["flip_mean"].as_f64().unwrap(),
+            m["flip_worst"].as_f64().unwrap(),
+        );
+        assert!(mean > 0.0 && worst >= mean, "{method}: {m}");
+        assert!(m["flip_worst_frame"].as_u64().unwrap() < 5);
+        assert!(m["temporal_error"].as_f64().unwrap() > 0.0, "{method}: {m}");
+        assert!(m["bar_width_jitter_px"].as_f64().is_some(), "{method}: {m}");
+        assert!(
+            m["sharpness"].as_f64().is_some_and(|s| s > 0.0),
+            "{method}: {m}"
+        );
+        assert!(m["settle_frames"].as_u64().is_some());
+    }
+    let temporal = |method: &str| {
+        run(&report, BARS, method)["motion"]["temporal_error"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(
+        temporal("median:layers=2") < temporal("none"),
+        "median:layers=2 {} against none {}",
+        temporal("median:layers=2"),
+        temporal("none")
+    );
+    assert!(dir.join("temporal_error_vs_time.png").is_file());
+    let strip = std::fs::File::open(dir.join("motion-builtin_bars.png")).expect("the crop strip");
+    let reader = png::Decoder::new(std::io::BufReader::new(strip))
+        .read_info()
+        .expect("an APNG");
+    let control = reader.info().animation_control.expect("animated");
+    assert_eq!(control.num_frames, 5);
+    let md = std::fs::read_to_string(dir.join("report.md")).expect("report.md");
+    assert!(md.contains("In motion (`pan:frames=5,px=0.5`"), "{md}");
+    let _ = std::fs::remove_dir_all(&dir);
+
+    // `render --motion` writes the frames.
+    let out = std::env::temp_dir().join(format!("dmsaa-render-motion-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let o = cli(&[
+        "render",
+        "--scene",
+        BARS,
+        "--size",
+        "64x36",
+        "--motion",
+        "orbit:frames=3,px=1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let frames: Vec<_> = (0..3)
+        .map(|k| {
+            image::open(out.join(format!("frame-{k:03}.png")))
+                .expect("a frame")
+                .to_rgba8()
+        })
+        .collect();
+    assert!(!out.join("frame-003.png").exists());
+    assert_ne!(frames[0], frames[2], "the camera did not move");
+    let _ = std::fs::remove_dir_all(&out);
 }
