@@ -479,7 +479,6 @@ struct Viewer {
     gl: glow::Context,
     surface: Surface<WindowSurface>,
     context: PossiblyCurrentContext,
-    display: Display,
     window: Window,
     scene: Scene,
     options: RenderOptions,
@@ -598,7 +597,6 @@ impl Viewer {
             gl,
             surface,
             context,
-            display,
             window,
             scene,
             options,
@@ -729,23 +727,16 @@ impl Viewer {
         self.window.request_redraw();
     }
 
-    /// Point the renderer at the orbit camera. The renderer takes its camera
-    /// from the scene, so a new one is built; the old one keeps drawing
-    /// until the new one exists.
+    /// Point the renderer at the orbit camera: nothing is rebuilt, so what
+    /// a method keeps from frame to frame (a temporal filter's history)
+    /// carries on as the camera moves.
     fn update_camera(&mut self) -> AnyResult<()> {
         if !self.camera_changed {
             return Ok(());
         }
         self.camera_changed = false;
         self.scene.camera = self.orbit.camera();
-        let display = &self.display;
-        let loader = |name: &str| {
-            CString::new(name).map_or(std::ptr::null(), |c| display.get_proc_address(&c))
-        };
-        match Renderer::new(&self.gl, loader, &self.scene, &self.options) {
-            Ok(renderer) => std::mem::replace(&mut self.renderer, renderer).destroy(&self.gl),
-            Err(e) => eprintln!("viewer: cannot move the camera: {e}"),
-        }
+        self.renderer.set_camera(self.scene.camera);
         Ok(())
     }
 
