@@ -280,6 +280,7 @@ thread_local! {
 }
 
 /// What an entry point fails with: its status and message.
+#[derive(Debug)]
 struct Failure {
     status: DmsaaStatus,
     message: String,
@@ -424,6 +425,7 @@ fn pick<T: Clone>(name: &str, value: u32, choices: &[(&str, T)]) -> Result<T, Fa
 
 /// What [`DmsaaOptions`] asks for: the Rust options, the depth mode and
 /// whether positions are world-space.
+#[derive(Debug)]
 struct Converted {
     options: RetrofitOptions,
     depth_mode: DepthMode,
@@ -986,4 +988,140 @@ pub extern "C" fn dmsaa_last_error() -> *const c_char {
 #[unsafe(no_mangle)]
 pub extern "C" fn dmsaa_live_objects() -> i64 {
     deferred_msaa::gl::live_objects().total()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn last_error() -> String {
+        // SAFETY: the library's own NUL-terminated message.
+        unsafe { CStr::from_ptr(dmsaa_last_error()) }
+            .to_string_lossy()
+            .into_owned()
+    }
+
+    #[test]
+    fn a_panic_becomes_a_status_and_a_one_line_message() {
+        let status = entry("dmsaa_test", || panic!("deliberately\nsecond line"));
+        assert_eq!(status, DmsaaStatus::Panic);
+        let message = last_error();
+        assert!(
+            message.starts_with("dmsaa_test: internal error"),
+            "{message}"
+        );
+        assert!(
+            message.contains("deliberately") && !message.contains('\n'),
+            "{message}"
+        );
+    }
+
+    #[test]
+    fn the_defaults_are_the_rust_defaults() {
+        let converted = convert(&dmsaa_options_default()).expect("the defaults are valid");
+        assert_eq!(converted.options, RetrofitOptions::default());
+        assert_eq!(converted.depth_mode, DepthMode::Standard);
+        assert!(!converted.world_space);
+    }
+
+    #[test]
+    fn every_field_converts_and_out_of_range_values_are_named() {
+        let mut o = dmsaa_options_default();
+        o.layers = 2;
+        o.position_attachment = 0;
+        o.world_space_position = 1;
+        o.normal_attachment = 1;
+        o.normal_encoding = DMSAA_NORMAL_OCTAHEDRAL_UNORM;
+        o.method = DMSAA_METHOD_FRONT;
+        o.window = DMSAA_WINDOW_HARD;
+        o.rules[1] = DMSAA_RULE_SELECT;
+        o.stencil_copy = DMSAA_STENCIL_BLIT;
+        o.layer_mix = DMSAA_LAYER_MIX_TONEMAPPED;
+        o.restore_first_layer = 0;
+        o.memory_budget_bytes = 1 << 20;
+        o.memory_budget_strict = 1;
+        o.depth_mode = DMSAA_DEPTH_REVERSED_Z;
+        let c = convert(&o).expect("valid options");
+        assert_eq!(c.options.resolve.layers, 2);
+        assert_eq!(c.options.position_attachment, Some(ColorAttachment(0)));
+        assert_eq!(c.options.position_space, PositionSpace::World);
+        assert_eq!(
+            c.options.normal_attachment,
+            Some(NormalAttachment {
+                attachment: ColorAttachment(1),
+                encoding: NormalEncoding::OctahedralUnorm
+            })
+        );
+        assert_eq!(c.options.resolve.method, ResolveMethod::Front);
+        assert_eq!(c.options.resolve.window, Window::Hard);
+        assert_eq!(
+            c.options.rules,
+            vec![(ColorAttachment(1), ResolveRule::Select)]
+        );
+        assert_eq!(c.options.stencil, StencilCopy::Blit);
+        assert_eq!(c.options.layer_mix, LayerMix::Tonemapped);
+        assert!(!c.options.restore_first_layer);
+        assert_eq!(
+            c.options.memory_budget,
+            Some(MemoryBudget {
+                bytes: Some(1 << 20),
+                strict: true
+            })
+        );
+        assert_eq!(c.depth_mode, DepthMode::ReversedZ);
+
+        let curve = CString::new("vec3 dmsaa_curve(vec3 x) { return x; }").unwrap();
+        let mut o = dmsaa_options_default();
+        o.layer_mix = DMSAA_LAYER_MIX_CURVE;
+        o.layer_mix_curve = curve.as_ptr();
+        let c = convert(&o).expect("a curve mix");
+        assert_eq!(
+            c.options.layer_mix,
+            LayerMix::Curve(curve.to_str().unwrap().into())
+        );
+
+        let bad: [(&str, fn(&mut DmsaaOptions)); 6] = [
+            ("DmsaaOptions.stencil_copy is 4", |o| o.stencil_copy = 4),
+            ("DmsaaOptions.rules[3] is 5", |o| o.rules[3] = 5),
+            ("DmsaaOptions.depth_mode is 3", |o| o.depth_mode = 3),
+            ("DmsaaOptions.restore_first_layer is 7", |o| {
+                o.restore_first_layer = 7
+            }),
+            ("DmsaaOptions.normal_attachment is -2", |o| {
+                o.normal_attachment = -2
+            }),
+            ("the normal threshold is a cosine", |o| {
+                o.normal_threshold = 1.5
+            }),
+        ];
+        for (expected, change) in bad {
+            let mut o = dmsaa_options_default();
+            change(&mut o);
+            let Err(failure) = convert(&o) else {
+                panic!("accepted: {expected}");
+            };
+            assert_eq!(failure.status, DmsaaStatus::InvalidArgument);
+            assert!(failure.message.starts_with(expected), "{}", failure.message);
+        }
+    }
+
+    #[test]
+    fn null_pointers_are_refused_before_anything_is_read() {
+        let mut out: *mut DmsaaRetrofit = std::ptr::NonNull::dangling().as_ptr();
+        // SAFETY: every pointer is null or valid.
+        let status = unsafe {
+            dmsaa_retrofit_new(None, std::ptr::null_mut(), 1, std::ptr::null(), &mut out)
+        };
+        assert_eq!(status, DmsaaStatus::NullPointer);
+        assert!(out.is_null(), "a failed call leaves *out null");
+        assert_eq!(
+            last_error(),
+            "dmsaa_retrofit_new: `get_proc_address` is null"
+        );
+        let mut fbo = 0;
+        // SAFETY: a null handle, which is refused.
+        let status = unsafe { dmsaa_framebuffer(std::ptr::null_mut(), &mut fbo) };
+        assert_eq!(status, DmsaaStatus::NullPointer);
+        assert_eq!(last_error(), "dmsaa_framebuffer: `retrofit` is null");
+    }
 }
