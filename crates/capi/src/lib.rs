@@ -1080,7 +1080,8 @@ mod tests {
             LayerMix::Curve(curve.to_str().unwrap().into())
         );
 
-        let bad: [(&str, fn(&mut DmsaaOptions)); 6] = [
+        type Change = fn(&mut DmsaaOptions);
+        let bad: [(&str, Change); 6] = [
             ("DmsaaOptions.stencil_copy is 4", |o| o.stencil_copy = 4),
             ("DmsaaOptions.rules[3] is 5", |o| o.rules[3] = 5),
             ("DmsaaOptions.depth_mode is 3", |o| o.depth_mode = 3),
