@@ -15,8 +15,9 @@
  * - Ownership: a DmsaaRetrofit is made by dmsaa_retrofit_new and owned by
  *   the caller until dmsaa_destroy. Pointer arguments are read (or, for
  *   out_* and run_lighting, written) during the call only; nothing the
- *   host passes is kept. The library never deletes or changes the host's
- *   GL objects other than writing the G-buffer images the resolve targets.
+ *   host passes is kept. The library never deletes the host's GL objects
+ *   and changes none but by writing the G-buffer's images (the resolve,
+ *   the second layer) and, with two layers, the lit output's colour.
  * - Threading: calls that touch GL need the host's GL context current on
  *   the calling thread (the handle holds the GL function table loaded
  *   through the host's loader, never a context). A handle is used from one
