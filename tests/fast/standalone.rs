@@ -86,7 +86,7 @@ fn the_models_travel_with_their_licences() {
 
 #[test]
 fn every_published_package_has_its_readme_and_licences() {
-    for dir in ["", "crates/core", "crates/headless"] {
+    for dir in ["", "crates/core", "crates/headless", "crates/capi"] {
         let package = root().join(dir);
         for file in ["README.md", "LICENSE-MIT", "LICENSE-APACHE"] {
             let path = package.join(file);

@@ -1,0 +1,438 @@
+/*
+ * deferred_msaa.h: depth-aware MSAA for OpenGL 3.2+ deferred renderers,
+ * the C interface of the deferred-msaa-capi library.
+ *
+ * Generated from crates/capi/src/lib.rs by cbindgen; do not edit (the
+ * crate's tests fail when this file differs from the declarations).
+ *
+ * A host adds two calls to its frame: bind dmsaa_framebuffer's framebuffer
+ * for its geometry pass instead of its G-buffer's, and call dmsaa_resolve
+ * before its lighting, which then reads its own G-buffer textures,
+ * anti-aliased. With two layers, dmsaa_begin_second_layer and
+ * dmsaa_finish_second_layer bracket a second run of its lighting.
+ *
+ * Conventions for every function:
+ * - Ownership: a DmsaaRetrofit is made by dmsaa_retrofit_new and owned by
+ *   the caller until dmsaa_destroy. Pointer arguments are read (or, for
+ *   out_* and run_lighting, written) during the call only; nothing the
+ *   host passes is kept. The library never deletes the host's GL objects
+ *   and changes none but by writing the G-buffer's images (the resolve,
+ *   the second layer) and, with two layers, the lit output's colour.
+ * - Threading: calls that touch GL need the host's GL context current on
+ *   the calling thread (the handle holds the GL function table loaded
+ *   through the host's loader, never a context). A handle is used from one
+ *   thread at a time.
+ * - GL state: every call leaves the state the host set as it was (bound
+ *   framebuffers, program, textures and active unit, viewport, enables,
+ *   blend, depth and stencil settings, draw buffers).
+ * - Errors: every fallible call returns a DmsaaStatus; on anything but
+ *   DMSAA_STATUS_OK, dmsaa_last_error() has a one-line message for the
+ *   calling thread. A null pointer, an option out of range or a call out
+ *   of order is an error status, never undefined behaviour, and no panic
+ *   crosses the boundary.
+ */
+
+#ifndef DEFERRED_MSAA_H
+#define DEFERRED_MSAA_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+// `position_attachment` / `normal_attachment`: none.
+#define DMSAA_NO_ATTACHMENT -1
+
+// How many colour attachments `DmsaaOptions.rules` covers (GL's
+// guaranteed minimum of `GL_MAX_COLOR_ATTACHMENTS`).
+#define DMSAA_MAX_RULES 8
+
+// `memory_budget_bytes`: no budget.
+#define DMSAA_MEMORY_BUDGET_NONE 0
+
+// `memory_budget_bytes`: a share of the free video memory the driver
+// reports (or the crate's fixed default where it reports none).
+#define DMSAA_MEMORY_BUDGET_DRIVER UINT64_MAX
+
+// What every fallible call returns. Any value other than
+// `DMSAA_STATUS_OK` leaves a one-line message in [`dmsaa_last_error`].
+typedef enum {
+  // Success.
+  DMSAA_STATUS_OK = 0,
+  // A pointer argument that must not be null was null.
+  DMSAA_STATUS_NULL_POINTER = 1,
+  // An argument or an option is out of range (the message names it and
+  // what is accepted), or the projection is not a GL perspective matrix.
+  DMSAA_STATUS_INVALID_ARGUMENT = 2,
+  // A call out of order: `dmsaa_begin_second_layer` before this frame's
+  // `dmsaa_resolve` or twice, `dmsaa_finish_second_layer` without
+  // `dmsaa_begin_second_layer`, `dmsaa_resolve` between the two.
+  DMSAA_STATUS_OUT_OF_ORDER = 3,
+  // The host framebuffer cannot be retrofitted as it is (no depth
+  // attachment, an already multisampled attachment, a rule or key naming
+  // an attachment it lacks): the message names the attachment.
+  DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER = 4,
+  // The context lacks what is asked for: a GL version or extension, a
+  // sample count or a multisampled format.
+  DMSAA_STATUS_UNSUPPORTED = 5,
+  // The twins would take more memory than the options' budget allows.
+  DMSAA_STATUS_MEMORY_BUDGET = 6,
+  // The driver failed: a GL error, an object that could not be made, an
+  // incomplete framebuffer, a shader that did not compile or link (those
+  // two carry the driver's log on the lines after the first).
+  DMSAA_STATUS_GL = 7,
+  // A panic inside the library, caught at the boundary. The handle it
+  // happened on refuses every call but `dmsaa_destroy` from then on.
+  DMSAA_STATUS_PANIC = 8,
+} DmsaaStatus;
+
+// A host G-buffer retrofitted with MSAA: the multisampled twins, the
+// resolve's programs and the GL function table loaded through the host's
+// loader. It never owns a GL context. Opaque; made by
+// [`dmsaa_retrofit_new`], freed by [`dmsaa_destroy`].
+typedef struct DmsaaRetrofit DmsaaRetrofit;
+
+// How a normal attachment stores a normal (`DMSAA_NORMAL_XYZ` …).
+typedef uint32_t DmsaaNormalEncoding;
+
+// How the reference sample of a pixel is chosen
+// (`DMSAA_METHOD_AVERAGE` … `DMSAA_METHOD_BACK`).
+typedef uint32_t DmsaaMethod;
+
+// The closeness window (`DMSAA_WINDOW_HARD`, `DMSAA_WINDOW_SMOOTH`).
+typedef uint32_t DmsaaWindow;
+
+// The rule by which one colour attachment's samples become one value.
+typedef uint32_t DmsaaRule;
+
+// How a depth-stencil host's stencil is written back after the resolve.
+typedef uint32_t DmsaaStencilCopy;
+
+// How the two lit layers are mixed by the second layer's coverage.
+typedef uint32_t DmsaaLayerMix;
+
+// How the host's depth buffer holds depth.
+typedef uint32_t DmsaaDepthMode;
+
+// Everything that does not change from frame to frame, given once: the
+// C form of the Rust `RetrofitOptions`. Start from
+// [`dmsaa_options_default`] and change fields; flags are 0 or 1, and any
+// value out of range makes the call that is given it fail with
+// `DMSAA_STATUS_INVALID_ARGUMENT`, naming the field.
+typedef struct {
+  // Requested samples per pixel, at least 1 (default 4); the driver's
+  // real count is used ([`dmsaa_samples`]).
+  uint32_t samples;
+  // Resolved layers per pixel: 1 (default) or 2 (the second layer:
+  // [`dmsaa_begin_second_layer`], [`dmsaa_finish_second_layer`]).
+  uint32_t layers;
+  // The colour attachment number holding positions, whose view-space
+  // `-z` is the depth key; `DMSAA_NO_ATTACHMENT` (default) linearises
+  // the depth attachment with each frame's projection instead.
+  int32_t position_attachment;
+  // 1: the position attachment holds world-space positions, and each
+  // [`dmsaa_resolve`] passes the view matrix; 0 (default): view space.
+  uint8_t world_space_position;
+  // The colour attachment number holding normals, for the second
+  // layer's normal test; `DMSAA_NO_ATTACHMENT` (default): by depth alone.
+  int32_t normal_attachment;
+  // How `normal_attachment` stores normals (`DMSAA_NORMAL_*`).
+  DmsaaNormalEncoding normal_encoding;
+  // With two layers and a normal attachment: samples close in depth are
+  // one surface only when the cosine between their normals is at least
+  // this, in `[-1, 1]` (default 0.95).
+  double normal_threshold;
+  // `DMSAA_METHOD_*` (default median).
+  DmsaaMethod method;
+  // `DMSAA_WINDOW_*` (default smooth).
+  DmsaaWindow window;
+  // Outer window width in pixel footprints, above 0 (default 5).
+  double window_c;
+  // Inner width of the smooth window, at least 0 and below `window_c`
+  // (default 2.5).
+  double window_c_in;
+  // 1 (default): uniform pixels take one sample.
+  uint8_t fast_path;
+  // 1: blend the depth attachment's value rather than select the
+  // reference's (default 0).
+  uint8_t blend_depth;
+  // 1: with the fast path and a depth key, pixels whose depth samples lie
+  // on one plane count as uniform (default 0).
+  uint8_t plane_uniformity;
+  // 1: with the fast path and a position key, pixels whose position
+  // samples are all equal count as uniform (default 0).
+  uint8_t position_uniformity;
+  // The rule of colour attachment `k` (`DMSAA_RULE_*`); attachments the
+  // host framebuffer lacks must stay `DMSAA_RULE_DEFAULT`.
+  DmsaaRule rules[DMSAA_MAX_RULES];
+  // `DMSAA_STENCIL_*` (default auto).
+  DmsaaStencilCopy stencil_copy;
+  // `DMSAA_LAYER_MIX_*` (default auto).
+  DmsaaLayerMix layer_mix;
+  // With `DMSAA_LAYER_MIX_CURVE`: the curve's GLSL, NUL-terminated UTF-8,
+  // copied by the call that reads the options; otherwise ignored.
+  const char *layer_mix_curve;
+  // 1 (default): `dmsaa_finish_second_layer` puts the first layer back
+  // into the host's G-buffer (textures, depth, stencil). 0, for a host
+  // that reads nothing of its G-buffer after lighting until its next
+  // geometry pass: two full copies a frame fewer, the same lit image.
+  uint8_t restore_first_layer;
+  // A limit on the twins' memory in bytes: `DMSAA_MEMORY_BUDGET_NONE`
+  // (default), `DMSAA_MEMORY_BUDGET_DRIVER`, or a number of bytes. Over
+  // it, the sample count steps down (or, strict, the call fails).
+  uint64_t memory_budget_bytes;
+  // 1: over the budget, fail with `DMSAA_STATUS_MEMORY_BUDGET` rather
+  // than step down (default 0).
+  uint8_t memory_budget_strict;
+  // `DMSAA_DEPTH_*` (default standard): how the host stores depth.
+  DmsaaDepthMode depth_mode;
+} DmsaaOptions;
+
+// The GL loader a host already has: returns the address of the GL entry
+// point `name` (a NUL-terminated ASCII string), or null where it has none.
+// `user_data` is what the host gave [`dmsaa_retrofit_new`]. An
+// `eglGetProcAddress`, `glXGetProcAddress` or `SDL_GL_GetProcAddress` is
+// wrapped in a one-line function of this type.
+typedef const void *(*DmsaaGetProcAddress)(const char *name, void *user_data);
+
+// Every sample weighs 1, as a hardware resolve.
+#define DMSAA_METHOD_AVERAGE 0
+
+// Reference: the nearest sample.
+#define DMSAA_METHOD_FRONT 1
+
+// Reference: the median sample by depth (the default).
+#define DMSAA_METHOD_MEDIAN 2
+
+// Reference: the farthest sample.
+#define DMSAA_METHOD_BACK 3
+
+// Weight 1 within `window_c` pixel footprints, else 0.
+#define DMSAA_WINDOW_HARD 0
+
+// Weight falling smoothly from `window_c_in` to `window_c` (the default).
+#define DMSAA_WINDOW_SMOOTH 1
+
+// xyz as they are (a float or snorm attachment; the default).
+#define DMSAA_NORMAL_XYZ 0
+
+// xyz packed as `n * 0.5 + 0.5` (an RGBA8 attachment).
+#define DMSAA_NORMAL_UNORM 1
+
+// Octahedral, x and y in `[-1, 1]`.
+#define DMSAA_NORMAL_OCTAHEDRAL 2
+
+// Octahedral packed into `[0, 1]`.
+#define DMSAA_NORMAL_OCTAHEDRAL_UNORM 3
+
+// The format's default: blend, select for integer formats.
+#define DMSAA_RULE_DEFAULT 0
+
+// Weighted mean.
+#define DMSAA_RULE_BLEND 1
+
+// Normalised weighted sum of xyz (normals), w blended.
+#define DMSAA_RULE_BLEND_NORMAL 2
+
+// Weighted mean in the tonemapped domain `x / (1 + max3(x))`.
+#define DMSAA_RULE_BLEND_HDR 3
+
+// The reference sample's value, never blended.
+#define DMSAA_RULE_SELECT 4
+
+// The best the driver offers (the default).
+#define DMSAA_STENCIL_AUTO 0
+
+// One pass, with `GL_ARB_shader_stencil_export`.
+#define DMSAA_STENCIL_EXPORT 1
+
+// Eight passes, with `GL_ARB_stencil_texturing` alone.
+#define DMSAA_STENCIL_BIT_PASSES 2
+
+// `glBlitFramebuffer`: the sample the driver picks.
+#define DMSAA_STENCIL_BLIT 3
+
+// Tonemapped for a floating-point output, linear otherwise (the default).
+#define DMSAA_LAYER_MIX_AUTO 0
+
+// `mix(first, second, a)` as the output stores it.
+#define DMSAA_LAYER_MIX_LINEAR 1
+
+// In the domain `x / (1 + max3(x))`, mapped back.
+#define DMSAA_LAYER_MIX_TONEMAPPED 2
+
+// In the domain of the host's own tonemap curve: `layer_mix_curve` is GLSL
+// defining `vec3 dmsaa_curve(vec3)` and `vec3 dmsaa_curve_inverse(vec3)`.
+#define DMSAA_LAYER_MIX_CURVE 3
+
+// OpenGL's default: the near plane at 0, cleared to 1 (the default).
+#define DMSAA_DEPTH_STANDARD 0
+
+// `glClipControl(..., GL_ZERO_TO_ONE)`, cleared to 1.
+#define DMSAA_DEPTH_ZERO_TO_ONE 1
+
+// Reversed-Z: `GL_ZERO_TO_ONE`, the near plane at 1, cleared to 0.
+#define DMSAA_DEPTH_REVERSED_Z 2
+
+#ifdef __cplusplus
+extern "C" {
+#endif // __cplusplus
+
+// The default options: 4 samples, one layer, the depth key from the depth
+// buffer, the median method with the smooth window (c = 5, c_in = 2.5),
+// the fast path, each attachment's default rule, the first layer restored
+// after the second lighting, no memory budget, standard depth.
+//
+// Threading: any thread; needs no GL context. Never fails.
+DmsaaOptions dmsaa_options_default(void);
+
+// Retrofit the host's G-buffer framebuffer `host_fbo` with MSAA: read its
+// attachments, formats and draw buffers, make multisampled twins of them
+// and compile the resolve's programs.
+//
+// `get_proc_address` (with `user_data`, passed back to it unchanged) loads
+// the GL entry points; the handle keeps the function table it loaded, never
+// a context. `options` is read during the call only. On success `*out`
+// holds the new handle, which the caller owns and frees with
+// [`dmsaa_destroy`]; on failure `*out` is set to null (when `out` is not
+// null) and nothing is left allocated.
+//
+// Threading: the host's GL context must be current on the calling thread,
+// here and in every later call on the handle (the same context or one
+// sharing its objects). The GL state the host set (bindings, program,
+// viewport, enables, draw buffers...) is as it was when the call returns.
+//
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `get_proc_address`,
+// `options` or `out`; `DMSAA_STATUS_INVALID_ARGUMENT` for a `host_fbo` of
+// 0 (the default framebuffer has no textures to resolve into) or options
+// out of range; `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the framebuffer
+// cannot be retrofitted (no depth attachment, for one);
+// `DMSAA_STATUS_UNSUPPORTED`, `DMSAA_STATUS_MEMORY_BUDGET`,
+// `DMSAA_STATUS_GL` as their names say.
+DmsaaStatus dmsaa_retrofit_new(DmsaaGetProcAddress get_proc_address,
+                               void *user_data,
+                               uint32_t host_fbo,
+                               const DmsaaOptions *options,
+                               DmsaaRetrofit **out);
+
+// The multisampled framebuffer: bind it instead of the host's G-buffer
+// framebuffer for the geometry pass. It changes after
+// [`dmsaa_set_options`] or [`dmsaa_refresh`] rebuild the twins, so a host
+// asks for it each frame (the call is cheap: no GL call).
+//
+// Ownership: the framebuffer belongs to the handle; do not delete it.
+// Threading: the calling thread's context need not be current.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `out_fbo`.
+DmsaaStatus dmsaa_framebuffer(DmsaaRetrofit *retrofit, uint32_t *out_fbo);
+
+// The real sample count of the twins (the driver may round the requested
+// count up, or the memory budget step it down).
+//
+// Threading: the calling thread's context need not be current.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `out_samples`.
+DmsaaStatus dmsaa_samples(DmsaaRetrofit *retrofit, uint32_t *out_samples);
+
+// Resolve the twins into the host's own G-buffer textures (and depth):
+// call it after the geometry pass, before the host's lighting reads its
+// G-buffer.
+//
+// `projection`: the 16 floats of the geometry pass's projection matrix,
+// column-major (as `glUniformMatrix4fv` takes them untransposed), a GL
+// perspective projection. `view_or_null`: the view matrix likewise when
+// the options' position attachment holds world-space positions, else null
+// (it is then ignored). Both are read during the call only.
+//
+// Threading: the host's context current on the calling thread. The host's
+// GL state is as it was.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or
+// `projection`, or a null `view_or_null` with world-space positions;
+// `DMSAA_STATUS_INVALID_ARGUMENT` for a projection that is not a GL
+// perspective matrix; `DMSAA_STATUS_OUT_OF_ORDER` between
+// [`dmsaa_begin_second_layer`] and [`dmsaa_finish_second_layer`];
+// `DMSAA_STATUS_GL`.
+DmsaaStatus dmsaa_resolve(DmsaaRetrofit *retrofit,
+                          const float *projection,
+                          const float *view_or_null);
+
+// With two layers, after the host lit the first layer into `output_fbo`
+// (its framebuffer; 0 for the default framebuffer; the lit colour is its
+// first draw buffer's, the G-buffer's size): keep that lit image and put
+// the second layer into the host's G-buffer textures and depth. Then, when
+// `*run_lighting` is true, the host runs its lighting again, unchanged,
+// into the same `output_fbo`, and calls [`dmsaa_finish_second_layer`].
+// With one layer nothing is done and `*run_lighting` is false.
+//
+// Threading: the host's context current on the calling thread. The host's
+// GL state is as it was.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or
+// `run_lighting`; `DMSAA_STATUS_OUT_OF_ORDER` before this frame's
+// [`dmsaa_resolve`] or when already begun; `DMSAA_STATUS_INVALID_ARGUMENT`
+// for an output the second layer cannot use; `DMSAA_STATUS_GL`.
+DmsaaStatus dmsaa_begin_second_layer(DmsaaRetrofit *retrofit,
+                                     uint32_t output_fbo,
+                                     bool *run_lighting);
+
+// After the host lit the second layer into `output_fbo` (the one given to
+// [`dmsaa_begin_second_layer`]): mix the two lit layers into it by the
+// second layer's coverage and put the first layer back into the host's
+// G-buffer (unless the options' `restore_first_layer` is 0).
+//
+// Threading: the host's context current on the calling thread. The host's
+// GL state is as it was.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit`;
+// `DMSAA_STATUS_OUT_OF_ORDER` without a [`dmsaa_begin_second_layer`] that
+// returned `*run_lighting` true; `DMSAA_STATUS_INVALID_ARGUMENT` for
+// another output than begin's or with one layer; `DMSAA_STATUS_GL`.
+DmsaaStatus dmsaa_finish_second_layer(DmsaaRetrofit *retrofit, uint32_t output_fbo);
+
+// Change the options. Only what they change is rebuilt; when the twins
+// are, [`dmsaa_framebuffer`] returns the new multisampled framebuffer. On
+// error the handle keeps working with the options it had. `options` is
+// read during the call only.
+//
+// Threading: the host's context current on the calling thread. The host's
+// GL state is as it was.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `options`;
+// `DMSAA_STATUS_INVALID_ARGUMENT` for options out of range; those of
+// [`dmsaa_retrofit_new`].
+DmsaaStatus dmsaa_set_options(DmsaaRetrofit *retrofit, const DmsaaOptions *options);
+
+// Re-read the host framebuffer after the host resized or re-allocated its
+// G-buffer textures, and rebuild the twins (ask [`dmsaa_framebuffer`]
+// again). On error the handle keeps working as before.
+//
+// Threading: the host's context current on the calling thread. The host's
+// GL state is as it was.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit`; those of
+// [`dmsaa_retrofit_new`].
+DmsaaStatus dmsaa_refresh(DmsaaRetrofit *retrofit);
+
+// Free every GL object the handle made (never the host's) and the handle
+// itself; `retrofit` is invalid afterwards. Null is accepted and does
+// nothing. A handle that had an internal error is freed too.
+//
+// Threading: the host's context current on the calling thread.
+void dmsaa_destroy(DmsaaRetrofit *retrofit);
+
+// The message of the calling thread's last failed call: one line saying
+// what went wrong and, where it can, what to do (shader build failures,
+// which only a driver problem causes, add the driver's log on further
+// lines). An empty string before any failure. Successful calls leave it
+// as it was.
+//
+// Ownership: the library's; valid until the calling thread's next failed
+// call. Threading: any thread; each has its own message.
+const char *dmsaa_last_error(void);
+
+// How many GL objects (textures, framebuffers, programs, shaders,
+// buffers, vertex arrays, queries) the library has made and not yet freed
+// on the calling thread, over every handle: 0 once every handle made on
+// this thread is destroyed.
+//
+// Threading: any thread; counts that thread's objects.
+int64_t dmsaa_live_objects(void);
+
+#ifdef __cplusplus
+}  // extern "C"
+#endif  // __cplusplus
+
+#endif  /* DEFERRED_MSAA_H */
