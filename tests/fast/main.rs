@@ -27,4 +27,5 @@ mod selective;
 mod sparse;
 mod stability;
 mod standalone;
+mod taa;
 mod zoo;
