@@ -465,7 +465,8 @@ struct Viewer {
     gl: glow::Context,
     surface: Surface<WindowSurface>,
     context: PossiblyCurrentContext,
-    display: Display,
+    /// The display the context and the surface belong to, kept alive with them.
+    _display: Display,
     window: Window,
     scene: Scene,
     options: RenderOptions,
@@ -584,7 +585,7 @@ impl Viewer {
             gl,
             surface,
             context,
-            display,
+            _display: display,
             window,
             scene,
             options,
