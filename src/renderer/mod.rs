@@ -1161,7 +1161,9 @@ impl Renderer {
 
     /// The camera's projection at this size in the frame's depth mode:
     /// standard GL depth (−1..1, [`Camera::projection`]), or reversed-Z for
-    /// `GL_ZERO_TO_ONE` (near → 1; far → 0, or 0 at infinity).
+    /// `GL_ZERO_TO_ONE` (near → 1; far → 0, or 0 at infinity). With
+    /// [`AaMode::Taa`] the frame's passes draw with it moved by the frame's
+    /// sub-pixel jitter ([`technique::Taa::last_jitter`]).
     pub fn projection(&self) -> Mat4 {
         let aspect = self.options.width as f32 / self.options.height as f32;
         depth::projection(&self.camera, aspect, self.depth_mode)
