@@ -7,7 +7,7 @@
 //!
 //! ```sh
 //! cargo run --release --example viewer -- [SCENE] [--size 960x540] [--samples N]
-//!     [--method none|average|front|median|back] [--fxaa]
+//!     [--method none|average|front|median|back|taa] [--fxaa]
 //!     [--frames N --screenshot FILE.png] [--keys KEYS]
 //! ```
 //! `SCENE` is `builtin:NAME` (default `builtin:greebles`) or a `.gltf`/`.glb` path.
@@ -16,8 +16,8 @@
 //!
 //! | key | what |
 //! |---|---|
-//! | `M` / `Shift+M` | next / previous method: none, average, front, median, back |
-//! | `0` … `4` | none, average, front, median, back |
+//! | `M` / `Shift+M` | next / previous method: none, average, front, median, back, taa |
+//! | `0` … `5` | none, average, front, median, back, taa (temporal anti-aliasing: orbit to see its lag and smear) |
 //! | `N` | next sample count the driver really offers for every G-buffer format |
 //! | `F` | FXAA on / off |
 //! | `V` / `Shift+V` | next / previous view: final image, each G-buffer attachment, depth, complex pixels |
@@ -47,8 +47,7 @@ use deferred_msaa_lab::gl::{
 };
 use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
 use deferred_msaa_lab::resolve::{
-    COMPLEX_GLSL, COMPLEX_GLSL_NAME, DepthProjection, KeySource, ResolveMethod, ResolveSettings,
-    ResolveSlot,
+    COMPLEX_GLSL, COMPLEX_GLSL_NAME, DepthProjection, KeySource, ResolveSlot,
 };
 use deferred_msaa_lab::scene::{Aabb, Camera, Scene};
 use glam::Vec3;
@@ -73,14 +72,8 @@ type AnyResult<T> = Result<T, Box<dyn Error>>;
 /// Frames of a scripted run after which resident memory is the baseline.
 const WARMUP_FRAMES: u32 = 100;
 
-/// The methods, in key order (`0` … `4`).
-const METHODS: [Option<ResolveMethod>; 5] = [
-    None,
-    Some(ResolveMethod::Average),
-    Some(ResolveMethod::Front),
-    Some(ResolveMethod::Median),
-    Some(ResolveMethod::Back),
-];
+/// The methods, in key order (`0` … `5`), as method specs.
+const METHODS: [&str; 6] = ["none", "average", "front", "median", "back", "taa"];
 
 fn main() -> ExitCode {
     let args = match parse_args::<Cli>() {
@@ -176,7 +169,7 @@ struct Cli {
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
     samples: u32,
     /// The method to start with.
-    #[arg(long, default_value = "median", value_parser = ["none", "average", "front", "median", "back"])]
+    #[arg(long, default_value = "median", value_parser = METHODS)]
     method: String,
     /// Start with FXAA on.
     #[arg(long)]
@@ -200,10 +193,7 @@ impl From<Cli> for Args {
             height: cli.size.1,
             samples: cli.samples,
             // clap admitted only the methods' names.
-            method: METHODS
-                .iter()
-                .position(|m| method_name(*m) == cli.method)
-                .unwrap_or(3),
+            method: METHODS.iter().position(|m| *m == cli.method).unwrap_or(3),
             fxaa: cli.fxaa,
             frames: cli.frames.or_else(|| cli.screenshot.as_ref().map(|_| 1)),
             screenshot: cli.screenshot,
@@ -219,12 +209,8 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
         .ok_or_else(|| format!("expected WIDTHxHEIGHT such as 960x540, got `{text}`"))
 }
 
-fn method_name(method: Option<ResolveMethod>) -> &'static str {
-    method.map_or("none", ResolveMethod::name)
-}
-
 /// The keys, for `--help` and `?`.
-const KEYS: &str = "keys: M/Shift+M method, 0-4 none/average/front/median/back, N sample count, F FXAA, \
+const KEYS: &str = "keys: M/Shift+M method, 0-5 none/average/front/median/back/taa, N sample count, F FXAA, \
 V/Shift+V view, arrows/HJKL or drag orbit, +/- or wheel zoom, R reset camera, P screenshot, ? keys, Esc/Q quit";
 
 fn print_keys() {
@@ -252,7 +238,7 @@ fn action_for_char(c: char) -> Option<Action> {
     Some(match c {
         'm' => Action::StepMethod(1),
         'M' => Action::StepMethod(-1),
-        '0'..='4' => Action::Method(c as usize - '0' as usize),
+        '0'..='5' => Action::Method(c as usize - '0' as usize),
         'n' | 'N' => Action::NextSamples,
         'f' | 'F' => Action::ToggleFxaa,
         'v' => Action::StepView(1),
@@ -479,6 +465,8 @@ struct Viewer {
     gl: glow::Context,
     surface: Surface<WindowSurface>,
     context: PossiblyCurrentContext,
+    /// The display the context and the surface belong to, kept alive with them.
+    _display: Display,
     window: Window,
     scene: Scene,
     options: RenderOptions,
@@ -597,6 +585,7 @@ impl Viewer {
             gl,
             surface,
             context,
+            _display: display,
             window,
             scene,
             options,
@@ -727,17 +716,15 @@ impl Viewer {
         self.window.request_redraw();
     }
 
-    /// Point the renderer at the orbit camera: nothing is rebuilt, so what
-    /// a method keeps from frame to frame (a temporal filter's history)
-    /// carries on as the camera moves.
-    fn update_camera(&mut self) -> AnyResult<()> {
+    /// Point the renderer at the orbit camera. Nothing is rebuilt, so
+    /// `taa` reprojects its history from the camera of the frame before,
+    /// as it would in a game.
+    fn update_camera(&mut self) {
         if !self.camera_changed {
-            return Ok(());
+            return;
         }
         self.camera_changed = false;
-        self.scene.camera = self.orbit.camera();
-        self.renderer.set_camera(self.scene.camera);
-        Ok(())
+        self.renderer.set_camera(self.orbit.camera());
     }
 
     /// Render and present one frame.
@@ -749,7 +736,7 @@ impl Viewer {
                 self.last_action = Some(c);
             }
         }
-        self.update_camera()?;
+        self.update_camera();
         let start = Instant::now();
         self.renderer.render(&self.gl)?;
         let size = self.window.inner_size();
@@ -826,7 +813,7 @@ impl Viewer {
     }
 
     fn title(&self) -> String {
-        let method = method_name(METHODS[self.method]);
+        let method = METHODS[self.method];
         let samples = match self.renderer.samples() {
             1 => String::new(),
             n => format!(" {n}x"),
@@ -841,14 +828,11 @@ impl Viewer {
     }
 }
 
-fn aa_mode(method: Option<ResolveMethod>) -> AaMode {
-    match method {
-        None => AaMode::None,
-        Some(method) => AaMode::Resolve(ResolveSettings {
-            method,
-            ..ResolveSettings::default()
-        }),
-    }
+fn aa_mode(method: &str) -> AaMode {
+    // The list holds the registry's own method names, which parse.
+    method
+        .parse()
+        .unwrap_or_else(|e| panic!("the viewer's method `{method}`: {e}"))
 }
 
 /// The sample counts every attachment of the layout really gets.

@@ -11,6 +11,7 @@
 //! | `complex`             | per-sample lighting only on complex pixels (needs renderer support) |
 //! | `gbaa`                | geometry-buffer anti-aliasing: a single-sample G-buffer plus edge distances, blended across triangle edges after the tonemap |
 //! | `sparse`              | the multisampled G-buffer as per-pixel linked lists of blocks, one per visible triangle, lit once each (OpenGL 4.3 and post-depth coverage); `:pool=N` sets the pool to N blocks |
+//! | `taa`                 | temporal anti-aliasing: one sample per pixel, the projection jittered per frame, the history reprojected, clipped to the neighbourhood and blended; `:alpha=F` (the new frame's weight, default 0.1) and `:phases=N` (Halton jitter phases, default 8). A still frame is measured after the method's warm-up frames ([`AaMode::warmup_frames`]) |
 //!
 //! Options of the resolve methods: `:hard` / `:smooth` (the closeness
 //! window), `:c=F` (outer width; when given without `c_in`, `c_in` becomes

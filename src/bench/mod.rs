@@ -886,6 +886,18 @@ fn time_scene(
             if renderer.options() != &job.options {
                 renderer.set_options(gl, &job.options)?;
             }
+            if last {
+                // A temporal method's still frame is the one it settles on:
+                // its warm-up frames from a fresh history, then the frame
+                // measured (shared renderers may have reset it between rounds).
+                let warmup = job.options.aa.warmup_frames();
+                if warmup > 0 {
+                    renderer.reset_history();
+                    for _ in 0..warmup {
+                        renderer.render(gl)?;
+                    }
+                }
+            }
             let t = renderer.render(gl)?;
             if timed {
                 job.frames.push(t);
@@ -1014,7 +1026,7 @@ fn time_scene(
                     t.resolve_ms
                         + t.second_layer_ms
                         + t.fxaa_ms
-                        + t.gbaa_ms
+                        + t.post_ms
                         + extra
                         + extra_geometry
                 })

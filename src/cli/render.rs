@@ -263,7 +263,10 @@ impl Session {
         // The renderer logs its precision warnings (log::warn!) itself.
         let loader = |name: &str| ctx.get_proc_address(name);
         let mut renderer = Renderer::new(ctx.gl(), loader, &scene, &options)?;
-        renderer.render(ctx.gl())?;
+        // A temporal method's still image is the one it settles on.
+        for _ in 0..=options.aa.warmup_frames() {
+            renderer.render(ctx.gl())?;
+        }
         Ok(Session {
             ctx,
             renderer: Some(renderer),

@@ -38,6 +38,10 @@ pub enum Pass {
     /// G-buffer pass recorded (the geometry pass then also runs a geometry
     /// shader and writes the edge buffers).
     GbaaPost,
+    /// Method `taa`: the resolve that blends the frame with the history
+    /// reprojected from the frame before (every pass of the frame then
+    /// draws with a jittered projection).
+    TaaResolve,
     /// Method `sparse`: the multisampled depth-only pre-pass.
     SparseDepth,
     /// Method `sparse`: the G-buffer pass writing per-pixel block lists.
@@ -64,6 +68,7 @@ impl Pass {
             Pass::Tonemap => "tonemap",
             Pass::Fxaa => "fxaa",
             Pass::GbaaPost => "gbaa",
+            Pass::TaaResolve => "taa",
             Pass::SparseDepth => "sparse-depth",
             Pass::SparseLists => "sparse-lists",
             Pass::SparseLighting => "sparse-lighting",

@@ -84,6 +84,7 @@ pub mod plan;
 mod second_layer_mask;
 mod slow_path;
 mod sparse;
+mod taa;
 mod targets;
 pub mod technique;
 mod tonemap;
@@ -119,8 +120,11 @@ pub use sparse::{
     SparseOptions, SparseStats,
 };
 use std::ffi::c_void;
+pub use taa::{MAX_TAA_PHASES, TaaOptions};
 use targets::Targets;
-use technique::{ComplexPixelsInput, FrameParts, GeometryStep, LightingStep, Setup, Techniques};
+use technique::{
+    ComplexPixelsInput, FrameCamera, FrameParts, GeometryStep, LightingStep, Setup, Techniques,
+};
 use tonemap::TonemapPass;
 use transparent::TransparentPass;
 
@@ -220,9 +224,10 @@ pub struct FrameTimings {
     pub tonemap_ms: f64,
     /// The FXAA pass (0 when off).
     pub fxaa_ms: f64,
-    /// The post pass of [`AaMode::Gbaa`] (0 with other modes; its G-buffer
-    /// pass is in `geometry_ms`).
-    pub gbaa_ms: f64,
+    /// The post pass between the tonemap and FXAA: [`AaMode::Gbaa`]'s
+    /// blend across edges (its G-buffer pass is in `geometry_ms`) or
+    /// [`AaMode::Taa`]'s resolve; 0 with other modes.
+    pub post_ms: f64,
     /// How the times were measured.
     pub timer: TimerKind,
 }
@@ -563,18 +568,18 @@ impl Renderer {
         &self.camera
     }
 
-    /// Render the next frames from `camera` (a camera path, a viewer's
-    /// orbit): nothing is rebuilt, and what a technique keeps from frame to
-    /// frame stays. The layout's precision is checked again for the new
-    /// camera, and what changed is logged and kept ([`Renderer::warnings`]).
+    /// Render the next frames from `camera` instead: nothing on the GPU
+    /// changes, and a temporal method ([`AaMode::Taa`]) reprojects its
+    /// history from the camera of the frame before. The precision check
+    /// runs again for the new distances (new findings are logged,
+    /// [`Renderer::warnings`]).
     pub fn set_camera(&mut self, camera: Camera) {
+        if camera == self.camera {
+            return;
+        }
         self.camera = camera;
-        let mut warnings = depth::warnings(
-            &self.options.layout,
-            &self.camera,
-            self.depth_mode,
-            self.extent,
-        );
+        let mut warnings =
+            depth::warnings(&self.options.layout, &camera, self.depth_mode, self.extent);
         warnings.extend(self.plan.warnings.iter().cloned());
         if warnings != self.warnings {
             for w in warnings.iter().filter(|w| !self.warnings.contains(w)) {
@@ -584,8 +589,17 @@ impl Renderer {
                     self.depth_mode
                 );
             }
-            self.warnings = warnings;
         }
+        self.warnings = warnings;
+    }
+
+    /// Forget what earlier frames left to the next (the history of
+    /// [`AaMode::Taa`]; nothing for the other methods): the next frame
+    /// starts afresh, as after [`Renderer::new`]. [`Renderer::set_options`]
+    /// does this itself (a new size or method invalidates the history); a
+    /// caller that cuts to another shot calls it.
+    pub fn reset_history(&mut self) {
+        self.techniques.active_mut(&self.options.aa).reset_history();
     }
 
     /// The depth convention in effect: [`RenderOptions::depth_mode`] as
@@ -638,7 +652,6 @@ impl Renderer {
         let depth_mode = self.depth_mode;
         let clear_depth = depth_mode.clear_depth();
         let view = self.camera.view.as_dmat4();
-        let projection = self.projection();
         let resolve_frame = self.resolve_frame();
         let batches = light_batches(&self.lights, &view);
         let footprint = (self.camera.fov_y / height as f32).tan();
@@ -661,6 +674,14 @@ impl Renderer {
         };
         let technique = self.techniques.active_mut(&aa);
         technique.prepare(gl, &setup, Some(frame))?;
+        // Every pass of the frame draws with the projection the technique
+        // gives (`taa` jitters it).
+        let projection = technique.begin_frame(&FrameCamera {
+            view: &view,
+            projection: &depth::projection(&self.camera, width as f32 / height as f32, depth_mode),
+            size: (width, height),
+            zero_to_one: depth_mode.is_reversed(),
+        });
         let Passes {
             background,
             background_copy,
@@ -682,7 +703,7 @@ impl Renderer {
             transparent_ms: 0.0,
             tonemap_ms: 0.0,
             fxaa_ms: 0.0,
-            gbaa_ms: 0.0,
+            post_ms: 0.0,
             timer: timer.kind(),
         };
 
@@ -784,7 +805,7 @@ impl Renderer {
         t.tonemap_ms = timed(gl, timer, || {
             tonemap.draw(gl, tonemapped, fullscreen, &targets.hdr.texture)
         })?;
-        t.gbaa_ms = technique.post(gl, targets, fullscreen, timer)?;
+        t.post_ms = technique.post(gl, targets, fullscreen, timer)?;
         if let Some(out) = targets.fxaa.as_ref() {
             t.fxaa_ms = timed(gl, timer, || {
                 fxaa.draw(gl, out, fullscreen, &targets.ldr.texture)
@@ -802,7 +823,7 @@ impl Renderer {
             + t.second_layer_ms
             + t.transparent_ms
             + t.tonemap_ms
-            + t.gbaa_ms
+            + t.post_ms
             + t.fxaa_ms;
         Ok(t)
     }
@@ -1140,7 +1161,9 @@ impl Renderer {
 
     /// The camera's projection at this size in the frame's depth mode:
     /// standard GL depth (−1..1, [`Camera::projection`]), or reversed-Z for
-    /// `GL_ZERO_TO_ONE` (near → 1; far → 0, or 0 at infinity).
+    /// `GL_ZERO_TO_ONE` (near → 1; far → 0, or 0 at infinity). With
+    /// [`AaMode::Taa`] the frame's passes draw with it moved by the frame's
+    /// sub-pixel jitter ([`technique::Taa::last_jitter`]).
     pub fn projection(&self) -> Mat4 {
         let aspect = self.options.width as f32 / self.options.height as f32;
         depth::projection(&self.camera, aspect, self.depth_mode)

@@ -1,7 +1,7 @@
 //! What a frame is rendered with: the anti-aliasing method ([`AaMode`])
 //! and the rest of the options ([`RenderOptions`]).
 
-use super::{DepthMode, GBufferSlots, SparseOptions, technique};
+use super::{DepthMode, GBufferSlots, SparseOptions, TaaOptions, technique};
 use crate::gbuffer::{GBufferLayout, MemoryBudget};
 use crate::gl::ColorAttachment;
 use crate::resolve::NormalEncoding;
@@ -74,12 +74,27 @@ pub enum AaMode {
     /// twins. See [`SparseOptions`] for how it works and what it needs,
     /// [`technique::Sparse::allocated`](super::technique::Sparse::allocated) and [`technique::Sparse::stats`](super::technique::Sparse::stats).
     Sparse(SparseOptions),
+    /// Temporal anti-aliasing as engines ship it (method `taa`), a baseline
+    /// to measure the others against in motion: one sample per pixel on
+    /// top of `none`'s frame, every frame drawn with its projection shifted
+    /// by a sub-pixel offset (Halton (2, 3), [`TaaOptions::phases`] of
+    /// them in turn), then a resolve after the tonemap that reprojects the
+    /// previous frames' accumulated history through this frame's depth and
+    /// the previous frame's view-projection, clips it to this frame's 3x3
+    /// neighbourhood in YCoCg (variance clipping) and blends
+    /// [`TaaOptions::alpha`] of the new frame into it. The history and
+    /// the previous camera live in the technique
+    /// ([`technique::Taa`](super::technique::Taa)): render frame after
+    /// frame, moving the camera with
+    /// [`Renderer::set_camera`](super::Renderer::set_camera); a still frame
+    /// is settled after [`AaMode::warmup_frames`] frames.
+    Taa(TaaOptions),
 }
 
 impl AaMode {
     /// `none`, the resolve method's name (`average`, `front`, `median`,
-    /// `back`), `per-sample`, `complex`, `gbaa` or `sparse`: the name a
-    /// bench method entry starts with.
+    /// `back`), `per-sample`, `complex`, `gbaa`, `sparse` or `taa`: the
+    /// name a bench method entry starts with.
     pub fn name(&self) -> &'static str {
         technique::kind_of(self).method_name(self)
     }
@@ -107,6 +122,15 @@ impl AaMode {
     /// renderer: switching between them changes nothing on the GPU.
     pub fn technique_name(&self) -> &'static str {
         technique::kind_of(self).name()
+    }
+
+    /// How many frames the method renders from a fresh renderer (or after
+    /// [`Renderer::reset_history`](super::Renderer::reset_history)) before
+    /// a still camera's image has settled: 0 but for [`AaMode::Taa`]
+    /// ([`TaaOptions::warmup_frames`]). The bench renders them before it
+    /// measures a still frame.
+    pub fn warmup_frames(&self) -> u32 {
+        technique::kind_of(self).warmup_frames(self)
     }
 
     /// Whether the method renders more than one sample per pixel, so that
@@ -229,6 +253,9 @@ impl RenderOptions {
             }
             sparse.validate(self.samples)?;
         }
+        if let AaMode::Taa(taa) = &self.aa {
+            taa.validate()?;
+        }
         self.layout.validate()?;
         GBufferSlots::of(&self.layout).map(|_| ())
     }
@@ -297,7 +324,25 @@ mod tests {
             "sparse:pool=8".parse::<AaMode>().unwrap(),
             AaMode::Sparse(o) if o.pool_blocks == Some(8)
         ));
-        for bad in ["sideways", "none:hard", "median:round", "sparse:pool=x", ""] {
+        assert_eq!(
+            "taa:alpha=0.05:phases=16".parse::<AaMode>().unwrap(),
+            AaMode::Taa(TaaOptions {
+                alpha: 0.05,
+                phases: 16
+            })
+        );
+        for bad in [
+            "sideways",
+            "none:hard",
+            "median:round",
+            "sparse:pool=x",
+            "",
+            "taa:alpha=2",
+            "taa:alpha=0",
+            "taa:phases=0",
+            "taa:phases=x",
+            "taa:beta=1",
+        ] {
             let e = bad.parse::<AaMode>().unwrap_err().to_string();
             assert_eq!(e.lines().count(), 1, "{bad}: {e}");
             assert!(e.contains(&format!("`{bad}")), "{bad}: {e}");
@@ -313,7 +358,8 @@ mod tests {
                 "per-sample",
                 "complex",
                 "gbaa",
-                "sparse"
+                "sparse",
+                "taa"
             ]
         );
     }

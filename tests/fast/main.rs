@@ -28,4 +28,5 @@ mod selective;
 mod sparse;
 mod stability;
 mod standalone;
+mod taa;
 mod zoo;

@@ -473,6 +473,14 @@ fn set_options_switches_at_run_time_without_leaks() {
                 ..start.clone()
             },
         ),
+        (
+            "taa, with fxaa",
+            RenderOptions {
+                aa: AaMode::Taa(Default::default()),
+                fxaa: true,
+                ..start.clone()
+            },
+        ),
         ("complex into none", options(AaMode::None)),
         ("back to start", start.clone()),
     ];
@@ -484,7 +492,7 @@ fn set_options_switches_at_run_time_without_leaks() {
         assert_eq!(renderer.gbuffer().width, opts.width, "{what}");
         assert_eq!(renderer.gbuffer().height, opts.height, "{what}");
         match opts.aa {
-            AaMode::None | AaMode::Gbaa | AaMode::Sparse(_) => {
+            AaMode::None | AaMode::Gbaa | AaMode::Sparse(_) | AaMode::Taa(_) => {
                 assert!(renderer.retrofit().is_none(), "{what}")
             }
             AaMode::Resolve(_) | AaMode::PerSample | AaMode::Complex => {

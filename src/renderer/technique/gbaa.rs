@@ -139,7 +139,7 @@ impl Technique for Gbaa {
 
     /// Blend across the edges into the LDR image (where FXAA, if on, finds it).
     fn post(
-        &self,
+        &mut self,
         gl: &glow::Context,
         targets: &Targets,
         fullscreen: &VertexArray,

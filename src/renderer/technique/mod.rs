@@ -33,6 +33,7 @@ mod none;
 mod per_sample;
 mod resolve;
 mod sparse;
+mod taa;
 
 use super::background_copy::{BackgroundCopyPass, CopyTarget};
 use super::frame_pass::Pass;
@@ -54,15 +55,17 @@ pub(crate) use per_sample::PerSample;
 pub(crate) use resolve::second_layer_bytes;
 pub use sparse::Sparse;
 use std::any::Any;
+pub use taa::Taa;
 
 /// Every technique, once. Adding a technique is one line here.
-pub(crate) static KINDS: [&dyn Kind; 6] = [
+pub(crate) static KINDS: [&dyn Kind; 7] = [
     &none::Kind,
     &resolve::Kind,
     &per_sample::Kind,
     &complex::Kind,
     &gbaa::Kind,
     &sparse::Kind,
+    &taa::Kind,
 ];
 
 /// What is known of a technique before anything is built: its method names
@@ -150,6 +153,13 @@ pub(crate) trait Kind: Sync {
         &[]
     }
 
+    /// How many frames `aa` must render, from a fresh state, before its
+    /// image is what a still camera settles on (a temporal method's
+    /// history); the bench renders them before it measures a still frame.
+    fn warmup_frames(&self, _aa: &AaMode) -> u32 {
+        0
+    }
+
     /// The technique, in an empty state (nothing is built before it is
     /// first used).
     fn build(&self) -> Box<dyn Technique>;
@@ -192,7 +202,7 @@ pub(crate) fn no_options(method: &str, options: &[&str], spec: &str) -> Result<(
 }
 
 /// A technique whose state [`Renderer::technique`](super::Renderer::technique)
-/// lends out: [`Gbaa`], [`Complex`] or [`Sparse`].
+/// lends out: [`Gbaa`], [`Complex`], [`Sparse`] or [`Taa`].
 pub trait TechniqueState: std::any::Any + sealed::Sealed {}
 
 mod sealed {
@@ -201,6 +211,22 @@ mod sealed {
     impl Sealed for super::Gbaa {}
     impl Sealed for super::Complex {}
     impl Sealed for super::Sparse {}
+    impl Sealed for super::Taa {}
+}
+
+/// The camera of the frame about to be rendered, as
+/// [`Technique::begin_frame`] sees it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FrameCamera<'a> {
+    /// The camera's view.
+    pub(crate) view: &'a DMat4,
+    /// The projection in the frame's depth mode, unjittered.
+    pub(crate) projection: &'a Mat4,
+    /// The image size.
+    pub(crate) size: (u32, u32),
+    /// Whether clip-space z maps to depth 0..1 as it is (reversed-Z's
+    /// clip control) rather than from −1..1.
+    pub(crate) zero_to_one: bool,
 }
 
 /// What a technique builds against.
@@ -418,6 +444,17 @@ pub(crate) trait Technique: std::fmt::Debug {
     /// `active`: whether this technique renders the new options.
     fn options_changed(&mut self, _gl: &glow::Context, _active: bool) {}
 
+    /// The frame begins with `camera`: the projection every pass of the
+    /// frame draws with (`camera.projection` unless the technique jitters
+    /// it). Called once per frame rendered, after [`Technique::prepare`].
+    fn begin_frame(&mut self, camera: &FrameCamera<'_>) -> Mat4 {
+        *camera.projection
+    }
+
+    /// Forget what earlier frames left behind (a temporal history), so
+    /// that the next frame starts afresh.
+    fn reset_history(&mut self) {}
+
     /// Where the G-buffer pass draws.
     fn geometry_target(&self, frame: &FrameParts<'_>) -> GBufferTarget {
         GBufferTarget::of_frame(frame)
@@ -472,7 +509,7 @@ pub(crate) trait Technique: std::fmt::Debug {
     /// The pass after the tonemap and before FXAA, timed; the milliseconds
     /// it took (0 when there is none, untimed).
     fn post(
-        &self,
+        &mut self,
         _gl: &glow::Context,
         _targets: &Targets,
         _fullscreen: &VertexArray,
@@ -610,6 +647,7 @@ mod tests {
             AaMode::Complex,
             AaMode::Gbaa,
             AaMode::Sparse(Default::default()),
+            AaMode::Taa(Default::default()),
         ];
         for aa in modes {
             assert_eq!(KINDS.iter().filter(|k| k.renders(&aa)).count(), 1, "{aa:?}");
