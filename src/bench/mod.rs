@@ -466,7 +466,8 @@ pub fn run(config: &BenchConfig) -> Result<BenchOutput> {
         },
         runs: Vec::new(),
         backend: config.backend.name().to_string(),
-        frames: config.frames,
+        // With a camera path, the timed frames are the path's.
+        frames: config.motion.map_or(config.frames, |m| m.frames),
         warmup: config.warmup,
         extra_lights: config.lights,
         motion: config.motion.map(|m| m.to_string()),
@@ -553,7 +554,10 @@ struct Pool {
 }
 
 /// A pool slot's method class, FXAA, requested samples and adaptive layout.
-type PoolKey = (&'static str, bool, u32, bool);
+/// For a method whose frames build on the ones before (`taa`), its entry
+/// too: it gets a renderer of its own, whose history no other entry's
+/// `set_options` resets between its frames.
+type PoolKey = (&'static str, bool, u32, bool, Option<String>);
 
 impl Pool {
     fn slot(
@@ -821,6 +825,7 @@ fn time_scene(
                 entry.fxaa,
                 requested,
                 options.adaptive,
+                (entry.method.warmup_frames() > 0).then(|| entry.label.clone()),
             );
             let slot = pool.slot(ctx, scene, key, &options)?;
             let renderer = pool.get(slot)?;

@@ -354,6 +354,14 @@ impl Report {
             self.layout,
             self.extra_lights
         );
+        if let Some(path) = &self.motion {
+            let _ = writeln!(
+                md,
+                "In motion, along `{path}`: the times are over the path's frames, each scene's \
+                 table below is its middle frame's (the scene's own camera), and the motion table \
+                 after it is over the whole path.\n"
+            );
+        }
         let _ = writeln!(
             md,
             "Ratios (×) are to `none` on the same scene in the same run. \

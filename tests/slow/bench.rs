@@ -627,7 +627,7 @@ fn the_motion_bench_measures_every_frame_against_its_reference() {
             "--scene",
             BARS,
             "--methods",
-            "none,median:layers=2,per-sample",
+            "none,taa,median:layers=2,per-sample",
             "--warmup",
             "0",
             "--motion",
@@ -635,7 +635,7 @@ fn the_motion_bench_measures_every_frame_against_its_reference() {
         ],
     );
     assert_eq!(report["motion"], "pan:frames=5,px=0.5");
-    for method in ["none", "median:layers=2", "per-sample"] {
+    for method in ["none", "taa", "median:layers=2", "per-sample"] {
         let m = &run(&report, BARS, method)["motion"];
         assert_eq!(m["frames"], 5, "{method}: {m}");
         let px = m["px_per_frame"].as_f64().unwrap();
