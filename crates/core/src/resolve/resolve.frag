@@ -376,7 +376,10 @@ void acc_step(inout Acc a, int rule, vec4 x, float w) {
 // The blended value; `reference` (the reference sample's) where nothing weighs.
 vec4 acc_finish(Acc a, int rule, vec4 reference) {
     if (rule == RULE_BLEND_NORMAL) {
-        // The weighted sum of normals, normalised; w blends as RULE_BLEND does.
+        // Equal normals are kept as written (normalised or not), as RULE_BLEND
+        // keeps equal values; else the weighted sum of normals, normalised,
+        // and w blends as RULE_BLEND does.
+        if (a.weight > 0.0 && a.same) return a.first;
         float len = length(a.sum.xyz);
         float w = a.weight > 0.0 ? a.sum.w / a.weight : reference.w;
         return vec4(len >= 1e-6 ? a.sum.xyz / len : reference.xyz, w);

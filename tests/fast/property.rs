@@ -1,0 +1,112 @@
+//! The property test's fast share: a few hundred random host G-buffers
+//! (`tests/common/property.rs` says what each is put through; the slow
+//! tier runs more than a thousand), and the named regression cases its
+//! failures shrank to, each with its layout written out.
+
+use crate::common;
+use crate::common::property::{Verdict, check, run_seeds};
+
+/// Seeds of the fast tier.
+const SEEDS: std::ops::Range<u64> = 0..300;
+
+#[test]
+fn random_hosts_retrofit_or_refuse_in_one_line() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let limits = deferred_msaa_testkit::random_host::Limits::of(ctx.gl());
+    let summary = run_seeds(&ctx, SEEDS, "--test fast property::random_hosts");
+    eprintln!("{}", summary.report(limits));
+    assert!(
+        summary.failures.is_empty(),
+        "{} of the random hosts failed (seeds {:?}); each is printed above with its replay command",
+        summary.failures.len(),
+        summary.failures.iter().map(|f| f.0).collect::<Vec<_>>()
+    );
+    assert!(summary.retrofitted > 0, "no random host was retrofitted");
+}
+
+use deferred_msaa::RetrofitOptions;
+use deferred_msaa_testkit::random_host::{
+    ColorSpec, DepthPoint, DepthSpec, HostFormat, HostSpec, Limits, Storage,
+};
+
+/// A host written out: colour points with their format and image kind
+/// (uploaded with `GL_UNSIGNED_BYTE` unless the format needs another
+/// type), every one drawn in order, and the depth.
+fn written_out(
+    size: (u32, u32),
+    colors: &[(u32, &str, &str, Storage)],
+    depth: Option<(&str, &str, Storage, DepthPoint)>,
+    options: RetrofitOptions,
+) -> HostSpec {
+    HostSpec {
+        seed: 0,
+        width: size.0,
+        height: size.1,
+        resized: size,
+        colors: colors
+            .iter()
+            .map(|&(point, name, ty, storage)| ColorSpec {
+                point,
+                format: HostFormat::of(name, ty),
+                storage,
+                size: None,
+            })
+            .collect(),
+        draw_buffers: colors.iter().map(|c| Some(c.0)).collect(),
+        depth: depth.map(|(name, ty, storage, point)| DepthSpec {
+            format: HostFormat::of(name, ty),
+            storage,
+            point,
+        }),
+        other_options: options.clone(),
+        options,
+    }
+}
+
+/// Found by the property test: a host that draws into every colour point
+/// the context has, with a depth-stencil attachment, left the stencil
+/// copy's reference index no point of its own; the retrofit attached it
+/// past `GL_MAX_COLOR_ATTACHMENTS` and failed with a GL error. It is now
+/// refused in one line naming the depth-stencil point.
+#[test]
+fn every_colour_point_and_a_stencil_is_refused_in_one_line() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let max = Limits::of(ctx.gl()).color_attachments;
+    let colors: Vec<(u32, &str, &str, Storage)> = (0..max)
+        .map(|n| (n, "GL_RGBA8", "GL_UNSIGNED_BYTE", Storage::Texture))
+        .collect();
+    let spec = written_out(
+        (16, 8),
+        &colors,
+        Some((
+            "GL_DEPTH24_STENCIL8",
+            "GL_UNSIGNED_INT_24_8",
+            Storage::Renderbuffer,
+            DepthPoint::DepthStencil,
+        )),
+        RetrofitOptions::default(),
+    );
+    assert_eq!(
+        check(&ctx, &spec),
+        Verdict::Refused("no draw buffer for the stencil copy".into())
+    );
+    // One colour fewer leaves the point the stencil copy needs.
+    let spec = written_out(
+        (16, 8),
+        &colors[1..],
+        spec.depth.as_ref().map(|_| {
+            (
+                "GL_DEPTH24_STENCIL8",
+                "GL_UNSIGNED_INT_24_8",
+                Storage::Renderbuffer,
+                DepthPoint::DepthStencil,
+            )
+        }),
+        RetrofitOptions::default(),
+    );
+    assert_eq!(check(&ctx, &spec), Verdict::Retrofitted);
+}
