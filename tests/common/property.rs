@@ -34,6 +34,9 @@ use std::collections::BTreeMap;
 /// The variable that replays one seed.
 pub const SEED_VAR: &str = "DEFERRED_MSAA_SEED";
 
+/// The variable that prints every seed's host and verdict.
+pub const VERBOSE_VAR: &str = "DEFERRED_MSAA_VERBOSE";
+
 /// Every refusal the crate can answer a host layout or its options with:
 /// a name, and the words of its message that tell it apart.
 pub const REFUSALS: &[(&str, &str)] = &[
@@ -123,14 +126,35 @@ pub const UNREACHABLE: &[(&str, &str)] = &[
     ),
 ];
 
-/// The refusals a driver of this kind may not reach: whether they can
-/// depend on its limits and formats.
-pub fn driver_dependent(name: &str, limits: Limits) -> Option<String> {
+/// Why a refusal cannot be reached on this context, where that depends on
+/// the driver: its limits, the formats it multisamples, its extensions.
+pub fn driver_dependent(gl: &glow::Context, name: &str, limits: Limits) -> Option<String> {
+    use deferred_msaa::gl::{Capabilities, Format};
+    use deferred_msaa::resolve::StencilCopy;
     match name {
         "too many colour attachments" if limits.color_attachments <= 8 => Some(format!(
             "GL_MAX_COLOR_ATTACHMENTS is {}, no more than the resolve's 8",
             limits.color_attachments
         )),
+        "not multisampled by the driver" => {
+            let offered = |f: Format| {
+                Capabilities::sample_counts_for(gl, f)
+                    .iter()
+                    .any(|&n| n > 1)
+            };
+            let none: Vec<_> = Format::ALL
+                .iter()
+                .filter(|f| !f.is_depth())
+                .filter(|&&f| !(offered(f) || f.multisample_stand_in().is_some_and(offered)))
+                .collect();
+            none.is_empty().then(|| {
+                "the driver multisamples every colour format the crate knows, or its stand-in"
+                    .to_string()
+            })
+        }
+        "stencil copy unsupported" => (StencilCopy::Export.on(gl).is_ok()
+            && StencilCopy::BitPasses.on(gl).is_ok())
+        .then(|| "the context offers stencil export and stencil texturing".to_string()),
         _ => None,
     }
 }
@@ -164,7 +188,7 @@ pub struct Summary {
 
 impl Summary {
     /// The report the tiers print.
-    pub fn report(&self, limits: Limits) -> String {
+    pub fn report(&self, gl: &glow::Context, limits: Limits) -> String {
         let refused: usize = self.refused.values().sum();
         let incomplete: usize = self.incomplete.values().sum();
         let mut out = format!(
@@ -180,7 +204,7 @@ impl Summary {
         for (status, n) in &self.incomplete {
             out += &format!("  {n:5}  {status}\n");
         }
-        let missing = self.unreached(limits);
+        let missing = self.unreached(gl, limits);
         if !missing.is_empty() {
             out += &format!("refusals not reached: {}\n", missing.join(", "));
         }
@@ -189,20 +213,20 @@ impl Summary {
 
     /// The refusals no case reached that are neither unreachable nor
     /// out of this driver's reach.
-    pub fn unreached(&self, limits: Limits) -> Vec<&'static str> {
+    pub fn unreached(&self, gl: &glow::Context, limits: Limits) -> Vec<&'static str> {
         REFUSALS
             .iter()
             .map(|(name, _)| *name)
             .filter(|name| !self.refused.contains_key(*name))
             .filter(|name| !UNREACHABLE.iter().any(|(n, _)| n == name))
-            .filter(|name| driver_dependent(name, limits).is_none())
+            .filter(|name| driver_dependent(gl, name, limits).is_none())
             .collect()
     }
 }
 
 /// Run `seeds` (or only the one `DEFERRED_MSAA_SEED` names), shrinking and
 /// printing each failure with its replay command; `tier` is the test's
-/// `cargo test` arguments for that command.
+/// `cargo test` arguments for that command, up to `--nocapture`.
 pub fn run_seeds(ctx: &HeadlessContext, seeds: std::ops::Range<u64>, tier: &str) -> Summary {
     let gl = ctx.gl();
     let limits = Limits::of(gl);
@@ -217,7 +241,11 @@ pub fn run_seeds(ctx: &HeadlessContext, seeds: std::ops::Range<u64>, tier: &str)
     let mut summary = Summary::default();
     for seed in seeds {
         let spec = HostSpec::generate(seed, limits);
-        match check(ctx, &spec) {
+        let verdict = check(ctx, &spec);
+        if std::env::var_os(VERBOSE_VAR).is_some() {
+            eprintln!("seed {seed}: {verdict:?}\n{}", spec.describe());
+        }
+        match verdict {
             Verdict::Retrofitted => summary.retrofitted += 1,
             Verdict::Refused(r) => *summary.refused.entry(r).or_default() += 1,
             Verdict::HostIncomplete(s) => *summary.incomplete.entry(s).or_default() += 1,
@@ -228,7 +256,7 @@ pub fn run_seeds(ctx: &HeadlessContext, seeds: std::ops::Range<u64>, tier: &str)
                     _ => lines,
                 };
                 eprintln!(
-                    "seed {seed} failed:\n  {}\nreplay: {SEED_VAR}={seed} cargo test {tier} -- --nocapture\nshrunk to:\n{}",
+                    "seed {seed} failed:\n  {}\nreplay: {SEED_VAR}={seed} cargo test {tier} --nocapture\nshrunk to:\n{}",
                     lines.join("\n  "),
                     shrunk.describe()
                 );
@@ -1098,7 +1126,8 @@ struct Lit {
     fbo: glow::Framebuffer,
 }
 
-const LIT: [u8; 4] = [51, 102, 204, 255];
+/// What the host's first and second lighting write.
+const LIT: [[u8; 4]; 2] = [[51, 102, 204, 255], [255, 0, 102, 255]];
 
 impl Lit {
     fn new(gl: &glow::Context, w: u32, h: u32) -> Lit {
@@ -1131,14 +1160,17 @@ impl Lit {
         }
     }
 
-    /// The host's lighting: its output cleared to [`LIT`] with its own state.
-    fn light(&self, gl: &glow::Context, w: u32, h: u32) {
+    /// The host's lighting: its output cleared to `colour` with its own
+    /// state (a clear is all the property needs of it: the mix must keep
+    /// the first lighting's value wherever a pixel has one cluster).
+    fn light(&self, gl: &glow::Context, w: u32, h: u32, colour: [u8; 4]) {
         unsafe {
             gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.fbo));
             gl.viewport(0, 0, w as i32, h as i32);
             gl.disable(glow::SCISSOR_TEST);
+            gl.disable(glow::RASTERIZER_DISCARD);
             gl.color_mask(true, true, true, true);
-            let c = LIT.map(|v| v as f32 / 255.0);
+            let c = colour.map(|v| v as f32 / 255.0);
             gl.clear_buffer_f32_slice(glow::COLOR, 0, &c);
         }
     }
@@ -1200,7 +1232,7 @@ fn frame_checks(
     }
     let (w, h) = (host.width, host.height);
     let lit = Lit::new(gl, w, h);
-    lit.light(gl, w, h);
+    lit.light(gl, w, h, LIT[0]);
     let first_lit = lit.read(gl, w, h);
     clutter(gl, rng, host, geometry);
     let begun = around(
@@ -1215,7 +1247,7 @@ fn frame_checks(
         Ok(false) => failures.push(format!("{what}: begin_second_layer did nothing")),
         Err(e) => failures.push(format!("{what}: begin_second_layer failed: {e}")),
     }
-    lit.light(gl, w, h);
+    lit.light(gl, w, h, LIT[1]);
     clutter(gl, rng, host, geometry);
     let finished = around(
         gl,
@@ -1246,9 +1278,11 @@ fn frame_checks(
             && mixed[i * 4..i * 4 + 4] != first_lit[i * 4..i * 4 + 4]
         {
             failures.push(format!(
-                "{what}: the mixed image changed pixel ({}, {}) inside a face",
+                "{what}: the mixed image changed pixel ({}, {}) inside a face: {:?}, lit {:?}",
                 i as u32 % w,
-                i as u32 / w
+                i as u32 / w,
+                &mixed[i * 4..i * 4 + 4],
+                &first_lit[i * 4..i * 4 + 4]
             ));
             break;
         }

@@ -15,8 +15,8 @@ fn random_hosts_retrofit_or_refuse_in_one_line() {
         return;
     };
     let limits = deferred_msaa_testkit::random_host::Limits::of(ctx.gl());
-    let summary = run_seeds(&ctx, SEEDS, "--test fast property::random_hosts");
-    eprintln!("{}", summary.report(limits));
+    let summary = run_seeds(&ctx, SEEDS, "--test fast property::random_hosts --");
+    eprintln!("{}", summary.report(ctx.gl(), limits));
     assert!(
         summary.failures.is_empty(),
         "{} of the random hosts failed (seeds {:?}); each is printed above with its replay command",
@@ -107,6 +107,70 @@ fn every_colour_point_and_a_stencil_is_refused_in_one_line() {
             )
         }),
         RetrofitOptions::default(),
+    );
+    assert_eq!(check(&ctx, &spec), Verdict::Retrofitted);
+}
+
+/// Found by the property test (seed 9, shrunk): a `blend-normal` rule on
+/// an attachment whose face value is not unit length (normals scaled by a
+/// gloss, or anything else) renormalised it even where every sample is
+/// the same face, so the host's texel changed by a step inside faces. Equal
+/// samples now resolve to themselves under every rule.
+#[test]
+fn equal_samples_keep_an_unnormalised_normal_as_written() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let mut options = RetrofitOptions::default();
+    options.rules = vec![(
+        deferred_msaa::ColorAttachment(6),
+        deferred_msaa::resolve::ResolveRule::BlendNormal,
+    )];
+    options.resolve.fast_path = false;
+    let spec = written_out(
+        (1, 8),
+        &[
+            (0, "GL_RGBA8", "GL_UNSIGNED_BYTE", Storage::Texture),
+            (6, "GL_RGBA8", "GL_UNSIGNED_BYTE", Storage::Texture),
+        ],
+        Some((
+            "GL_DEPTH_COMPONENT",
+            "GL_FLOAT",
+            Storage::Texture,
+            DepthPoint::Depth,
+        )),
+        options,
+    );
+    assert_eq!(check(&ctx, &spec), Verdict::Retrofitted);
+}
+
+/// Found by the property test (seed 721 of the slow tier, shrunk): a
+/// position attachment whose key is at or behind the eye (an RGBA8 world
+/// position, z in [0, 1]) gave equal samples no window, so with two
+/// layers a one-surface pixel got a second cluster and the mix changed
+/// the lit pixel. Equal keys are now one surface whatever their sign.
+#[test]
+fn equal_keys_behind_the_eye_are_one_surface_with_two_layers() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let mut options = RetrofitOptions::default();
+    options.position_attachment = Some(deferred_msaa::ColorAttachment(0));
+    options.position_space = deferred_msaa::PositionSpace::World;
+    options.resolve.method = deferred_msaa::resolve::ResolveMethod::Back;
+    options.resolve.window = deferred_msaa::resolve::Window::Hard;
+    options.resolve.fast_path = false;
+    options.resolve.layers = 2;
+    let spec = written_out(
+        (1, 13),
+        &[(0, "GL_RGBA8", "GL_UNSIGNED_BYTE", Storage::Texture)],
+        Some((
+            "GL_DEPTH_COMPONENT32",
+            "GL_UNSIGNED_INT",
+            Storage::Texture,
+            DepthPoint::Depth,
+        )),
+        options,
     );
     assert_eq!(check(&ctx, &spec), Verdict::Retrofitted);
 }

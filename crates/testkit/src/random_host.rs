@@ -466,7 +466,7 @@ pub fn random_options(rng: &mut Rng, points: &[u32], limits: Limits) -> Retrofit
     };
     // A point the host has, or now and then any point (which may be empty).
     let point = |rng: &mut Rng| {
-        if points.is_empty() || chance(rng, 8) {
+        if points.is_empty() || chance(rng, 4) {
             rng.below(limits.color_attachments)
         } else {
             pick(rng, points)
@@ -992,6 +992,10 @@ unsafe fn respecify(
                             format.ty,
                             glow::PixelUnpackData::Slice(None),
                         );
+                        // Levels 0 and 1 make the whole chain: a level
+                        // other than the base one is attachable only from
+                        // a mipmap-complete texture.
+                        gl.tex_parameter_i32(target, glow::TEXTURE_MAX_LEVEL, 1);
                     }
                     Storage::CubeFace => {
                         for face in 0..6 {

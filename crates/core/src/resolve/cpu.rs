@@ -305,7 +305,8 @@ impl CpuResolve {
         }
         let (zi, zr) = (keys.z[i], keys.z[r]);
         let d = (zi - zr).abs();
-        let m = zi.min(zr) * self.footprint;
+        // resolve.frag's closeness: a key at or behind the eye has no window.
+        let m = zi.min(zr).max(0.0) * self.footprint;
         let (c, c_in) = (self.settings.c, self.settings.c_in);
         // f32 rounds each depth to about 6e-8 of itself and the edge to about 1e-7.
         let near =

@@ -270,7 +270,9 @@ float closeness(float z, bool bg, bool is_ref, float z_r, bool bg_r) {
     return 1.0;
 #else
     float d = abs(z - z_r);
-    float m = min(z, z_r) * u_footprint;
+    // A key at or behind the eye (a position attachment can hold one) has
+    // no window, but equal keys are still one surface.
+    float m = max(min(z, z_r), 0.0) * u_footprint;
 #ifdef WINDOW_HARD
     float w = d <= u_c * m ? 1.0 : 0.0;
 #else
