@@ -31,17 +31,18 @@ use deferred_msaa_testkit::random_host::{
     ColorSpec, DepthPoint, DepthSpec, HostFormat, HostSpec, Limits, Storage,
 };
 
-/// A host written out: colour points with their format and image kind
-/// (uploaded with `GL_UNSIGNED_BYTE` unless the format needs another
-/// type), every one drawn in order, and the depth.
+/// A host written out: the seed its faces' values and triangle are drawn
+/// from, colour points with their format, upload type and image kind,
+/// every one drawn in order, and the depth.
 fn written_out(
+    seed: u64,
     size: (u32, u32),
     colors: &[(u32, &str, &str, Storage)],
     depth: Option<(&str, &str, Storage, DepthPoint)>,
     options: RetrofitOptions,
 ) -> HostSpec {
     HostSpec {
-        seed: 0,
+        seed,
         width: size.0,
         height: size.1,
         resized: size,
@@ -80,6 +81,7 @@ fn every_colour_point_and_a_stencil_is_refused_in_one_line() {
         .map(|n| (n, "GL_RGBA8", "GL_UNSIGNED_BYTE", Storage::Texture))
         .collect();
     let spec = written_out(
+        0,
         (16, 8),
         &colors,
         Some((
@@ -96,6 +98,7 @@ fn every_colour_point_and_a_stencil_is_refused_in_one_line() {
     );
     // One colour fewer leaves the point the stencil copy needs.
     let spec = written_out(
+        0,
         (16, 8),
         &colors[1..],
         spec.depth.as_ref().map(|_| {
@@ -128,6 +131,7 @@ fn equal_samples_keep_an_unnormalised_normal_as_written() {
     )];
     options.resolve.fast_path = false;
     let spec = written_out(
+        9,
         (1, 8),
         &[
             (0, "GL_RGBA8", "GL_UNSIGNED_BYTE", Storage::Texture),
@@ -162,6 +166,7 @@ fn equal_keys_behind_the_eye_are_one_surface_with_two_layers() {
     options.resolve.fast_path = false;
     options.resolve.layers = 2;
     let spec = written_out(
+        721,
         (1, 13),
         &[(0, "GL_RGBA8", "GL_UNSIGNED_BYTE", Storage::Texture)],
         Some((
