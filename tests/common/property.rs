@@ -191,8 +191,9 @@ impl Summary {
     pub fn report(&self, gl: &glow::Context, limits: Limits) -> String {
         let refused: usize = self.refused.values().sum();
         let incomplete: usize = self.incomplete.values().sum();
+        let version = unsafe { gl.get_parameter_string(glow::VERSION) };
         let mut out = format!(
-            "random hosts: {} retrofitted, {refused} refused, {incomplete} host-incomplete, {} failed\n",
+            "random hosts on OpenGL {version}: {} retrofitted, {refused} refused, {incomplete} host-incomplete, {} failed\n",
             self.retrofitted,
             self.failures.len()
         );
@@ -1372,8 +1373,7 @@ pub fn check(ctx: &HeadlessContext, spec: &HostSpec) -> Verdict {
                     }
                 }
             }
-            let destroyed = around(gl, "destroy", &host, &mut failures, || msaa.destroy(gl));
-            let _ = destroyed;
+            around(gl, "destroy", &host, &mut failures, || msaa.destroy(gl));
             let live = live_objects();
             if live != start {
                 failures.push(format!(

@@ -124,11 +124,13 @@ fn equal_samples_keep_an_unnormalised_normal_as_written() {
     let Some(ctx) = common::egl_context() else {
         return;
     };
-    let mut options = RetrofitOptions::default();
-    options.rules = vec![(
-        deferred_msaa::ColorAttachment(6),
-        deferred_msaa::resolve::ResolveRule::BlendNormal,
-    )];
+    let mut options = RetrofitOptions {
+        rules: vec![(
+            deferred_msaa::ColorAttachment(6),
+            deferred_msaa::resolve::ResolveRule::BlendNormal,
+        )],
+        ..RetrofitOptions::default()
+    };
     options.resolve.fast_path = false;
     let spec = written_out(
         9,
@@ -158,9 +160,11 @@ fn equal_keys_behind_the_eye_are_one_surface_with_two_layers() {
     let Some(ctx) = common::egl_context() else {
         return;
     };
-    let mut options = RetrofitOptions::default();
-    options.position_attachment = Some(deferred_msaa::ColorAttachment(0));
-    options.position_space = deferred_msaa::PositionSpace::World;
+    let mut options = RetrofitOptions {
+        position_attachment: Some(deferred_msaa::ColorAttachment(0)),
+        position_space: deferred_msaa::PositionSpace::World,
+        ..RetrofitOptions::default()
+    };
     options.resolve.method = deferred_msaa::resolve::ResolveMethod::Back;
     options.resolve.window = deferred_msaa::resolve::Window::Hard;
     options.resolve.fast_path = false;
