@@ -23,6 +23,8 @@ fn random_hosts_retrofit_or_refuse_in_one_line() {
         summary.failures.len(),
         summary.failures.iter().map(|f| f.0).collect::<Vec<_>>()
     );
+    let live = deferred_msaa::gl::live_objects();
+    assert_eq!(live.total(), 0, "the crate's GL objects left: {live:?}");
     assert!(summary.retrofitted > 0, "no random host was retrofitted");
 }
 

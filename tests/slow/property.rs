@@ -36,6 +36,8 @@ fn two_thousand_random_hosts_retrofit_or_refuse_in_one_line() {
         summary.failures.len(),
         summary.failures.iter().map(|f| f.0).collect::<Vec<_>>()
     );
+    let live = deferred_msaa::gl::live_objects();
+    assert_eq!(live.total(), 0, "the crate's GL objects left: {live:?}");
     if std::env::var_os(common::property::SEED_VAR).is_none() {
         let unreached = summary.unreached(ctx.gl(), limits);
         assert!(
