@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod golden;
+pub mod property;
 
 use deferred_msaa_lab::context::{Backend, HeadlessContext};
 

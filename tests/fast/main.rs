@@ -19,6 +19,7 @@ mod gltf_sources;
 mod goldens;
 mod host_equivalence;
 mod plan;
+mod property;
 mod reliability;
 mod renderer;
 mod resolve_layers;

@@ -11,3 +11,4 @@ mod common;
 mod bench;
 mod examples;
 mod first_run;
+mod property;

@@ -288,6 +288,41 @@ fn multisamples(gl: &glow::Context, format: Format, samples: u32) -> Result<bool
     Ok(complete)
 }
 
+/// The colour attachment points (and draw buffers) a framebuffer of this
+/// context may use: the smaller of `GL_MAX_COLOR_ATTACHMENTS` and
+/// `GL_MAX_DRAW_BUFFERS`.
+pub(crate) fn output_points(gl: &glow::Context) -> u32 {
+    let (attachments, draw) = unsafe {
+        (
+            glow::HasContext::get_parameter_i32(gl, glow::MAX_COLOR_ATTACHMENTS),
+            glow::HasContext::get_parameter_i32(gl, glow::MAX_DRAW_BUFFERS),
+        )
+    };
+    attachments.min(draw).max(1) as u32
+}
+
+/// The resolve writes a depth-stencil host's reference-sample index as one
+/// more colour output after the host's drawn colours: a host that uses
+/// every point leaves none for it, which must be refused here, in one line,
+/// rather than fail later as a GL error on a point the context lacks.
+fn check_stencil_copy_point(gl: &glow::Context, host: &HostFramebuffer) -> Result<()> {
+    let points = output_points(gl);
+    let needed = host.colors.len() as u32 + 1;
+    if needed <= points {
+        return Ok(());
+    }
+    Err(Error::Retrofit {
+        attachment: host.depth.point.name(),
+        reason: format!(
+            "the stencil copy's reference sample needs a colour output after the {} drawn colour \
+             attachments, and this context has {points} (GL_MAX_COLOR_ATTACHMENTS, \
+             GL_MAX_DRAW_BUFFERS); draw one colour attachment fewer, or attach {} without its stencil",
+            host.colors.len(),
+            host.depth.requested_format
+        ),
+    })
+}
+
 impl MsaaRetrofit {
     /// Introspect `host_fbo`, build its multisampled twins under
     /// `options` and compile the resolve's programs.
@@ -382,7 +417,7 @@ impl MsaaRetrofit {
             {
                 return Err(Error::UnsupportedFormat {
                     attachment: a.point.name(),
-                    format: a.format.name().into(),
+                    format: a.requested_format.clone(),
                     reason: format!(
                         "integer values can only be selected, not resolved by `{rule}`"
                     ),
@@ -415,7 +450,7 @@ impl MsaaRetrofit {
                 if ResolveRule::default_for(host.colors[k].format) == ResolveRule::Select {
                     return Err(Error::UnsupportedFormat {
                         attachment: n.name(),
-                        format: host.colors[k].format.name().into(),
+                        format: host.colors[k].requested_format.clone(),
                         reason: "the depth key needs a floating-point position".into(),
                     });
                 }
@@ -440,7 +475,7 @@ impl MsaaRetrofit {
                 if ResolveRule::default_for(host.colors[k].format) == ResolveRule::Select {
                     return Err(Error::UnsupportedFormat {
                         attachment: n.attachment.name(),
-                        format: host.colors[k].format.name().into(),
+                        format: host.colors[k].requested_format.clone(),
                         reason: "the normal test needs a float or normalised normal attachment"
                             .into(),
                     });
@@ -448,6 +483,9 @@ impl MsaaRetrofit {
                 Some((ResolveSlot(k), n.encoding))
             }
         };
+        if host.depth.format.has_stencil() {
+            check_stencil_copy_point(gl, &host)?;
+        }
         let mut samples = options.samples;
         let mut warnings = Vec::new();
         if let Some(budget) = &options.memory_budget {

@@ -334,8 +334,9 @@ impl SecondLayer {
     ) -> Result<Self> {
         let (w, h) = host.size();
         let n = host.colors.len() as u32;
-        let max_draw_buffers =
-            unsafe { gl.get_parameter_i32(glow::MAX_DRAW_BUFFERS) }.max(1) as u32;
+        // Its target attaches colour points up to the last draw buffer, so
+        // both limits bound it.
+        let max_draw_buffers = crate::retrofit::output_points(gl);
         // The second resolve writes the host's colours, the coverage, the
         // depth and perhaps the seed sample.
         let needed = n + 2 + u32::from(with_reference);

@@ -305,7 +305,8 @@ impl CpuResolve {
         }
         let (zi, zr) = (keys.z[i], keys.z[r]);
         let d = (zi - zr).abs();
-        let m = zi.min(zr) * self.footprint;
+        // resolve.frag's closeness: a key at or behind the eye has no window.
+        let m = zi.min(zr).max(0.0) * self.footprint;
         let (c, c_in) = (self.settings.c, self.settings.c_in);
         // f32 rounds each depth to about 6e-8 of itself and the edge to about 1e-7.
         let near =
@@ -627,8 +628,13 @@ fn equal_contributions(values: &[[f64; 4]], weights: &[f64]) -> Option<[f64; 4]>
 }
 
 /// xyz: the normalised weighted sum (the reference's xyz when it is shorter
-/// than 1e-6); w: blended like [`blend`].
+/// than 1e-6); w: blended like [`blend`]. Equal contributions are that
+/// value, as in [`blend`]: a pixel whose samples are one surface keeps the
+/// host's normal as it wrote it, normalised or not.
 pub fn blend_normal(values: &[[f64; 4]], weights: &[f64], r: usize) -> [f64; 4] {
+    if let Some(v) = equal_contributions(values, weights) {
+        return v;
+    }
     let mean = blend(values, weights, r);
     let mut n = [0.0; 3];
     for (x, &w) in values.iter().zip(weights) {
@@ -822,6 +828,14 @@ mod tests {
         cpu.settings.fast_path = false;
         let out = cpu.resolve_pixel(&px);
         assert_eq!(out.attachments[0][0], (0.0 + 1.0 + 3.0) / 3.0);
+    }
+
+    #[test]
+    fn equal_normals_are_kept_as_written() {
+        // Not unit length (a gloss-scaled normal): one surface's samples
+        // resolve to it unchanged, as the host's own render holds it.
+        let n = [0.3, 0.1, 0.2, 0.7];
+        assert_eq!(blend_normal(&[n, n, n], &[1.0, 0.5, 1.0], 0), n);
     }
 
     #[test]

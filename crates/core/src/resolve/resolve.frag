@@ -270,7 +270,9 @@ float closeness(float z, bool bg, bool is_ref, float z_r, bool bg_r) {
     return 1.0;
 #else
     float d = abs(z - z_r);
-    float m = min(z, z_r) * u_footprint;
+    // A key at or behind the eye (a position attachment can hold one) has
+    // no window, but equal keys are still one surface.
+    float m = max(min(z, z_r), 0.0) * u_footprint;
 #ifdef WINDOW_HARD
     float w = d <= u_c * m ? 1.0 : 0.0;
 #else
@@ -376,7 +378,10 @@ void acc_step(inout Acc a, int rule, vec4 x, float w) {
 // The blended value; `reference` (the reference sample's) where nothing weighs.
 vec4 acc_finish(Acc a, int rule, vec4 reference) {
     if (rule == RULE_BLEND_NORMAL) {
-        // The weighted sum of normals, normalised; w blends as RULE_BLEND does.
+        // Equal normals are kept as written (normalised or not), as RULE_BLEND
+        // keeps equal values; else the weighted sum of normals, normalised,
+        // and w blends as RULE_BLEND does.
+        if (a.weight > 0.0 && a.same) return a.first;
         float len = length(a.sum.xyz);
         float w = a.weight > 0.0 ? a.sum.w / a.weight : reference.w;
         return vec4(len >= 1e-6 ? a.sum.xyz / len : reference.xyz, w);
