@@ -1,8 +1,11 @@
 //! What both tiers (`tests/fast`, `tests/slow`) share beside the
 //! `deferred-msaa-testkit` crate (the toy host, the generator, projections):
-//! contexts and the skip rule, a test run alone (`alone`), goldens (`golden`).
+//! contexts and the skip rule, a test run alone (`alone`), goldens (`golden`),
+//! the GL state snapshot (`gl_state`), the property test over random host
+//! G-buffers (`property`).
 #![allow(dead_code)]
 
+pub mod gl_state;
 pub mod golden;
 pub mod property;
 

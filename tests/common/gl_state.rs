@@ -1,0 +1,157 @@
+//! The GL state a host keeps across the retrofit's calls: a snapshot by
+//! name (bindings of every texture unit, framebuffers, buffers, program,
+//! pixel store, depth, stencil, blend, capabilities, viewport, scissor,
+//! masks, clear values), taken before and after a call and compared. The
+//! zoo and the property test read the same list.
+
+use glow::HasContext;
+
+/// The host state the retrofit's calls must leave as they found it, by name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GlState(Vec<(String, Vec<i64>)>);
+
+impl GlState {
+    /// Read it (every texture unit is walked, and the active one put back).
+    pub fn capture(gl: &glow::Context) -> GlState {
+        let mut s: Vec<(String, Vec<i64>)> = Vec::new();
+        unsafe {
+            let int = |e: u32| vec![gl.get_parameter_i32(e) as i64];
+            let ints = |e: u32, n: usize| {
+                let mut v = vec![0i32; n];
+                gl.get_parameter_i32_slice(e, &mut v);
+                v.into_iter().map(i64::from).collect::<Vec<_>>()
+            };
+            let floats = |e: u32, n: usize| {
+                let mut v = vec![0f32; n];
+                gl.get_parameter_f32_slice(e, &mut v);
+                v.into_iter()
+                    .map(|x| x.to_bits() as i64)
+                    .collect::<Vec<_>>()
+            };
+            let on = |e: u32| vec![gl.is_enabled(e) as i64];
+            let active = gl.get_parameter_i32(glow::ACTIVE_TEXTURE);
+            let units = gl
+                .get_parameter_i32(glow::MAX_COMBINED_TEXTURE_IMAGE_UNITS)
+                .clamp(1, 32) as u32;
+            for unit in 0..units {
+                gl.active_texture(glow::TEXTURE0 + unit);
+                for (name, e) in [
+                    ("2D", glow::TEXTURE_BINDING_2D),
+                    ("2D_ARRAY", glow::TEXTURE_BINDING_2D_ARRAY),
+                    ("2D_MULTISAMPLE", glow::TEXTURE_BINDING_2D_MULTISAMPLE),
+                    ("CUBE_MAP", glow::TEXTURE_BINDING_CUBE_MAP),
+                    ("RECTANGLE", glow::TEXTURE_BINDING_RECTANGLE),
+                    ("3D", glow::TEXTURE_BINDING_3D),
+                ] {
+                    s.push((format!("GL_TEXTURE_BINDING_{name} of unit {unit}"), int(e)));
+                }
+            }
+            gl.active_texture(active as u32);
+            s.push(("GL_ACTIVE_TEXTURE".into(), vec![active as i64]));
+            for (name, e) in [
+                (
+                    "GL_DRAW_FRAMEBUFFER_BINDING",
+                    glow::DRAW_FRAMEBUFFER_BINDING,
+                ),
+                (
+                    "GL_READ_FRAMEBUFFER_BINDING",
+                    glow::READ_FRAMEBUFFER_BINDING,
+                ),
+                ("GL_RENDERBUFFER_BINDING", glow::RENDERBUFFER_BINDING),
+                ("GL_CURRENT_PROGRAM", glow::CURRENT_PROGRAM),
+                ("GL_VERTEX_ARRAY_BINDING", glow::VERTEX_ARRAY_BINDING),
+                ("GL_ARRAY_BUFFER_BINDING", glow::ARRAY_BUFFER_BINDING),
+                (
+                    "GL_PIXEL_PACK_BUFFER_BINDING",
+                    glow::PIXEL_PACK_BUFFER_BINDING,
+                ),
+                (
+                    "GL_PIXEL_UNPACK_BUFFER_BINDING",
+                    glow::PIXEL_UNPACK_BUFFER_BINDING,
+                ),
+                ("GL_UNIFORM_BUFFER_BINDING", glow::UNIFORM_BUFFER_BINDING),
+                ("GL_PACK_ALIGNMENT", glow::PACK_ALIGNMENT),
+                ("GL_UNPACK_ALIGNMENT", glow::UNPACK_ALIGNMENT),
+                ("GL_PACK_ROW_LENGTH", glow::PACK_ROW_LENGTH),
+                ("GL_UNPACK_ROW_LENGTH", glow::UNPACK_ROW_LENGTH),
+                ("GL_DEPTH_FUNC", glow::DEPTH_FUNC),
+                ("GL_DEPTH_WRITEMASK", glow::DEPTH_WRITEMASK),
+                ("GL_STENCIL_FUNC", glow::STENCIL_FUNC),
+                ("GL_STENCIL_REF", glow::STENCIL_REF),
+                ("GL_STENCIL_VALUE_MASK", glow::STENCIL_VALUE_MASK),
+                ("GL_STENCIL_FAIL", glow::STENCIL_FAIL),
+                ("GL_STENCIL_PASS_DEPTH_FAIL", glow::STENCIL_PASS_DEPTH_FAIL),
+                ("GL_STENCIL_PASS_DEPTH_PASS", glow::STENCIL_PASS_DEPTH_PASS),
+                ("GL_STENCIL_WRITEMASK", glow::STENCIL_WRITEMASK),
+                ("GL_STENCIL_BACK_FUNC", glow::STENCIL_BACK_FUNC),
+                ("GL_STENCIL_BACK_REF", glow::STENCIL_BACK_REF),
+                ("GL_STENCIL_BACK_WRITEMASK", glow::STENCIL_BACK_WRITEMASK),
+                ("GL_BLEND_SRC_RGB", glow::BLEND_SRC_RGB),
+                ("GL_BLEND_DST_RGB", glow::BLEND_DST_RGB),
+                ("GL_BLEND_SRC_ALPHA", glow::BLEND_SRC_ALPHA),
+                ("GL_BLEND_DST_ALPHA", glow::BLEND_DST_ALPHA),
+                ("GL_BLEND_EQUATION_RGB", glow::BLEND_EQUATION_RGB),
+                ("GL_BLEND_EQUATION_ALPHA", glow::BLEND_EQUATION_ALPHA),
+                ("GL_CULL_FACE_MODE", glow::CULL_FACE_MODE),
+                ("GL_FRONT_FACE", glow::FRONT_FACE),
+                ("GL_STENCIL_CLEAR_VALUE", glow::STENCIL_CLEAR_VALUE),
+                ("GL_READ_BUFFER", glow::READ_BUFFER),
+            ] {
+                s.push((name.into(), int(e)));
+            }
+            let max_draw = gl.get_parameter_i32(glow::MAX_DRAW_BUFFERS).clamp(1, 32) as u32;
+            for i in 0..max_draw {
+                s.push((format!("GL_DRAW_BUFFER{i}"), int(glow::DRAW_BUFFER0 + i)));
+            }
+            for (name, e) in [
+                ("GL_DEPTH_TEST", glow::DEPTH_TEST),
+                ("GL_STENCIL_TEST", glow::STENCIL_TEST),
+                ("GL_BLEND", glow::BLEND),
+                ("GL_CULL_FACE", glow::CULL_FACE),
+                ("GL_SCISSOR_TEST", glow::SCISSOR_TEST),
+                ("GL_FRAMEBUFFER_SRGB", glow::FRAMEBUFFER_SRGB),
+                ("GL_SAMPLE_MASK", glow::SAMPLE_MASK),
+                (
+                    "GL_SAMPLE_ALPHA_TO_COVERAGE",
+                    glow::SAMPLE_ALPHA_TO_COVERAGE,
+                ),
+                ("GL_RASTERIZER_DISCARD", glow::RASTERIZER_DISCARD),
+                ("GL_MULTISAMPLE", glow::MULTISAMPLE),
+                ("GL_POLYGON_OFFSET_FILL", glow::POLYGON_OFFSET_FILL),
+                ("GL_COLOR_LOGIC_OP", glow::COLOR_LOGIC_OP),
+                ("GL_CLIP_DISTANCE0", glow::CLIP_DISTANCE0),
+                ("GL_DITHER", glow::DITHER),
+            ] {
+                s.push((name.into(), on(e)));
+            }
+            s.push(("GL_VIEWPORT".into(), ints(glow::VIEWPORT, 4)));
+            s.push(("GL_SCISSOR_BOX".into(), ints(glow::SCISSOR_BOX, 4)));
+            s.push(("GL_POLYGON_MODE".into(), ints(glow::POLYGON_MODE, 2)));
+            s.push(("GL_COLOR_WRITEMASK".into(), ints(glow::COLOR_WRITEMASK, 4)));
+            s.push((
+                "GL_COLOR_CLEAR_VALUE".into(),
+                floats(glow::COLOR_CLEAR_VALUE, 4),
+            ));
+            s.push((
+                "GL_DEPTH_CLEAR_VALUE".into(),
+                floats(glow::DEPTH_CLEAR_VALUE, 1),
+            ));
+            s.push(("GL_BLEND_COLOR".into(), floats(glow::BLEND_COLOR, 4)));
+            s.push((
+                "GL_SAMPLE_MASK_VALUE".into(),
+                vec![gl.get_parameter_indexed_i32(glow::SAMPLE_MASK_VALUE, 0) as i64],
+            ));
+        }
+        GlState(s)
+    }
+
+    /// `"NAME: before -> after"` for each difference.
+    pub fn differences(&self, after: &GlState) -> Vec<String> {
+        self.0
+            .iter()
+            .zip(&after.0)
+            .filter(|(a, b)| a.1 != b.1)
+            .map(|(a, b)| format!("{}: {:?} -> {:?}", a.0, a.1, b.1))
+            .collect()
+    }
+}
