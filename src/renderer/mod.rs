@@ -83,6 +83,7 @@ mod pass;
 pub mod plan;
 mod second_layer_mask;
 mod slow_path;
+mod smaa_tables;
 mod sparse;
 mod targets;
 pub mod technique;
