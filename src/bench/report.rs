@@ -155,6 +155,9 @@ pub struct Run {
     pub method: String,
     /// Whether FXAA ran.
     pub fxaa: bool,
+    /// Whether SMAA ran (`smaa`, `+smaa`).
+    #[serde(default)]
+    pub smaa: bool,
     /// Real samples per pixel of the G-buffer pass (1 for `none`).
     pub samples: u32,
     /// Width in pixels.
@@ -163,7 +166,7 @@ pub struct Run {
     pub height: u32,
     /// Median frame time over the timed frames, in milliseconds.
     pub ms_total: f64,
-    /// Median time the anti-aliasing adds: resolve + FXAA (+ lighting beyond
+    /// Median time the anti-aliasing adds: resolve + FXAA or SMAA (+ lighting beyond
     /// `none`'s for per-sample methods), in milliseconds.
     pub ms_aa: f64,
     /// How times were measured: `gl-time-elapsed` or `finish-wall-clock`.
@@ -181,6 +184,18 @@ pub struct Run {
     pub ms_resolve: f64,
     /// Median FXAA time in ms (extra key).
     pub ms_fxaa: f64,
+    /// Median time of SMAA's three passes in ms, 0 without SMAA (extra key).
+    #[serde(default)]
+    pub ms_smaa: f64,
+    /// Median time of SMAA's edge pass in ms (extra key).
+    #[serde(default)]
+    pub ms_smaa_edges: f64,
+    /// Median time of SMAA's blending-weight pass in ms (extra key).
+    #[serde(default)]
+    pub ms_smaa_weights: f64,
+    /// Median time of SMAA's neighbourhood-blending pass in ms (extra key).
+    #[serde(default)]
+    pub ms_smaa_blend: f64,
     /// Median lighting time in ms (extra key).
     pub ms_lighting: f64,
     /// Median time of the resolve's second layer in ms, 0 with one layer:
@@ -602,6 +617,7 @@ pub(crate) mod tests {
             scene: "builtin:halo".into(),
             method: method.into(),
             fxaa: false,
+            smaa: false,
             samples: 4,
             width: 96,
             height: 54,
@@ -614,6 +630,10 @@ pub(crate) mod tests {
             gbuffer_bytes: 1 << 20,
             ms_resolve: 0.1,
             ms_fxaa: 0.0,
+            ms_smaa: 0.0,
+            ms_smaa_edges: 0.0,
+            ms_smaa_weights: 0.0,
+            ms_smaa_blend: 0.0,
             ms_lighting,
             ms_second_layer: 0.0,
             flip_p95: 0.2,

@@ -40,7 +40,10 @@
 //! 7. **Transparent objects** (`transparent.frag`), forward, single-sampled,
 //!    alpha-blended, depth-tested against the resolved depth without writing it.
 //! 8. **Tonemap** (`tonemap.frag`) into an RGBA8 sRGB-encoded image.
-//! 9. **FXAA** (`fxaa.frag`), optional, into a second RGBA8 image.
+//! 9. **FXAA** (`fxaa.frag`), optional, into a second RGBA8 image; or
+//!    **SMAA 1x** ([`SmaaOptions`]: `smaa_edges.frag`, `smaa_weights.frag`,
+//!    `smaa_blend.frag`), optional, through its edge and weight targets
+//!    into another.
 //!
 //! With [`AaMode::Sparse`] steps 2 (the copy) to 4 become a multisampled
 //! depth pre-pass, a set-up pass and a G-buffer pass that writes per-pixel
@@ -83,7 +86,11 @@ mod pass;
 pub mod plan;
 mod second_layer_mask;
 mod slow_path;
-mod smaa_tables;
+mod smaa;
+mod smaa_blend;
+mod smaa_edges;
+pub mod smaa_tables;
+mod smaa_weights;
 mod sparse;
 mod targets;
 pub mod technique;
@@ -114,6 +121,8 @@ use lighting::{LightingPass, StandIns, light_batches};
 use lighting_per_sample::PerSampleLightingPass;
 use mesh::GpuScene;
 pub use options::{AaMode, RenderOptions};
+pub use smaa::{SmaaEdges, SmaaFilter, SmaaOptions, SmaaOutput, SmaaPreset};
+use smaa::{DepthInput, SmaaPasses, SmaaTargets};
 use plan::{Pass, Plan, PlanContext, SceneNeeds};
 pub use sparse::{
     DEFAULT_POOL_BLOCKS_PER_PIXEL, MASK_OVERFLOW, MASK_SINGLE, MAX_SPARSE_SAMPLES, SparseMemory,
@@ -221,6 +230,14 @@ pub struct FrameTimings {
     pub tonemap_ms: f64,
     /// The FXAA pass (0 when off).
     pub fxaa_ms: f64,
+    /// SMAA's three passes (0 when off): the sum of the next three.
+    pub smaa_ms: f64,
+    /// SMAA's edge pass.
+    pub smaa_edges_ms: f64,
+    /// SMAA's blending-weight pass.
+    pub smaa_weights_ms: f64,
+    /// SMAA's neighbourhood-blending pass.
+    pub smaa_blend_ms: f64,
     /// The post pass of [`AaMode::Gbaa`] (0 with other modes; its G-buffer
     /// pass is in `geometry_ms`).
     pub gbaa_ms: f64,
@@ -241,6 +258,8 @@ struct Passes {
     transparent: TransparentPass,
     tonemap: TonemapPass,
     fxaa: FxaaPass,
+    /// SMAA's programs and tables, built when SMAA is first asked for.
+    smaa: Option<SmaaPasses>,
     fullscreen: VertexArray,
     timer: GpuTimer,
 }
@@ -254,13 +273,14 @@ impl GlObject for Passes {
         self.transparent.handles(out);
         self.tonemap.handles(out);
         self.fxaa.handles(out);
+        self.smaa.handles(out);
         self.fullscreen.handles(out);
         self.timer.handles(out);
     }
 }
 
 impl Passes {
-    fn new(gl: &glow::Context, slots: GBufferSlots) -> Result<Self> {
+    fn new(gl: &glow::Context, slots: GBufferSlots, smaa: bool) -> Result<Self> {
         Made::build(gl, |made| {
             Ok(Passes {
                 background: made.keep(BackgroundPass::new(gl)?),
@@ -270,6 +290,11 @@ impl Passes {
                 transparent: made.keep(TransparentPass::new(gl)?),
                 tonemap: made.keep(TonemapPass::new(gl)?),
                 fxaa: made.keep(FxaaPass::new(gl)?),
+                smaa: if smaa {
+                    Some(made.keep(SmaaPasses::new(gl)?))
+                } else {
+                    None
+                },
                 fullscreen: made.keep(VertexArray::new(gl, "renderer full-screen triangle")?),
                 timer: made.keep(GpuTimer::new(gl, false)?),
             })
@@ -320,7 +345,12 @@ impl Frame {
             } else {
                 None
             };
-            let targets = made.keep(Targets::new(gl, &gbuffer.depth, options.fxaa)?);
+            let targets = made.keep(Targets::new(
+                gl,
+                &gbuffer.depth,
+                options.fxaa,
+                options.smaa.is_some(),
+            )?);
             Ok(Frame {
                 gbuffer,
                 retrofit,
@@ -490,7 +520,7 @@ impl Renderer {
             log::warn!("scene `{}` ({depth_mode} depth): {w}", scene.name);
         }
         let (passes, gpu_scene, frame, opt_out_flag) = Made::build(gl, |made| {
-            let passes = made.keep(Passes::new(gl, slots)?);
+            let passes = made.keep(Passes::new(gl, slots, options.smaa.is_some())?);
             let gpu_scene = made.keep(GpuScene::new(gl, scene)?);
             // Objects that opted out of anti-aliasing (`Object::antialias`, a
             // glTF `extras` field) write 0 into `color.a`: the resolve reads it
@@ -670,6 +700,7 @@ impl Renderer {
             transparent,
             tonemap,
             fxaa,
+            smaa,
             fullscreen,
             timer,
         } = &mut self.passes;
@@ -683,6 +714,10 @@ impl Renderer {
             transparent_ms: 0.0,
             tonemap_ms: 0.0,
             fxaa_ms: 0.0,
+            smaa_ms: 0.0,
+            smaa_edges_ms: 0.0,
+            smaa_weights_ms: 0.0,
+            smaa_blend_ms: 0.0,
             gbaa_ms: 0.0,
             timer: timer.kind(),
         };
@@ -791,6 +826,25 @@ impl Renderer {
                 fxaa.draw(gl, out, fullscreen, &targets.ldr.texture)
             })?;
         }
+        if let (Some(options), Some(passes), Some(out)) =
+            (self.options.smaa, smaa.as_ref(), targets.smaa.as_ref())
+        {
+            let depth_input = DepthInput::new(&projection, depth_mode.is_reversed());
+            let times = passes.draw(
+                gl,
+                &options,
+                out,
+                fullscreen,
+                &targets.ldr.texture,
+                &gbuffer.depth,
+                depth_input,
+                timer,
+            )?;
+            t.smaa_edges_ms = times.edges_ms;
+            t.smaa_weights_ms = times.weights_ms;
+            t.smaa_blend_ms = times.blend_ms;
+            t.smaa_ms = times.edges_ms + times.weights_ms + times.blend_ms;
+        }
         unsafe {
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
             gl.bind_vertex_array(None);
@@ -804,7 +858,8 @@ impl Renderer {
             + t.transparent_ms
             + t.tonemap_ms
             + t.gbaa_ms
-            + t.fxaa_ms;
+            + t.fxaa_ms
+            + t.smaa_ms;
         Ok(t)
     }
 
@@ -937,7 +992,7 @@ impl Renderer {
         self.decal_hook = hook;
     }
 
-    /// Change size, sample count, anti-aliasing method, FXAA or layout at run
+    /// Change size, sample count, anti-aliasing method, FXAA, SMAA or layout at run
     /// time, re-creating only what changed:
     /// - a new size re-allocates the G-buffer's textures on the same
     ///   framebuffer and lets the retrofit re-read it ([`MsaaRetrofit::set_samples`],
@@ -971,6 +1026,9 @@ impl Renderer {
         let options = &active;
         // The technique's programs first: they are kept either way.
         self.prepare_technique(gl, Some(options))?;
+        if options.smaa.is_some() && self.passes.smaa.is_none() {
+            self.passes.smaa = Some(SmaaPasses::new(gl)?);
+        }
         let depth_mode =
             depth::resolve_mode(gl, options.depth_mode, &self.clip, options.layout.depth)?;
         let mut warnings = depth::warnings(&options.layout, &self.camera, depth_mode, self.extent);
@@ -1034,7 +1092,12 @@ impl Renderer {
             let (colors, depth) =
                 GBuffer::allocate_textures(gl, &options.layout, options.width, options.height)?;
             let (colors, depth) = (made.keep(colors), made.keep(depth));
-            let targets = made.keep(Targets::new(gl, &depth, options.fxaa)?);
+            let targets = made.keep(Targets::new(
+                gl,
+                &depth,
+                options.fxaa,
+                options.smaa.is_some(),
+            )?);
             Ok::<_, Error>((colors, depth, targets))
         })?;
         let gb = &mut self.frame.gbuffer;
@@ -1064,7 +1127,7 @@ impl Renderer {
         Ok(())
     }
 
-    /// Same size and layout: the retrofit and the FXAA target may change.
+    /// Same size and layout: the retrofit and the FXAA and SMAA targets may change.
     fn update_in_place(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
         let (w, h) = (options.width, options.height);
         let new_fxaa = if options.fxaa && self.frame.targets.fxaa.is_none() {
@@ -1072,11 +1135,34 @@ impl Renderer {
         } else {
             None
         };
+        let new_smaa = if options.smaa.is_some() && self.frame.targets.smaa.is_none() {
+            match SmaaTargets::new(gl, w, h) {
+                Ok(t) => Some(t),
+                Err(e) => {
+                    if let Some(t) = new_fxaa {
+                        t.destroy(gl);
+                    }
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
         if let Err(e) = self.update_retrofit(gl, options, false) {
             if let Some(t) = new_fxaa {
                 t.destroy(gl);
             }
+            if let Some(t) = new_smaa {
+                t.destroy(gl);
+            }
             return Err(e);
+        }
+        if new_smaa.is_some() {
+            self.frame.targets.smaa = new_smaa;
+        } else if options.smaa.is_none() {
+            if let Some(t) = self.frame.targets.smaa.take() {
+                t.destroy(gl);
+            }
         }
         if new_fxaa.is_some() {
             self.frame.targets.fxaa = new_fxaa;
@@ -1181,7 +1267,7 @@ impl Renderer {
         GeometryPass::fragment_source(self.passes.geometry.slots())
     }
 
-    /// Read the final image (after tonemapping and FXAA); row 0 is the top.
+    /// Read the final image (after tonemapping and FXAA or SMAA); row 0 is the top.
     pub fn read_final(&self, gl: &glow::Context) -> Result<image::RgbaImage> {
         self.frame
             .targets

@@ -26,9 +26,9 @@
 //! [`MAX_DISTANCE`] × [`MAX_DISTANCE`] texels with the start distance along
 //! x and the end distance along y, exactly (no compression: the pass
 //! fetches a texel, no filtering). `.r` is what p takes from across the
-//! edge, `.g` what the pixel across takes from p. A vertical edge uses the
-//! same table with its bottom end as the start and the pixel right of the
-//! edge as p.
+//! edge, `.g` what the pixel across takes from p. A horizontal edge starts
+//! at its left end; a vertical edge uses the same table with its top end as
+//! the start and the pixel right of the edge as p.
 //!
 //! # The search table
 //!
@@ -39,28 +39,29 @@
 //! tells both pixels apart. The search table turns the two rounded values
 //! into how many of the two pixels the line still covers, and whether the
 //! walk goes on; see [`search_step`]. R8, [`SEARCH_WIDTH`] × [`SEARCH_HEIGHT`]:
-//! two 5 × 5 blocks (x: the crossing value, y: the edge value), the first
-//! for walks towards the start of a line (left or down), the second towards
-//! its end (right or up), because a crossing flag lies on opposite sides of
-//! the pixel that holds it in the two directions.
+//! two 5 × 5 blocks (x: the crossing value, y: the edge value), one for
+//! walks on which a pixel's crossing flag lies past it ([`Walk::ToStart`]:
+//! left along a row, up along a column), one for walks on which it lies
+//! before it ([`Walk::ToEnd`]: right, down): a pixel holds the flags of its
+//! own left and top boundaries.
 
 /// The distances (in pixels, 0 to `MAX_DISTANCE - 1`) one area cell holds
 /// along each axis; longer distances are clamped to the last texel.
-pub(crate) const MAX_DISTANCE: u32 = 64;
+pub const MAX_DISTANCE: u32 = 64;
 
 /// The area table's size in texels.
-pub(crate) const AREA_WIDTH: u32 = 4 * MAX_DISTANCE;
+pub const AREA_WIDTH: u32 = 4 * MAX_DISTANCE;
 /// The area table's size in texels.
-pub(crate) const AREA_HEIGHT: u32 = 4 * MAX_DISTANCE;
+pub const AREA_HEIGHT: u32 = 4 * MAX_DISTANCE;
 
 /// The search table's size in texels.
-pub(crate) const SEARCH_WIDTH: u32 = 10;
+pub const SEARCH_WIDTH: u32 = 10;
 /// The search table's size in texels.
-pub(crate) const SEARCH_HEIGHT: u32 = 5;
+pub const SEARCH_HEIGHT: u32 = 5;
 
 /// What crosses an edge segment at one of its ends.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Crossing {
+pub enum Crossing {
     /// Nothing: the segment just stops.
     None = 0,
     /// An edge on the side of the pixel being weighed.
@@ -73,22 +74,12 @@ pub(crate) enum Crossing {
 
 impl Crossing {
     /// The four, in table order.
-    pub(crate) const ALL: [Crossing; 4] = [
+    pub const ALL: [Crossing; 4] = [
         Crossing::None,
         Crossing::PixelSide,
         Crossing::OtherSide,
         Crossing::Both,
     ];
-
-    /// From the two crossing flags at an end.
-    pub(crate) fn of(pixel_side: bool, other_side: bool) -> Crossing {
-        match (pixel_side, other_side) {
-            (false, false) => Crossing::None,
-            (true, false) => Crossing::PixelSide,
-            (false, true) => Crossing::OtherSide,
-            (true, true) => Crossing::Both,
-        }
-    }
 }
 
 /// The area between the edge and the line that runs from half a pixel off
@@ -107,7 +98,7 @@ fn wedge(half: f64, a: f64, b: f64) -> f64 {
 /// The areas (what p takes from across, what the pixel across takes from
 /// p) for a pixel `start` pixels after the segment's start and `end`
 /// pixels before its end, with crossings `at_start` and `at_end`.
-pub(crate) fn orthogonal_area(
+pub fn orthogonal_area(
     at_start: Crossing,
     at_end: Crossing,
     start: u32,
@@ -136,7 +127,7 @@ fn unorm(v: f64) -> u8 {
 
 /// The area table's bytes (RG8, row 0 first; see the [module
 /// documentation](self)).
-pub(crate) fn area_table() -> Vec<u8> {
+pub fn area_table() -> Vec<u8> {
     let mut bytes = vec![0u8; (AREA_WIDTH * AREA_HEIGHT * 2) as usize];
     for (column, &at_start) in Crossing::ALL.iter().enumerate() {
         for (row, &at_end) in Crossing::ALL.iter().enumerate() {
@@ -157,7 +148,7 @@ pub(crate) fn area_table() -> Vec<u8> {
 
 /// Which way a walk along an edge goes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Walk {
+pub enum Walk {
     /// Towards the start (left, down): a pixel's crossing flag lies on its
     /// far side from the walker (between it and the next pixel on).
     ToStart = 0,
@@ -172,7 +163,7 @@ pub(crate) enum Walk {
 /// it); it covers `far` too when `far` has the edge and no crossing lies
 /// between the two. Returns how many pixels it covers (0, 1 or 2) and
 /// whether the walk goes on past `far`.
-pub(crate) fn search_step(
+pub fn search_step(
     walk: Walk,
     near: (bool, bool),
     far: (bool, bool),
@@ -208,13 +199,13 @@ fn encode_step((covered, go_on): (u32, bool)) -> u8 {
 
 /// The level `round(4·v)` of a bilinear fetch weighting near by 3/4 and
 /// far by 1/4.
-pub(crate) fn fetch_level(near: bool, far: bool) -> u32 {
+pub fn fetch_level(near: bool, far: bool) -> u32 {
     3 * u32::from(near) + u32::from(far)
 }
 
 /// The search table's bytes (R8, row 0 first; see the [module
 /// documentation](self)). Levels 2 never occur and stay 0.
-pub(crate) fn search_table() -> Vec<u8> {
+pub fn search_table() -> Vec<u8> {
     let mut bytes = vec![0u8; (SEARCH_WIDTH * SEARCH_HEIGHT) as usize];
     for walk in [Walk::ToStart, Walk::ToEnd] {
         for bits in 0..16u32 {
