@@ -508,6 +508,9 @@ impl Report {
             if let Some(line) = lighting_orderings(&runs) {
                 let _ = writeln!(md, "{line}\n");
             }
+            if let Some(line) = smaa_standing(&runs) {
+                let _ = writeln!(md, "{line}\n");
+            }
             if let Some(table) = motion_table(&runs, self.motion.as_deref()) {
                 let _ = writeln!(md, "{table}");
             }
@@ -543,6 +546,44 @@ impl Report {
         std::fs::write(&md, self.to_markdown()).map_err(|e| Error::io(&md, e))?;
         Ok(())
     }
+}
+
+/// Where `median:layers=2` stands against SMAA on one scene (the post
+/// filter engines ship, alone as `smaa` and after the resolve as
+/// `median+smaa`, FreeSpace Open's pipeline), in FLIP and in frame time,
+/// and what SMAA's three passes cost: `None` without a `smaa` or
+/// `median+smaa` run.
+pub fn smaa_standing(runs: &[&Run]) -> Option<String> {
+    let find = |method: &str| runs.iter().find(|r| r.method == method);
+    let smaa_runs: Vec<&&Run> = ["smaa", "median+smaa"]
+        .iter()
+        .filter_map(|m| find(m))
+        .collect();
+    if smaa_runs.is_empty() {
+        return None;
+    }
+    let mut parts = Vec::new();
+    if let Some(layers) = find("median:layers=2") {
+        for other in &smaa_runs {
+            parts.push(format!(
+                "`median:layers=2` against `{}`: FLIP {:.4} against {:.4} ({:.2} ×), {:.2} ms against {:.2} ms ({:.2} ×)",
+                other.method,
+                layers.flip_mean,
+                other.flip_mean,
+                layers.flip_mean / other.flip_mean.max(f64::MIN_POSITIVE),
+                layers.ms_total,
+                other.ms_total,
+                layers.ms_total / other.ms_total.max(f64::MIN_POSITIVE),
+            ));
+        }
+    }
+    for run in &smaa_runs {
+        parts.push(format!(
+            "SMAA's passes in `{}`: edges {:.2} ms, blending weights {:.2} ms, neighbourhood blending {:.2} ms",
+            run.method, run.ms_smaa_edges, run.ms_smaa_weights, run.ms_smaa_blend
+        ));
+    }
+    Some(format!("{}.", parts.join("; ")))
 }
 
 /// The orderings of one scene's lighting times the bench is about, and
@@ -760,6 +801,25 @@ pub(crate) mod tests {
                 "{row}"
             );
         }
+    }
+
+    #[test]
+    fn the_smaa_line_sets_two_layers_against_smaa_in_error_and_time() {
+        let mut layers = run("median:layers=2", 1.0);
+        layers.flip_mean = 0.01;
+        layers.ms_total = 30.0;
+        let mut smaa = run("smaa", 1.0);
+        smaa.flip_mean = 0.02;
+        smaa.ms_total = 20.0;
+        smaa.ms_smaa_weights = 1.5;
+        let runs = [&layers, &smaa];
+        let line = smaa_standing(&runs).expect("a line");
+        assert!(line.contains("FLIP 0.0100 against 0.0200 (0.50 ×)"), "{line}");
+        assert!(line.contains("30.00 ms against 20.00 ms (1.50 ×)"), "{line}");
+        assert!(line.contains("blending weights 1.50 ms"), "{line}");
+        assert!(smaa_standing(&[&layers]).is_none());
+        let md = report(vec![layers.clone(), smaa.clone()]).to_markdown();
+        assert!(md.contains("`median:layers=2` against `smaa`"), "{md}");
     }
 
     #[test]

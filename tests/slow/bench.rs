@@ -513,8 +513,12 @@ fn bad_input_is_refused_in_one_line() {
             "round",
         ),
         (
-            vec!["bench", "--methods", "median+smaa", "--report", d],
-            "smaa",
+            vec!["bench", "--methods", "median+taa", "--report", d],
+            "taa",
+        ),
+        (
+            vec!["bench", "--methods", "smaa:preset=extreme", "--report", d],
+            "extreme",
         ),
         (vec!["bench", "--size", "big", "--report", d], "big"),
         (vec!["bench", "--size", "0x54", "--report", d], "0x54"),
