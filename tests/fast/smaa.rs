@@ -216,6 +216,51 @@ fn a_z_step_and_a_staircase_give_the_trapezoids_of_their_line() {
 }
 
 #[test]
+fn a_t_junction_splits_the_line_it_crosses() {
+    with_context(|gl| {
+        // White above row 3; below it black left of x = 8 and grey right of
+        // it: one edge runs along the whole row, and the vertical edge at
+        // x = 8 meets it from below. The crossing ends the line on the left
+        // and starts the one on the right (the walk must not pass it).
+        let img = grey(W, H, |x, y| match (y >= 4, x < 8) {
+            (true, _) => 255,
+            (false, true) => 0,
+            (false, false) => 128,
+        });
+        let r = filter(gl, &img, SmaaPreset::Low);
+        for x in 0..W {
+            assert!(r.edges(x, 3).1, "top edge at {x}");
+            let (takes, _) = if x < 8 {
+                orthogonal_area(Crossing::None, Crossing::PixelSide, x, 7 - x)
+            } else {
+                orthogonal_area(Crossing::PixelSide, Crossing::None, x - 8, W - 1 - x)
+            };
+            assert_near(r.weights(x, 3)[0], takes, &format!("row 3 at {x}"));
+        }
+        // The vertical edge's top meets edges on both sides: a junction, no
+        // smoothing.
+        assert_eq!(r.weights(8, 3)[2..], [0, 0]);
+        // The same turned on its side: white left of x = 8, right of it
+        // black above row 4 and grey below; the vertical line splits there.
+        let img = grey(W, H, |x, y| match (x < 8, y >= 4) {
+            (true, _) => 255,
+            (false, true) => 0,
+            (false, false) => 128,
+        });
+        let r = filter(gl, &img, SmaaPreset::Low);
+        for y in 0..H {
+            assert!(r.edges(8, y).0, "left edge at {y}");
+            let (takes, _) = if y >= 4 {
+                orthogonal_area(Crossing::None, Crossing::PixelSide, H - 1 - y, y - 4)
+            } else {
+                orthogonal_area(Crossing::PixelSide, Crossing::None, 3 - y, y)
+            };
+            assert_near(r.weights(8, y)[2], takes, &format!("column 8 at {y}"));
+        }
+    });
+}
+
+#[test]
 fn a_diagonal_takes_an_eighth_each_way() {
     with_context(|gl| {
         // A 45° boundary: the dark pixels on the diagonal have a left and a
