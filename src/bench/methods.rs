@@ -134,7 +134,11 @@ impl FromStr for MethodEntry {
             Some((body, "fxaa")) => (body, true, None),
             Some((body, post)) if post == "smaa" || post.starts_with("smaa:") => {
                 let options: Vec<&str> = post.split(':').skip(1).collect();
-                (body, false, Some(SmaaOptions::parse_options(&options, label)?))
+                (
+                    body,
+                    false,
+                    Some(SmaaOptions::parse_options(&options, label)?),
+                )
             }
             Some((_, other)) => {
                 return Err(Error::invalid(format!(
@@ -263,7 +267,10 @@ mod tests {
         let e: MethodEntry = "median+smaa".parse().unwrap();
         assert_eq!(e.smaa, Some(SmaaOptions::default()));
         assert!(!e.fxaa);
-        let err = "smaa:preset=extreme".parse::<MethodEntry>().unwrap_err().to_string();
+        let err = "smaa:preset=extreme"
+            .parse::<MethodEntry>()
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("extreme") && err.contains("ultra"), "{err}");
         let d = default_methods();
         for want in ["smaa", "median+smaa"] {

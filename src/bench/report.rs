@@ -814,8 +814,14 @@ pub(crate) mod tests {
         smaa.ms_smaa_weights = 1.5;
         let runs = [&layers, &smaa];
         let line = smaa_standing(&runs).expect("a line");
-        assert!(line.contains("FLIP 0.0100 against 0.0200 (0.50 ×)"), "{line}");
-        assert!(line.contains("30.00 ms against 20.00 ms (1.50 ×)"), "{line}");
+        assert!(
+            line.contains("FLIP 0.0100 against 0.0200 (0.50 ×)"),
+            "{line}"
+        );
+        assert!(
+            line.contains("30.00 ms against 20.00 ms (1.50 ×)"),
+            "{line}"
+        );
         assert!(line.contains("blending weights 1.50 ms"), "{line}");
         assert!(smaa_standing(&[&layers]).is_none());
         let md = report(vec![layers.clone(), smaa.clone()]).to_markdown();

@@ -121,9 +121,9 @@ use lighting::{LightingPass, StandIns, light_batches};
 use lighting_per_sample::PerSampleLightingPass;
 use mesh::GpuScene;
 pub use options::{AaMode, RenderOptions};
-pub use smaa::{SmaaEdges, SmaaFilter, SmaaOptions, SmaaOutput, SmaaPreset};
-use smaa::{DepthInput, SmaaPasses, SmaaTargets};
 use plan::{Pass, Plan, PlanContext, SceneNeeds};
+use smaa::{DepthInput, SmaaPasses, SmaaTargets};
+pub use smaa::{SmaaEdges, SmaaFilter, SmaaOptions, SmaaOutput, SmaaPreset};
 pub use sparse::{
     DEFAULT_POOL_BLOCKS_PER_PIXEL, MASK_OVERFLOW, MASK_SINGLE, MAX_SPARSE_SAMPLES, SparseMemory,
     SparseOptions, SparseStats,

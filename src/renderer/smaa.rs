@@ -142,8 +142,7 @@ pub struct SmaaOptions {
 
 impl SmaaOptions {
     /// What [`SmaaOptions::from_str`] accepts, for error messages.
-    pub const HELP: &'static str =
-        "smaa options: preset=low|medium|high|ultra (default high), edges=luma|color|depth (default luma)";
+    pub const HELP: &'static str = "smaa options: preset=low|medium|high|ultra (default high), edges=luma|color|depth (default luma)";
 
     /// Parse options written `preset=P`, `edges=E` (the parts after the
     /// colons of `smaa:preset=ultra:edges=color`); `spec` names the whole
@@ -157,7 +156,9 @@ impl SmaaOptions {
                     SmaaOptions::HELP
                 ))
             };
-            let (key, value) = option.split_once('=').ok_or_else(|| bad("unknown option"))?;
+            let (key, value) = option
+                .split_once('=')
+                .ok_or_else(|| bad("unknown option"))?;
             match key {
                 "preset" => {
                     out.preset = SmaaPreset::ALL
@@ -223,13 +224,7 @@ impl SmaaTargets {
                 width,
                 height,
             )?);
-            let out = made.keep(ColorTarget::new(
-                gl,
-                "smaa",
-                Format::Rgba8,
-                width,
-                height,
-            )?);
+            let out = made.keep(ColorTarget::new(gl, "smaa", Format::Rgba8, width, height)?);
             Ok(SmaaTargets {
                 edges,
                 weights,
@@ -342,7 +337,6 @@ impl SmaaPasses {
             blend_ms,
         })
     }
-
 }
 
 impl GlObject for SmaaPasses {
@@ -426,7 +420,10 @@ impl SmaaFilter {
                     DepthInput::new(&glam::Mat4::IDENTITY, false),
                     &mut self.timer,
                 )?;
-                let edges = targets.edges.fbo.read_u8(gl, glow::RG, 2, "the SMAA edges")?;
+                let edges = targets
+                    .edges
+                    .fbo
+                    .read_u8(gl, glow::RG, 2, "the SMAA edges")?;
                 let weights = targets
                     .weights
                     .fbo
@@ -500,7 +497,10 @@ mod tests {
         for bad in ["preset=extreme", "edges=normal", "steps=3", "preset"] {
             let e = bad.parse::<SmaaOptions>().unwrap_err().to_string();
             assert_eq!(e.lines().count(), 1, "{e}");
-            assert!(e.contains(bad) && e.contains("preset=low|medium|high|ultra"), "{e}");
+            assert!(
+                e.contains(bad) && e.contains("preset=low|medium|high|ultra"),
+                "{e}"
+            );
         }
         let values: Vec<_> = SmaaPreset::ALL
             .iter()

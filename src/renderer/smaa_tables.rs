@@ -98,12 +98,7 @@ fn wedge(half: f64, a: f64, b: f64) -> f64 {
 /// The areas (what p takes from across, what the pixel across takes from
 /// p) for a pixel `start` pixels after the segment's start and `end`
 /// pixels before its end, with crossings `at_start` and `at_end`.
-pub fn orthogonal_area(
-    at_start: Crossing,
-    at_end: Crossing,
-    start: u32,
-    end: u32,
-) -> (f64, f64) {
+pub fn orthogonal_area(at_start: Crossing, at_end: Crossing, start: u32, end: u32) -> (f64, f64) {
     let length = f64::from(start + end + 1);
     let half = 0.5 * length;
     let mut takes = (0.0, 0.0);
@@ -163,11 +158,7 @@ pub enum Walk {
 /// it); it covers `far` too when `far` has the edge and no crossing lies
 /// between the two. Returns how many pixels it covers (0, 1 or 2) and
 /// whether the walk goes on past `far`.
-pub fn search_step(
-    walk: Walk,
-    near: (bool, bool),
-    far: (bool, bool),
-) -> (u32, bool) {
+pub fn search_step(walk: Walk, near: (bool, bool), far: (bool, bool)) -> (u32, bool) {
     let ((near_edge, near_cross), (far_edge, far_cross)) = (near, far);
     match walk {
         Walk::ToStart => {

@@ -106,7 +106,11 @@ fn an_l_corner_is_found_and_kept_sharper_with_corner_rounding() {
                 for x in 0..W {
                     let want_left = x == left_col && y <= top_row;
                     let want_top = x >= left_col && y == top_row;
-                    assert_eq!(r.edges(x, y), (want_left, want_top), "{preset:?} ({x}, {y})");
+                    assert_eq!(
+                        r.edges(x, y),
+                        (want_left, want_top),
+                        "{preset:?} ({x}, {y})"
+                    );
                 }
             }
             // The top edge starts at x = 5 with the block's side below it
@@ -196,7 +200,12 @@ fn a_z_step_and_a_staircase_give_the_trapezoids_of_their_line() {
         let (w, h) = (32, 12);
         let img = shape(w, h, |x, y| y <= 2 + x / 4);
         let r = filter(gl, &img, SmaaPreset::High);
-        let by_hand = [(3.0 / 8.0, 0.0), (1.0 / 8.0, 0.0), (0.0, 1.0 / 8.0), (0.0, 3.0 / 8.0)];
+        let by_hand = [
+            (3.0 / 8.0, 0.0),
+            (1.0 / 8.0, 0.0),
+            (0.0, 1.0 / 8.0),
+            (0.0, 3.0 / 8.0),
+        ];
         for run in 1..7 {
             let y = 2 + run;
             for (k, &(takes, given)) in by_hand.iter().enumerate() {
@@ -328,10 +337,14 @@ fn coverage(x: u32, y: u32, slope: f64, c: f64) -> f64 {
 fn aliased_half_planes_come_near_their_exact_coverage() {
     with_context(|gl| {
         let (w, h) = (48, 48);
-        for (slope, c) in [(0.125, 20.3), (0.3, 14.6), (0.45, 12.2), (2.5, -40.0), (-0.2, 30.7)] {
-            let dark = |x: u32, y: u32| {
-                f64::from(y) + 0.5 < slope * (f64::from(x) + 0.5) + c
-            };
+        for (slope, c) in [
+            (0.125, 20.3),
+            (0.3, 14.6),
+            (0.45, 12.2),
+            (2.5, -40.0),
+            (-0.2, 30.7),
+        ] {
+            let dark = |x: u32, y: u32| f64::from(y) + 0.5 < slope * (f64::from(x) + 0.5) + c;
             // Dark = 0, light = 1 in linear light: the value is 1 − coverage.
             let img = shape(w, h, dark);
             let r = filter(gl, &img, SmaaPreset::Ultra);
@@ -356,7 +369,10 @@ fn aliased_half_planes_come_near_their_exact_coverage() {
             eprintln!(
                 "slope {slope}: mean error {mean:.4} (aliased {mean_aliased:.4}), worst {worst:.3}, {n} pixels"
             );
-            assert!(mean < mean_aliased / 3.0, "slope {slope}: {mean} vs {mean_aliased}");
+            assert!(
+                mean < mean_aliased / 3.0,
+                "slope {slope}: {mean} vs {mean_aliased}"
+            );
             assert!(worst < 0.2, "slope {slope}: worst {worst}");
         }
     });
@@ -438,9 +454,7 @@ fn colour_edges_see_what_luma_misses_and_depth_is_refused_by_the_filter() {
             }
         });
         let mut f = SmaaFilter::new(gl).expect("filter");
-        let luma = f
-            .apply(gl, &img, &SmaaOptions::default())
-            .expect("luma");
+        let luma = f.apply(gl, &img, &SmaaOptions::default()).expect("luma");
         assert!(luma.edges.iter().all(|e| e[0] == 0), "luma sees no edge");
         let colour = f
             .apply(
@@ -513,7 +527,8 @@ fn the_renderer_runs_smaa_after_the_tonemap() {
         eprintln!("{edges:?}: {changed} pixels changed");
         assert!(changed > 0 && share < 0.25, "{edges:?}: {changed}");
     }
-    r.set_options(gl, &box_options(None, AaMode::None)).expect("off");
+    r.set_options(gl, &box_options(None, AaMode::None))
+        .expect("off");
     r.render(gl).expect("frame");
     assert_eq!(r.read_final(gl).expect("read").as_raw(), none.as_raw());
     let mut both = box_options(Some(SmaaOptions::default()), AaMode::None);
