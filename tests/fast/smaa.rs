@@ -564,6 +564,15 @@ fn smaa_runs_on_the_gl_3_2_floor() {
             .output()
             .expect("running deferred-msaa")
     };
+    let info = floor(&["info", "--json"]);
+    assert!(
+        info.status.success(),
+        "{}",
+        String::from_utf8_lossy(&info.stderr)
+    );
+    let info: serde_json::Value = serde_json::from_slice(&info.stdout).expect("info JSON");
+    let version = info["gl_version"].as_str().unwrap_or("");
+    assert!(version.starts_with("3.2"), "not a 3.2 context: {version}");
     for (k, extra) in [
         vec!["--method", "smaa"],
         vec!["--method", "median", "--smaa", "preset=ultra:edges=depth"],
