@@ -37,7 +37,10 @@ use crate::gl::{Format, GlObject, GpuTimer, Handle, Made, Texture2d, VertexArray
 use crate::{Error, Result};
 use std::str::FromStr;
 
-/// SMAA's quality presets, with the reference implementation's values.
+/// SMAA's quality presets, with the reference implementation's values for
+/// the threshold, the search steps and corner rounding. (The reference's
+/// presets also search diagonals, 8 steps for `high` and 16 for `ultra`;
+/// this crate has no diagonal patterns: see docs/techniques.md.)
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum SmaaPreset {
     /// Threshold 0.15, 4 search steps, no corner rounding.
