@@ -37,20 +37,18 @@ use crate::gl::{Format, GlObject, GpuTimer, Handle, Made, Texture2d, VertexArray
 use crate::{Error, Result};
 use std::str::FromStr;
 
-/// SMAA's quality presets, with the reference implementation's values for
-/// the threshold, the search steps and corner rounding. (The reference's
-/// presets also search diagonals, 8 steps for `high` and 16 for `ultra`;
-/// this crate has no diagonal patterns: see docs/techniques.md.)
+/// SMAA's quality presets, with the reference implementation's values.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum SmaaPreset {
-    /// Threshold 0.15, 4 search steps, no corner rounding.
+    /// Threshold 0.15, 4 search steps, no diagonals, no corner rounding.
     Low,
-    /// Threshold 0.1, 8 search steps, no corner rounding.
+    /// Threshold 0.1, 8 search steps, no diagonals, no corner rounding.
     Medium,
-    /// Threshold 0.1, 16 search steps, corner rounding 25 (the default).
+    /// Threshold 0.1, 16 search steps, 8 diagonal steps, corner rounding 25
+    /// (the default).
     #[default]
     High,
-    /// Threshold 0.05, 32 search steps, corner rounding 25.
+    /// Threshold 0.05, 32 search steps, 16 diagonal steps, corner rounding 25.
     Ultra,
 }
 
@@ -88,6 +86,16 @@ impl SmaaPreset {
             SmaaPreset::Medium => 8,
             SmaaPreset::High => 16,
             SmaaPreset::Ultra => 32,
+        }
+    }
+
+    /// The cells walked each way along a diagonal run of one-pixel steps
+    /// (`None`: diagonal runs are weighed as their orthogonal pieces).
+    pub fn diagonal_steps(self) -> Option<u32> {
+        match self {
+            SmaaPreset::Low | SmaaPreset::Medium => None,
+            SmaaPreset::High => Some(8),
+            SmaaPreset::Ultra => Some(16),
         }
     }
 
@@ -268,6 +276,8 @@ pub(crate) struct SmaaPasses {
     area: Texture2d,
     /// [`smaa_tables::search_table`], R8 UNORM.
     search: Texture2d,
+    /// [`smaa_tables::diagonal_table`], RG8 UNORM.
+    diagonal: Texture2d,
 }
 
 impl SmaaPasses {
@@ -290,12 +300,21 @@ impl SmaaPasses {
                 smaa_tables::SEARCH_HEIGHT,
                 Some(&smaa_tables::search_table()),
             )?);
+            let diagonal = made.keep(Texture2d::with_data(
+                gl,
+                "smaa diagonal table",
+                Format::Rg8,
+                smaa_tables::DIAGONAL_WIDTH,
+                smaa_tables::DIAGONAL_HEIGHT,
+                Some(&smaa_tables::diagonal_table()),
+            )?);
             Ok(SmaaPasses {
                 edges: made.keep(SmaaEdgesPass::new(gl)?),
                 weights: made.keep(SmaaWeightsPass::new(gl)?),
                 blend: made.keep(SmaaBlendPass::new(gl)?),
                 area,
                 search,
+                diagonal,
             })
         })
     }
@@ -328,6 +347,7 @@ impl SmaaPasses {
                 &targets.edges.texture,
                 &self.area,
                 &self.search,
+                &self.diagonal,
             )
         })?;
         let blend_ms = super::timed(gl, timer, || {
@@ -349,6 +369,7 @@ impl GlObject for SmaaPasses {
         self.blend.handles(out);
         self.area.handles(out);
         self.search.handles(out);
+        self.diagonal.handles(out);
     }
 }
 
@@ -507,15 +528,22 @@ mod tests {
         }
         let values: Vec<_> = SmaaPreset::ALL
             .iter()
-            .map(|(p, _)| (p.threshold(), p.search_steps(), p.corner_rounding()))
+            .map(|(p, _)| {
+                (
+                    p.threshold(),
+                    p.search_steps(),
+                    p.diagonal_steps(),
+                    p.corner_rounding(),
+                )
+            })
             .collect();
         assert_eq!(
             values,
             [
-                (0.15, 4, None),
-                (0.1, 8, None),
-                (0.1, 16, Some(25)),
-                (0.05, 32, Some(25))
+                (0.15, 4, None, None),
+                (0.1, 8, None, None),
+                (0.1, 16, Some(8), Some(25)),
+                (0.05, 32, Some(16), Some(25))
             ]
         );
     }

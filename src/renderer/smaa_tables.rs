@@ -211,6 +211,139 @@ pub fn search_table() -> Vec<u8> {
     bytes
 }
 
+/// The diagonal distances (in cells, 0 to `DIAGONAL_MAX_DISTANCE - 1`) one
+/// diagonal cell holds along each axis.
+pub const DIAGONAL_MAX_DISTANCE: u32 = 32;
+
+/// The diagonal table's size in texels: 3 × 3 end patterns of
+/// [`DIAGONAL_MAX_DISTANCE`] × [`DIAGONAL_MAX_DISTANCE`].
+pub const DIAGONAL_WIDTH: u32 = 3 * DIAGONAL_MAX_DISTANCE;
+/// The diagonal table's size in texels.
+pub const DIAGONAL_HEIGHT: u32 = 3 * DIAGONAL_MAX_DISTANCE;
+
+/// How a 45° staircase goes on past one end of a run of one-pixel steps.
+///
+/// A run is a row of *cells* along a diagonal, each a pixel with an edge
+/// on its two boundaries that face the line (seen with the run rising to
+/// the right: its left and top). In the middle the line is taken through
+/// the steps' midpoints, half a pixel off each cell's corner, so each cell
+/// gives the side across an eighth. A line a little flatter than 45° draws
+/// runs of such steps joined by longer flat ones, and crosses each run from
+/// near its first cell's upper-left corner to near its last cell's
+/// upper-right one; so at an end that goes on flatter the line is taken
+/// through that corner (for a steeper line, through the first cell's
+/// lower-left corner and the corner a pixel above the last one's
+/// upper-right), and between an end and the run's middle it moves linearly (the diagonal form of the orthogonal
+/// lines' half-pixel offsets).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DiagonalEnd {
+    /// The staircase stops, or goes on both ways: the line stays at the
+    /// steps' midpoints.
+    Straight = 0,
+    /// It goes on along x: the line meets the first cell's upper-left
+    /// corner at the start, the last cell's upper-right one at the end.
+    Flatter = 1,
+    /// It goes on along y: the line meets the first cell's lower-left
+    /// corner at the start, the corner a pixel above the last cell's
+    /// upper-right one at the end.
+    Steeper = 2,
+}
+
+impl DiagonalEnd {
+    /// The three, in table order.
+    pub const ALL: [DiagonalEnd; 3] = [
+        DiagonalEnd::Straight,
+        DiagonalEnd::Flatter,
+        DiagonalEnd::Steeper,
+    ];
+
+    /// The line's offset above the cells' lower-left corners at this end
+    /// (`y = x + offset` in the run's frame, cell `k` spanning `[k, k+1]²`),
+    /// at the run's start or its end.
+    fn offset(self, at_start: bool) -> f64 {
+        match (self, at_start) {
+            (DiagonalEnd::Straight, _) => 0.5,
+            (DiagonalEnd::Flatter, true) | (DiagonalEnd::Steeper, false) => 1.0,
+            (DiagonalEnd::Flatter, false) | (DiagonalEnd::Steeper, true) => 0.0,
+        }
+    }
+}
+
+/// ∫ max(0, h) over `[a, b]` for `h` linear from `ha` to `hb`.
+fn positive_part(a: f64, b: f64, ha: f64, hb: f64) -> f64 {
+    let w = b - a;
+    if w <= 0.0 {
+        return 0.0;
+    }
+    match (ha >= 0.0, hb >= 0.0) {
+        (true, true) => 0.5 * (ha + hb) * w,
+        (false, false) => 0.0,
+        (true, false) => 0.5 * ha * ha / (ha - hb) * w,
+        (false, true) => 0.5 * hb * hb / (hb - ha) * w,
+    }
+}
+
+/// The areas of cell `back` of a run with `back` cells before it and
+/// `forward` after it: what the cell takes from across its top edge (the
+/// part of it above the line) and what the pixel above takes from it (the
+/// part of that pixel below the line), in the run's frame (rising to the
+/// right; a falling run is this one mirrored).
+pub fn diagonal_area(
+    at_start: DiagonalEnd,
+    at_end: DiagonalEnd,
+    back: u32,
+    forward: u32,
+) -> (f64, f64) {
+    let n = f64::from(back + forward + 1);
+    let k = f64::from(back);
+    let middle = 0.5 * n;
+    // The line's offset: from the start's to 1/2 at the middle, then to the end's.
+    let (first, last) = (at_start.offset(true), at_end.offset(false));
+    let offset = |x: f64| {
+        if x <= middle {
+            first + (0.5 - first) * (x / middle)
+        } else {
+            0.5 + (last - 0.5) * ((x - middle) / middle)
+        }
+    };
+    // Over the cell's column, split where the offset has its kink.
+    let mut points = vec![k, k + 1.0];
+    if middle > k && middle < k + 1.0 {
+        points.insert(1, middle);
+    }
+    let (mut takes, mut given) = (0.0, 0.0);
+    for pair in points.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        // The line's height above the cell's top edge (y = k + 1).
+        let above = |x: f64| x + offset(x) - (k + 1.0);
+        takes += positive_part(a, b, -above(a), -above(b));
+        given += positive_part(a, b, above(a), above(b));
+    }
+    (takes, given)
+}
+
+/// The diagonal table's bytes (RG8, row 0 first): cell column the start's
+/// [`DiagonalEnd`], cell row the end's, each cell the cells before (x) and
+/// after (y); `.r`, `.g` as [`diagonal_area`] gives them.
+pub fn diagonal_table() -> Vec<u8> {
+    let mut bytes = vec![0u8; (DIAGONAL_WIDTH * DIAGONAL_HEIGHT * 2) as usize];
+    for (column, &at_start) in DiagonalEnd::ALL.iter().enumerate() {
+        for (row, &at_end) in DiagonalEnd::ALL.iter().enumerate() {
+            for forward in 0..DIAGONAL_MAX_DISTANCE {
+                for back in 0..DIAGONAL_MAX_DISTANCE {
+                    let (takes, given) = diagonal_area(at_start, at_end, back, forward);
+                    let x = column as u32 * DIAGONAL_MAX_DISTANCE + back;
+                    let y = row as u32 * DIAGONAL_MAX_DISTANCE + forward;
+                    let k = ((y * DIAGONAL_WIDTH + x) * 2) as usize;
+                    bytes[k] = unorm(takes);
+                    bytes[k + 1] = unorm(given);
+                }
+            }
+        }
+    }
+    bytes
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -219,6 +352,84 @@ mod tests {
 
     fn close(a: f64, b: f64) -> bool {
         (a - b).abs() < EPS
+    }
+
+    /// The share of the cell `[k, k+1]²` above `line` and of the pixel
+    /// above it below `line`, by 512 × 512 sub-samples.
+    fn sampled(line: &dyn Fn(f64) -> f64, k: f64) -> (f64, f64) {
+        let n = 512;
+        let (mut above, mut below) = (0u32, 0u32);
+        for i in 0..n {
+            let x = k + (f64::from(i) + 0.5) / f64::from(n);
+            for j in 0..n {
+                let y = (f64::from(j) + 0.5) / f64::from(n);
+                if k + y > line(x) {
+                    above += 1;
+                }
+                if k + 1.0 + y < line(x) {
+                    below += 1;
+                }
+            }
+        }
+        let all = f64::from(n * n);
+        (f64::from(above) / all, f64::from(below) / all)
+    }
+
+    #[test]
+    fn diagonal_runs_give_the_areas_of_their_lines() {
+        // Straight ends: the line through the steps' midpoints, an eighth
+        // each way in every cell.
+        for back in 0..10 {
+            for forward in 0..10 {
+                let (t, g) =
+                    diagonal_area(DiagonalEnd::Straight, DiagonalEnd::Straight, back, forward);
+                assert!(
+                    close(t, 0.125) && close(g, 0.125),
+                    "{back} {forward}: {t} {g}"
+                );
+            }
+        }
+        // Steeper past both ends: one straight line from the first cell's
+        // lower-left corner to a pixel above the last one's upper-right,
+        // slope 1 + 1/n; flatter past both, from the first's upper-left to
+        // the last's upper-right, slope 1 - 1/n.
+        for n in 2..12u32 {
+            let l = f64::from(n);
+            let steeper = move |x: f64| x * (1.0 + 1.0 / l);
+            let flatter = move |x: f64| 1.0 + x * (1.0 - 1.0 / l);
+            let lines: [(DiagonalEnd, &dyn Fn(f64) -> f64); 2] = [
+                (DiagonalEnd::Steeper, &steeper),
+                (DiagonalEnd::Flatter, &flatter),
+            ];
+            for (end, line) in lines {
+                for back in 0..n {
+                    let (t, g) = diagonal_area(end, end, back, n - 1 - back);
+                    let (st, sg) = sampled(line, f64::from(back));
+                    assert!(
+                        (t - st).abs() < 2e-3 && (g - sg).abs() < 2e-3,
+                        "{end:?} {n} {back}: {t} {st} / {g} {sg}"
+                    );
+                }
+            }
+        }
+        // A run turned a half turn is the run read from its other end,
+        // with its sides swapped (flatter stays flatter).
+        for &a in &DiagonalEnd::ALL {
+            for &b in &DiagonalEnd::ALL {
+                for back in 0..12 {
+                    for forward in 0..12 {
+                        let (t, g) = diagonal_area(a, b, back, forward);
+                        let (t2, g2) = diagonal_area(b, a, forward, back);
+                        assert!(close(t, g2) && close(g, t2), "{a:?} {b:?} {back} {forward}");
+                    }
+                }
+            }
+        }
+        let t = diagonal_table();
+        let (takes, given) = diagonal_area(DiagonalEnd::Flatter, DiagonalEnd::Steeper, 3, 5);
+        let k = (((2 * DIAGONAL_MAX_DISTANCE + 5) * DIAGONAL_WIDTH + DIAGONAL_MAX_DISTANCE + 3) * 2)
+            as usize;
+        assert_eq!((t[k], t[k + 1]), (unorm(takes), unorm(given)));
     }
 
     #[test]

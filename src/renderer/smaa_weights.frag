@@ -14,19 +14,30 @@
 //  4. with corner rounding, an end whose crossing edge goes on past the
 //     line's row (a real corner, not a one-pixel step) keeps only that share
 //     of its smoothing.
+//  5. with diagonal steps, a pixel in a run of one-pixel steps along a
+//     diagonal (at least two) takes its weights from the run instead: count
+//     the run's cells both ways, read how the staircase goes on past each end
+//     (flatter, steeper or neither), and look the areas up in the diagonal
+//     table, all across the cells' horizontal edges (the blend then mixes
+//     along that axis alone). A rising run's cell is a pixel with a left and
+//     a top edge; a falling run's, a pixel with a left edge over a pixel with
+//     a top edge, whose weights that lower pixel holds.
 // Horizontal lines start at the left, vertical ones at the top; "this
 // pixel's side" of a vertical line is the right.
 
 uniform sampler2D u_edges;     // RG8: left (.r), top (.g); linear filtering
 uniform sampler2D u_area;      // RG8 area table
 uniform sampler2D u_search;    // R8 search table
+uniform sampler2D u_diagonal;  // RG8 diagonal table
 uniform int u_search_steps;
+uniform int u_diagonal_steps;  // cells walked each way along a diagonal; 0: off
 uniform int u_corners;         // 1: tell corners from steps
 uniform float u_corner;        // the share of smoothing a corner keeps
 
 out vec4 o_weights;
 
 #define MAX_DISTANCE 64
+#define DIAGONAL_MAX_DISTANCE 32
 #define TO_START 0
 #define TO_END 1
 
@@ -82,6 +93,42 @@ vec2 weigh(int cs, int ce, int ds, int de, bool sharp_s, bool sharp_e) {
          + area(0, ce, ds, de) * (sharp_e ? u_corner : 1.0);
 }
 
+// A rising run's cell: edges on its left and top.
+bool rising_cell(ivec2 q) { return left_edge(q) && top_edge(q); }
+
+// A falling run's cell, at the lower of its two pixels: a top edge here and
+// a left edge on the pixel above.
+bool falling_cell(ivec2 b) { return top_edge(b) && left_edge(b + ivec2(0, 1)); }
+
+// How many cells follow `p` along `dir`.
+int run(ivec2 p, ivec2 dir, bool rising) {
+    int d = 0;
+    for (int i = 0; i < u_diagonal_steps; ++i) {
+        ivec2 q = p + dir * (d + 1);
+        if (!(rising ? rising_cell(q) : falling_cell(q))) {
+            break;
+        }
+        d += 1;
+    }
+    return d;
+}
+
+// 0 straight, 1 flatter, 2 steeper (both or neither: straight; and a run
+// the walk cut short, `cells` = the steps, whose next cell would read as
+// flatter).
+int diagonal_end(bool flatter, bool steeper, int cells) {
+    if (cells >= u_diagonal_steps || flatter == steeper) {
+        return 0;
+    }
+    return flatter ? 1 : 2;
+}
+
+vec2 diagonal_area(int at_start, int at_end, int back, int forward) {
+    ivec2 t = ivec2(at_start * DIAGONAL_MAX_DISTANCE + min(back, DIAGONAL_MAX_DISTANCE - 1),
+                    at_end * DIAGONAL_MAX_DISTANCE + min(forward, DIAGONAL_MAX_DISTANCE - 1));
+    return texelFetch(u_diagonal, t, 0).rg;
+}
+
 void main() {
     ivec2 size = textureSize(u_edges, 0);
     ivec2 p = ivec2(gl_FragCoord.xy);
@@ -112,6 +159,38 @@ void main() {
         bool sharp_s = sp ? top_edge(s + ivec2(1, 0)) : top_edge(s + ivec2(-2, 0));
         bool sharp_e = ep ? top_edge(e + ivec2(1, 0)) : top_edge(e + ivec2(-2, 0));
         weights.ba = weigh(crossing(sp, so), crossing(ep, eo), ds, de, sharp_s, sharp_e);
+    }
+
+    if (u_diagonal_steps > 0) {
+        if (rising_cell(p)) {
+            int back = run(p, ivec2(-1, -1), true);
+            int forward = run(p, ivec2(1, 1), true);
+            if (back + forward > 0) {
+                ivec2 s = p - ivec2(back);
+                ivec2 e = p + ivec2(forward);
+                int cs = diagonal_end(top_edge(s - ivec2(1, 1)), left_edge(s - ivec2(0, 1)), back);
+                int ce = diagonal_end(top_edge(e + ivec2(1, 0)), left_edge(e + ivec2(0, 1)), forward);
+                weights = vec4(diagonal_area(cs, ce, back, forward), 0.0, 0.0);
+            }
+        } else if (falling_cell(p)) {
+            // The run's frame is this one mirrored top to bottom: what the
+            // cell (the pixel above) takes is what this pixel gives it.
+            int back = run(p, ivec2(-1, 1), false);
+            int forward = run(p, ivec2(1, -1), false);
+            if (back + forward > 0) {
+                ivec2 s = p + ivec2(-back, back);
+                ivec2 e = p + ivec2(forward, -forward);
+                int cs = diagonal_end(top_edge(s + ivec2(-1, 1)), left_edge(s + ivec2(0, 2)), back);
+                int ce = diagonal_end(top_edge(e + ivec2(1, 0)), left_edge(e), forward);
+                weights.rg = diagonal_area(cs, ce, back, forward).yx;
+            }
+        }
+        // The upper pixel of a falling run's cell: its left edge belongs to
+        // the run, which the pixel below weighs.
+        ivec2 b = p - ivec2(0, 1);
+        if (falling_cell(b) && run(b, ivec2(-1, 1), false) + run(b, ivec2(1, -1), false) > 0) {
+            weights.ba = vec2(0.0);
+        }
     }
 
     o_weights = weights;

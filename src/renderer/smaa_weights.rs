@@ -33,7 +33,7 @@ impl SmaaWeightsPass {
     }
 
     /// Clear `target` and weigh the edges of `edges` into it, with the
-    /// preset's search steps and corner rounding.
+    /// preset's search steps, diagonal steps and corner rounding.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn draw(
         &self,
@@ -44,12 +44,13 @@ impl SmaaWeightsPass {
         edges: &Texture2d,
         area: &Texture2d,
         search: &Texture2d,
+        diagonal: &Texture2d,
     ) -> Result<()> {
         target.begin_fullscreen(gl);
         unsafe {
             gl.clear_color(0.0, 0.0, 0.0, 0.0);
             gl.clear(glow::COLOR_BUFFER_BIT);
-            for (unit, texture) in [edges, area, search].into_iter().enumerate() {
+            for (unit, texture) in [edges, area, search, diagonal].into_iter().enumerate() {
                 gl.active_texture(glow::TEXTURE0 + unit as u32);
                 gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw()));
             }
@@ -59,13 +60,19 @@ impl SmaaWeightsPass {
         p.set_i32(gl, "u_edges", 0);
         p.set_i32(gl, "u_area", 1);
         p.set_i32(gl, "u_search", 2);
+        p.set_i32(gl, "u_diagonal", 3);
+        p.set_i32(
+            gl,
+            "u_diagonal_steps",
+            preset.diagonal_steps().map_or(0, |n| n as i32),
+        );
         p.set_i32(gl, "u_search_steps", preset.search_steps() as i32);
         let corner = preset.corner_rounding();
         p.set_i32(gl, "u_corners", i32::from(corner.is_some()));
         p.set_f32(gl, "u_corner", corner.map_or(1.0, |c| c as f32 / 100.0));
         draw_fullscreen(gl, vao);
         unsafe {
-            for unit in (0..3).rev() {
+            for unit in (0..4).rev() {
                 gl.active_texture(glow::TEXTURE0 + unit);
                 gl.bind_texture(glow::TEXTURE_2D, None);
             }

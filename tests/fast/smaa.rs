@@ -9,7 +9,9 @@
 use crate::common;
 
 use deferred_msaa_lab::gl::live_objects;
-use deferred_msaa_lab::renderer::smaa_tables::{Crossing, orthogonal_area};
+use deferred_msaa_lab::renderer::smaa_tables::{
+    Crossing, DiagonalEnd, diagonal_area, orthogonal_area,
+};
 use deferred_msaa_lab::renderer::{
     AaMode, RenderOptions, Renderer, SmaaEdges, SmaaFilter, SmaaOptions, SmaaOutput, SmaaPreset,
 };
@@ -269,25 +271,132 @@ fn a_t_junction_splits_the_line_it_crosses() {
     });
 }
 
+/// The cells of the 45° boundary `y <= x` in a `W` × `W` image and the
+/// diagonal table's areas for each with a preset's diagonal steps: the run
+/// goes from (1, 1) (the image's side clamps (0, 0)'s left edge away, so
+/// the staircase goes on flatter there) to (W - 2, W - 2) (straight).
+fn rising_run_areas(steps: u32) -> Vec<(u32, f64, f64)> {
+    (1..W - 1)
+        .map(|i| {
+            let back = (i - 1).min(steps);
+            let forward = (W - 2 - i).min(steps);
+            // A walk cut short cannot see the end: straight.
+            let start = if i - 1 < steps {
+                DiagonalEnd::Flatter
+            } else {
+                DiagonalEnd::Straight
+            };
+            let (takes, given) = diagonal_area(start, DiagonalEnd::Straight, back, forward);
+            (i, takes, given)
+        })
+        .collect()
+}
+
 #[test]
-fn a_diagonal_takes_an_eighth_each_way() {
+fn a_diagonal_run_takes_its_areas_from_the_diagonal_table() {
     with_context(|gl| {
-        // A 45° boundary: the dark pixels on the diagonal have a left and a
-        // top edge each; each edge is a Z of one pixel (1/8 each way), and
-        // the blend, along one axis, leaves 7/8 and 1/8: the coverage of
-        // the line through the steps' midpoints.
         let img = shape(W, W, |x, y| y <= x);
-        let r = filter(gl, &img, SmaaPreset::High);
+        // Without diagonals each cell's two one-pixel edges are Z steps, an
+        // eighth each way, and the blend along one axis leaves 7/8 and 1/8.
+        let r = filter(gl, &img, SmaaPreset::Medium);
         for i in 1..W - 1 {
             assert_eq!(r.edges(i, i), (true, true), "diagonal at {i}");
-            let w = r.weights(i, i);
-            for (k, v) in w.iter().enumerate() {
-                assert_near(*v, 1.0 / 8.0, &format!("diagonal {i} channel {k}"));
+            for (k, v) in r.weights(i, i).iter().enumerate() {
+                assert_near(*v, 1.0 / 8.0, &format!("orthogonal {i} channel {k}"));
             }
             let dark = i32::from(r.value(i, i));
-            let light = i32::from(r.value(i - 1, i));
             assert!((dark - srgb_byte(1.0 / 8.0)).abs() <= 1, "{i}: {dark}");
-            assert!((light - srgb_byte(7.0 / 8.0)).abs() <= 1, "{i}: {light}");
+        }
+        // With them, the run's cells hold the table's areas across their top
+        // edges and none across their left ones.
+        let preset = SmaaPreset::High;
+        let steps = preset.diagonal_steps().expect("high walks diagonals");
+        let r = filter(gl, &img, preset);
+        let areas = rising_run_areas(steps);
+        for &(i, takes, given) in &areas {
+            let w = r.weights(i, i);
+            assert_near(w[0], takes, &format!("cell {i} takes"));
+            assert_near(w[1], given, &format!("cell {i} gives"));
+            assert_eq!(w[2..], [0, 0], "cell {i}");
+            // The blend mixes by the stored bytes (near black, one byte of
+            // area is several of sRGB).
+            let (t8, g8) = (f64::from(w[0]) / 255.0, f64::from(w[1]) / 255.0);
+            let dark = i32::from(r.value(i, i));
+            assert!((dark - srgb_byte(t8)).abs() <= 1, "cell {i}: {dark}");
+            let light = i32::from(r.value(i, i + 1));
+            assert!(
+                (light - srgb_byte(1.0 - g8)).abs() <= 1,
+                "above {i}: {light}"
+            );
+        }
+        // Far from the flatter end the line is back at the steps' midpoints.
+        let (_, takes, given) = areas[(W - 4) as usize];
+        assert!((takes - 0.125).abs() < 1e-9 && (given - 0.125).abs() < 1e-9);
+    });
+}
+
+#[test]
+fn a_falling_diagonal_is_the_rising_one_mirrored() {
+    with_context(|gl| {
+        // Mirrored top to bottom, every pass's result mirrors: the falling
+        // run's weights sit on the lower pixel of each cell, swapped.
+        let rising = shape(W, W, |x, y| y <= x);
+        let falling = shape(W, W, |x, y| W - 1 - y <= x);
+        for preset in [SmaaPreset::Medium, SmaaPreset::High, SmaaPreset::Ultra] {
+            let up = filter(gl, &rising, preset);
+            let down = filter(gl, &falling, preset);
+            for y in 0..W {
+                for x in 0..W {
+                    assert_eq!(
+                        up.value(x, y),
+                        down.value(x, W - 1 - y),
+                        "{preset:?} at ({x}, {y})"
+                    );
+                }
+            }
+            if let Some(steps) = preset.diagonal_steps() {
+                for (i, takes, given) in rising_run_areas(steps) {
+                    let lower = down.weights(i, W - 2 - i);
+                    assert_near(lower[0], given, &format!("{preset:?} lower {i}"));
+                    assert_near(lower[1], takes, &format!("{preset:?} lower {i}"));
+                    assert_eq!(down.weights(i, W - 1 - i)[2..], [0, 0]);
+                }
+            }
+        }
+    });
+}
+
+/// A line a little steeper or flatter than 45° is staircases of
+/// one-pixel steps with a longer step now and then: with diagonal runs the
+/// filtered image comes nearer its exact coverage than with each step
+/// weighed alone.
+#[test]
+fn diagonal_runs_bring_near_diagonal_lines_nearer_their_coverage() {
+    with_context(|gl| {
+        let (w, h) = (48, 48);
+        for (slope, c) in [(0.85, 4.3), (1.2, -3.6), (-0.85, 44.2), (-1.2, 51.7)] {
+            let dark = |x: u32, y: u32| f64::from(y) + 0.5 < slope * (f64::from(x) + 0.5) + c;
+            let img = shape(w, h, dark);
+            let mean_error = |preset| {
+                let r = filter(gl, &img, preset);
+                let (mut err, mut n) = (0.0, 0);
+                for y in 4..h - 4 {
+                    for x in 4..w - 4 {
+                        let cover = coverage(x, y, slope, c);
+                        if cover <= 0.0 || cover >= 1.0 {
+                            continue;
+                        }
+                        err += (to_linear(r.value(x, y)) - (1.0 - cover)).abs();
+                        n += 1;
+                    }
+                }
+                err / f64::from(n)
+            };
+            // Medium and high differ in search steps too; these lines'
+            // horizontal and vertical runs are a few pixels long, within both.
+            let (without, with) = (mean_error(SmaaPreset::Medium), mean_error(SmaaPreset::High));
+            eprintln!("slope {slope}: mean error without diagonals {without:.4}, with {with:.4}");
+            assert!(with < without, "slope {slope}: {with} against {without}");
         }
     });
 }
