@@ -17,15 +17,16 @@
 //!    search table), read the crossing edges at the ends, and look the
 //!    areas up for that pattern and those distances (the area table);
 //!    where two boundaries meet at a real corner the smoothing is scaled
-//!    down (corner rounding) — into an RGBA8 target;
+//!    down (corner rounding); a run of one-pixel steps along a diagonal is
+//!    weighed as one line (the diagonal table) — into an RGBA8 target;
 //! 3. **neighbourhood blending** ([`super::smaa_blend`], `smaa_blend.frag`):
 //!    each pixel mixes in its neighbours across the edges by those areas, in
 //!    linear light, along the axis where it takes most, into the final
 //!    RGBA8 image. A pixel with no weight is copied bit for bit.
 //!
 //! The tables come from [`super::smaa_tables`], computed at set-up and
-//! uploaded as linear UNORM textures (RG8 and R8; an sRGB upload would bend
-//! every area).
+//! uploaded as linear UNORM textures (RG8, RG8 and R8; an sRGB upload
+//! would bend every area).
 
 use super::smaa_blend::SmaaBlendPass;
 use super::smaa_edges::SmaaEdgesPass;

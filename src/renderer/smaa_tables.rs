@@ -1,6 +1,6 @@
-//! The two look-up tables of SMAA's blending-weight pass, computed by the
-//! crate at set-up (a few hundred microseconds) rather than shipped as
-//! image files: the area table and the search table.
+//! The look-up tables of SMAA's blending-weight pass, computed by the crate
+//! at set-up rather than shipped as image files: the area table, the
+//! diagonal table and the search table.
 //!
 //! # The area table
 //!
@@ -29,6 +29,15 @@
 //! edge, `.g` what the pixel across takes from p. A horizontal edge starts
 //! at its left end; a vertical edge uses the same table with its top end as
 //! the start and the pixel right of the edge as p.
+//!
+//! # The diagonal table
+//!
+//! A run of one-pixel steps along a diagonal is weighed as one line: see
+//! [`DiagonalEnd`] for how the line is taken and [`diagonal_area`] for what
+//! each cell gets. RG8 (linear UNORM), [`DIAGONAL_WIDTH`] ×
+//! [`DIAGONAL_HEIGHT`]: 3 × 3 cells, one per pair of ends (cell column the
+//! start's, row the end's, in [`DiagonalEnd`] order), each with the cells
+//! before the pixel along x and after it along y.
 //!
 //! # The search table
 //!
