@@ -7,7 +7,7 @@
 //!
 //! ```sh
 //! cargo run --release --example viewer -- [SCENE] [--size 960x540] [--samples N]
-//!     [--method none|average|front|median|back|taa] [--fxaa]
+//!     [--method none|average|front|median|back|taa] [--fxaa | --smaa]
 //!     [--frames N --screenshot FILE.png] [--keys KEYS]
 //! ```
 //! `SCENE` is `builtin:NAME` (default `builtin:greebles`) or a `.gltf`/`.glb` path.
@@ -19,7 +19,8 @@
 //! | `M` / `Shift+M` | next / previous method: none, average, front, median, back, taa |
 //! | `0` … `5` | none, average, front, median, back, taa (temporal anti-aliasing: orbit to see its lag and smear) |
 //! | `N` | next sample count the driver really offers for every G-buffer format |
-//! | `F` | FXAA on / off |
+//! | `F` | FXAA on / off (turns SMAA off) |
+//! | `S` | SMAA 1x (preset high) on / off (turns FXAA off) |
 //! | `V` / `Shift+V` | next / previous view: final image, each G-buffer attachment, depth, complex pixels |
 //! | arrows (or `H` `J` `K` `L`), mouse drag | orbit the camera |
 //! | `+` / `-`, mouse wheel | zoom |
@@ -45,7 +46,7 @@ use deferred_msaa_lab::gl::{
     Capabilities, FullscreenPass, Made, ShaderSource, VertexArray, check_error,
     draw_fullscreen_triangle,
 };
-use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
+use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer, SmaaOptions};
 use deferred_msaa_lab::resolve::{
     COMPLEX_GLSL, COMPLEX_GLSL_NAME, DepthProjection, KeySource, ResolveSlot,
 };
@@ -150,6 +151,7 @@ struct Args {
     samples: u32,
     method: usize,
     fxaa: bool,
+    smaa: bool,
     frames: Option<u32>,
     screenshot: Option<PathBuf>,
     keys: Vec<char>,
@@ -172,8 +174,11 @@ struct Cli {
     #[arg(long, default_value = "median", value_parser = METHODS)]
     method: String,
     /// Start with FXAA on.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "smaa")]
     fxaa: bool,
+    /// Start with SMAA 1x on.
+    #[arg(long)]
+    smaa: bool,
     /// Render this many frames, then quit (1 with --screenshot alone).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     frames: Option<u32>,
@@ -195,6 +200,7 @@ impl From<Cli> for Args {
             // clap admitted only the methods' names.
             method: METHODS.iter().position(|m| *m == cli.method).unwrap_or(3),
             fxaa: cli.fxaa,
+            smaa: cli.smaa,
             frames: cli.frames.or_else(|| cli.screenshot.as_ref().map(|_| 1)),
             screenshot: cli.screenshot,
             keys: cli.keys.chars().collect(),
@@ -210,7 +216,7 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
 }
 
 /// The keys, for `--help` and `?`.
-const KEYS: &str = "keys: M/Shift+M method, 0-5 none/average/front/median/back/taa, N sample count, F FXAA, \
+const KEYS: &str = "keys: M/Shift+M method, 0-5 none/average/front/median/back/taa, N sample count, F FXAA, S SMAA, \
 V/Shift+V view, arrows/HJKL or drag orbit, +/- or wheel zoom, R reset camera, P screenshot, ? keys, Esc/Q quit";
 
 fn print_keys() {
@@ -224,6 +230,7 @@ enum Action {
     StepMethod(isize),
     NextSamples,
     ToggleFxaa,
+    ToggleSmaa,
     StepView(isize),
     Orbit(f32, f32),
     Zoom(f32),
@@ -241,6 +248,7 @@ fn action_for_char(c: char) -> Option<Action> {
         '0'..='5' => Action::Method(c as usize - '0' as usize),
         'n' | 'N' => Action::NextSamples,
         'f' | 'F' => Action::ToggleFxaa,
+        's' | 'S' => Action::ToggleSmaa,
         'v' => Action::StepView(1),
         'V' => Action::StepView(-1),
         'h' | 'H' => Action::Orbit(-STEP, 0.0),
@@ -546,6 +554,7 @@ impl Viewer {
             samples: args.samples,
             aa: aa_mode(METHODS[args.method]),
             fxaa: args.fxaa,
+            smaa: args.smaa.then(SmaaOptions::default),
             ..RenderOptions::default()
         };
         let sample_counts = sample_counts(&gl, &options);
@@ -654,7 +663,18 @@ impl Viewer {
                     options.samples = first;
                 }
             }
-            Action::ToggleFxaa => options.fxaa = !options.fxaa,
+            // One post filter at a time: the renderer refuses both.
+            Action::ToggleFxaa => {
+                options.fxaa = !options.fxaa;
+                options.smaa = None;
+            }
+            Action::ToggleSmaa => {
+                options.smaa = match options.smaa {
+                    Some(_) => None,
+                    None => Some(SmaaOptions::default()),
+                };
+                options.fxaa = false;
+            }
             Action::StepView(step) => {
                 let views = self.views();
                 let i = views.iter().position(|v| *v == self.view).unwrap_or(0) as isize;
@@ -818,7 +838,13 @@ impl Viewer {
             1 => String::new(),
             n => format!(" {n}x"),
         };
-        let fxaa = if self.options.fxaa { " + FXAA" } else { "" };
+        let fxaa = if self.options.fxaa {
+            " + FXAA"
+        } else if self.options.smaa.is_some() {
+            " + SMAA"
+        } else {
+            ""
+        };
         format!(
             "deferred-msaa — {} — {method}{samples}{fxaa} — view: {} — {:.1} ms",
             self.scene.name,

@@ -1,6 +1,6 @@
 //! The second layer's table: per scene and light setting, what
-//! `median:layers=2` measures against `none`, `average`, `median` and
-//! `per-sample` in the same run (FLIP, halo pixels, the bar width error, the
+//! `median:layers=2` measures against `none`, `average`, `median`,
+//! `per-sample` and the post filters FXAA and SMAA in the same run (FLIP, halo pixels, the bar width error, the
 //! AA time), from the bench's reports. `scripts/docs` writes it into the
 //! README with `cargo run --release --example layers_table`.
 
@@ -22,6 +22,8 @@ pub const TABLE_METHODS: &[&str] = &[
     "per-sample",
     "none+fxaa",
     "median:layers=2+fxaa",
+    "smaa",
+    "median+smaa",
 ];
 
 /// Load a `report.json`.
@@ -55,17 +57,17 @@ fn cell(v: Option<f64>, digits: usize) -> String {
 
 /// Two Markdown tables over `reports` (each a bench run, e.g. the scenes'
 /// own lights and `--lights 48`): quality (FLIP of each method, the
-/// two-layer ratio to `per-sample`, FXAA, halo pixels, bar width) and cost
+/// two-layer ratio to `per-sample`, FXAA, SMAA, halo pixels, bar width) and cost
 /// (AA time against `per-sample`'s, the second layer's own time and bytes).
 pub fn layers_table(reports: &[&Report]) -> String {
     let mut md = String::new();
     let _ = writeln!(
         md,
-        "| scene | lights | FLIP none | average | median | **median:layers=2** | per-sample | layers=2 / per-sample | none+fxaa | layers=2+fxaa | halo px median | halo px layers=2 | bar width px median | bar width px layers=2 |"
+        "| scene | lights | FLIP none | average | median | **median:layers=2** | per-sample | layers=2 / per-sample | none+fxaa | layers=2+fxaa | smaa | median+smaa | halo px median | halo px layers=2 | bar width px median | bar width px layers=2 |"
     );
     let _ = writeln!(
         md,
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     for report in reports {
         for scene in report.scenes() {
@@ -78,7 +80,7 @@ pub fn layers_table(reports: &[&Report]) -> String {
             let lights = get(TWO_LAYERS).or(get("none")).map_or(0, |r| r.lights);
             let _ = writeln!(
                 md,
-                "| `{}` | {lights} | {} | {} | {} | **{}** | {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| `{}` | {lights} | {} | {} | {} | **{}** | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 scene_name(scene),
                 cell(flip("none"), 4),
                 cell(flip("average"), 4),
@@ -88,6 +90,8 @@ pub fn layers_table(reports: &[&Report]) -> String {
                 cell(ratio, 2),
                 cell(flip("none+fxaa"), 4),
                 cell(flip("median:layers=2+fxaa"), 4),
+                cell(flip("smaa"), 4),
+                cell(flip("median+smaa"), 4),
                 cell(get("median").map(|r| r.halo_pixels as f64), 0),
                 cell(get(TWO_LAYERS).map(|r| r.halo_pixels as f64), 0),
                 cell(get("median").and_then(|r| r.bar_width_error_px), 3),

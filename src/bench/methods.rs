@@ -1,6 +1,7 @@
 //! The entries of a bench method list (`--methods`).
 //!
-//! An entry is a method name, options after colons, and optionally `+fxaa`:
+//! An entry is a method name, options after colons, and optionally `+fxaa`
+//! or `+smaa`:
 //!
 //! | entry                 | meaning |
 //! |-----------------------|---------|
@@ -10,6 +11,7 @@
 //! | `per-sample`          | lighting evaluated for every sample (needs renderer support) |
 //! | `complex`             | per-sample lighting only on complex pixels (needs renderer support) |
 //! | `gbaa`                | geometry-buffer anti-aliasing: a single-sample G-buffer plus edge distances, blended across triangle edges after the tonemap |
+//! | `smaa`                | SMAA 1x after the tonemap of a single-sample G-buffer (`none` with `+smaa`); `:preset=low\|medium\|high\|ultra` (default high), `:edges=luma\|color\|depth` (default luma) |
 //! | `sparse`              | the multisampled G-buffer as per-pixel linked lists of blocks, one per visible triangle, lit once each (OpenGL 4.3 and post-depth coverage); `:pool=N` sets the pool to N blocks |
 //! | `taa`                 | temporal anti-aliasing: one sample per pixel, the projection jittered per frame, the history reprojected, clipped to the neighbourhood and blended; `:alpha=F` (the new frame's weight, default 0.1) and `:phases=N` (Halton jitter phases, default 8). A still frame is measured after the method's warm-up frames ([`AaMode::warmup_frames`]) |
 //!
@@ -22,14 +24,16 @@
 //! same lighting pass and mixed in by coverage; front, median and back) and
 //! `:normal-threshold=F` (with two layers: the cosine below which two close
 //! samples are different surfaces, default 0.95). `+fxaa` after any entry runs the crate's FXAA
-//! after tonemapping: `median:hard+fxaa`, `none+fxaa`. `:full` after any
+//! after tonemapping: `median:hard+fxaa`, `none+fxaa`; `+smaa` runs SMAA 1x
+//! instead, with its options after colons: `median+smaa`,
+//! `median:layers=2+smaa:preset=ultra`. `:full` after any
 //! method renders with every attachment of the layout instead of the
 //! scene-adaptive plan (see [`crate::renderer::plan`]): `median` against
 //! `median:full` shows what the plan saves (its `gbuffer_bytes`) and costs.
 //!
 //! A run's `method` field in the report is the entry exactly as written.
 
-use crate::renderer::{AaMode, technique};
+use crate::renderer::{AaMode, SmaaOptions, technique};
 use crate::{Error, Result};
 use std::fmt;
 use std::str::FromStr;
@@ -47,6 +51,8 @@ pub const BASE_DEFAULT_METHODS: &[&str] = &[
     "median:nofast",
     "median+fxaa",
     "gbaa",
+    "smaa",
+    "median+smaa",
 ];
 
 /// Default entries that need more than the others.
@@ -64,9 +70,10 @@ fn accepted() -> String {
         .filter_map(|k| k.options_help())
         .collect();
     format!(
-        "accepted: {}; options after colons ({}); :full (the full G-buffer layout) and +fxaa after any entry",
+        "accepted: {}, smaa; options after colons ({}; {}); :full (the full G-buffer layout) and +fxaa or +smaa after any entry",
         AaMode::method_names().join(", "),
-        options.join("; ")
+        options.join("; "),
+        SmaaOptions::HELP
     )
 }
 
@@ -82,7 +89,7 @@ pub(crate) fn adds_lighting(aa: &AaMode) -> bool {
     technique::kind_of(aa).adds_lighting()
 }
 
-/// One entry of a method list: the method, FXAA, and the entry as written.
+/// One entry of a method list: the method, FXAA or SMAA, and the entry as written.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MethodEntry {
     /// The entry exactly as written (the report's `method` field).
@@ -91,6 +98,8 @@ pub struct MethodEntry {
     pub method: AaMode,
     /// Whether FXAA runs after tonemapping.
     pub fxaa: bool,
+    /// SMAA after tonemapping, with its options (`smaa`, `+smaa`).
+    pub smaa: Option<SmaaOptions>,
 }
 
 impl MethodEntry {
@@ -121,12 +130,20 @@ impl FromStr for MethodEntry {
                 accepted()
             )));
         }
-        let (body, fxaa) = match label.split_once('+') {
-            None => (label, false),
-            Some((body, "fxaa")) => (body, true),
+        let (body, fxaa, mut smaa) = match label.split_once('+') {
+            None => (label, false, None),
+            Some((body, "fxaa")) => (body, true, None),
+            Some((body, post)) if post == "smaa" || post.starts_with("smaa:") => {
+                let options: Vec<&str> = post.split(':').skip(1).collect();
+                (
+                    body,
+                    false,
+                    Some(SmaaOptions::parse_options(&options, label)?),
+                )
+            }
             Some((_, other)) => {
                 return Err(Error::invalid(format!(
-                    "method `{label}`: unknown `+{other}` (only `+fxaa`, at the end, is accepted); {}",
+                    "method `{label}`: unknown `+{other}` (only `+fxaa` or `+smaa`, at the end, is accepted); {}",
                     accepted()
                 )));
             }
@@ -135,13 +152,26 @@ impl FromStr for MethodEntry {
         let name = parts.next().unwrap_or("");
         // `:full` is about the layout, not the method: any entry takes it.
         let options: Vec<&str> = parts.filter(|o| *o != "full").collect();
-        let kind = technique::kind_named(name)
-            .ok_or_else(|| Error::invalid(format!("unknown method `{label}`; {}", accepted())))?;
-        let method = kind.parse(name, &options, label)?;
+        let method = if name == "smaa" {
+            // `smaa` is `none` with SMAA after the tonemap.
+            if smaa.is_some() || fxaa {
+                return Err(Error::invalid(format!(
+                    "method `{label}`: `smaa` is already a post filter; give no `+` after it"
+                )));
+            }
+            smaa = Some(SmaaOptions::parse_options(&options, label)?);
+            AaMode::None
+        } else {
+            let kind = technique::kind_named(name).ok_or_else(|| {
+                Error::invalid(format!("unknown method `{label}`; {}", accepted()))
+            })?;
+            kind.parse(name, &options, label)?
+        };
         Ok(MethodEntry {
             label: label.to_string(),
             method,
             fxaa,
+            smaa,
         })
     }
 }
@@ -224,6 +254,32 @@ mod tests {
     }
 
     #[test]
+    fn smaa_is_a_method_and_a_post_filter() {
+        use crate::renderer::{SmaaEdges, SmaaPreset};
+        let e: MethodEntry = "smaa".parse().unwrap();
+        assert_eq!((e.method, e.fxaa), (AaMode::None, false));
+        assert_eq!(e.smaa, Some(SmaaOptions::default()));
+        let e: MethodEntry = "smaa:preset=ultra:edges=depth".parse().unwrap();
+        let o = e.smaa.unwrap();
+        assert_eq!((o.preset, o.edges), (SmaaPreset::Ultra, SmaaEdges::Depth));
+        let e: MethodEntry = "median:layers=2+smaa:preset=low".parse().unwrap();
+        assert!(matches!(e.method, AaMode::Resolve(s) if s.layers == 2));
+        assert_eq!(e.smaa.map(|o| o.preset), Some(SmaaPreset::Low));
+        let e: MethodEntry = "median+smaa".parse().unwrap();
+        assert_eq!(e.smaa, Some(SmaaOptions::default()));
+        assert!(!e.fxaa);
+        let err = "smaa:preset=extreme"
+            .parse::<MethodEntry>()
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("extreme") && err.contains("ultra"), "{err}");
+        let d = default_methods();
+        for want in ["smaa", "median+smaa"] {
+            assert!(d.iter().any(|e| e.label == want), "{want}");
+        }
+    }
+
+    #[test]
     fn two_layers_are_a_resolve_option() {
         let e: MethodEntry = "median:layers=2:normal-threshold=0.9+fxaa".parse().unwrap();
         let AaMode::Resolve(settings) = e.method else {
@@ -243,8 +299,13 @@ mod tests {
             "median:c=x",
             "median:c=2:c_in=3",
             "none:hard",
-            "median+smaa",
+            "median+taa",
             "median+fxaa:hard",
+            "median+smaa:preset=extreme",
+            "smaa:preset=extreme",
+            "smaa:hard",
+            "smaa+fxaa",
+            "smaa+smaa",
             "median:layers=3",
             "average:layers=2",
             "median:normal-threshold=2",

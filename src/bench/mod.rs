@@ -553,11 +553,11 @@ struct Pool {
     renderers: Vec<(PoolKey, Renderer)>,
 }
 
-/// A pool slot's method class, FXAA, requested samples and adaptive layout.
+/// A pool slot's method class, FXAA, SMAA, requested samples and adaptive layout.
 /// For a method whose frames build on the ones before (`taa`), its entry
 /// too: it gets a renderer of its own, whose history no other entry's
 /// `set_options` resets between its frames.
-type PoolKey = (&'static str, bool, u32, bool, Option<String>);
+type PoolKey = (&'static str, bool, bool, u32, bool, Option<String>);
 
 impl Pool {
     fn slot(
@@ -803,6 +803,7 @@ fn time_scene(
         label: "none".into(),
         method: AaMode::None,
         fxaa: false,
+        smaa: None,
     });
     let mut jobs: Vec<Job> = Vec::new();
     let entries = config
@@ -818,11 +819,13 @@ fn time_scene(
         };
         for requested in counts {
             let mut options = render_options(config, entry.method, entry.fxaa, requested);
+            options.smaa = entry.smaa;
             // `:full`: every attachment of the layout, not the plan's.
             options.adaptive = !entry.full_layout();
             let key = (
                 entry.method.technique_name(),
                 entry.fxaa,
+                entry.smaa.is_some(),
                 requested,
                 options.adaptive,
                 (entry.method.warmup_frames() > 0).then(|| entry.label.clone()),
@@ -1032,6 +1035,7 @@ fn time_scene(
                         + t.second_layer_ms
                         + t.fxaa_ms
                         + t.post_ms
+                        + t.smaa_ms
                         + extra
                         + extra_geometry
                 })
@@ -1045,6 +1049,7 @@ fn time_scene(
             scene: spec.to_string(),
             method: job.entry.label.clone(),
             fxaa: job.entry.fxaa,
+            smaa: job.entry.smaa.is_some(),
             samples: job.samples,
             width: config.width,
             height: config.height,
@@ -1057,6 +1062,10 @@ fn time_scene(
             gbuffer_bytes: job.gbuffer_bytes,
             ms_resolve: median(job.frames.iter().map(|t| t.resolve_ms).collect()),
             ms_fxaa: median(job.frames.iter().map(|t| t.fxaa_ms).collect()),
+            ms_smaa: median(job.frames.iter().map(|t| t.smaa_ms).collect()),
+            ms_smaa_edges: median(job.frames.iter().map(|t| t.smaa_edges_ms).collect()),
+            ms_smaa_weights: median(job.frames.iter().map(|t| t.smaa_weights_ms).collect()),
+            ms_smaa_blend: median(job.frames.iter().map(|t| t.smaa_blend_ms).collect()),
             ms_lighting: median(job.frames.iter().map(|t| t.lighting_ms).collect()),
             ms_second_layer: median(job.frames.iter().map(|t| t.second_layer_ms).collect()),
             flip_p95: flip.p95 as f64,

@@ -155,6 +155,9 @@ pub struct Run {
     pub method: String,
     /// Whether FXAA ran.
     pub fxaa: bool,
+    /// Whether SMAA ran (`smaa`, `+smaa`).
+    #[serde(default)]
+    pub smaa: bool,
     /// Real samples per pixel of the G-buffer pass (1 for `none`).
     pub samples: u32,
     /// Width in pixels.
@@ -163,7 +166,7 @@ pub struct Run {
     pub height: u32,
     /// Median frame time over the timed frames, in milliseconds.
     pub ms_total: f64,
-    /// Median time the anti-aliasing adds: resolve + FXAA (+ lighting beyond
+    /// Median time the anti-aliasing adds: resolve + FXAA or SMAA (+ lighting beyond
     /// `none`'s for per-sample methods), in milliseconds.
     pub ms_aa: f64,
     /// How times were measured: `gl-time-elapsed` or `finish-wall-clock`.
@@ -181,6 +184,18 @@ pub struct Run {
     pub ms_resolve: f64,
     /// Median FXAA time in ms (extra key).
     pub ms_fxaa: f64,
+    /// Median time of SMAA's three passes in ms, 0 without SMAA (extra key).
+    #[serde(default)]
+    pub ms_smaa: f64,
+    /// Median time of SMAA's edge pass in ms (extra key).
+    #[serde(default)]
+    pub ms_smaa_edges: f64,
+    /// Median time of SMAA's blending-weight pass in ms (extra key).
+    #[serde(default)]
+    pub ms_smaa_weights: f64,
+    /// Median time of SMAA's neighbourhood-blending pass in ms (extra key).
+    #[serde(default)]
+    pub ms_smaa_blend: f64,
     /// Median lighting time in ms (extra key).
     pub ms_lighting: f64,
     /// Median time of the resolve's second layer in ms, 0 with one layer:
@@ -501,6 +516,9 @@ impl Report {
             if let Some(line) = lighting_orderings(&runs) {
                 let _ = writeln!(md, "{line}\n");
             }
+            if let Some(line) = smaa_standing(&runs) {
+                let _ = writeln!(md, "{line}\n");
+            }
             if let Some(table) = motion_table(&runs, self.motion.as_deref()) {
                 let _ = writeln!(md, "{table}");
             }
@@ -536,6 +554,44 @@ impl Report {
         std::fs::write(&md, self.to_markdown()).map_err(|e| Error::io(&md, e))?;
         Ok(())
     }
+}
+
+/// Where `median:layers=2` stands against SMAA on one scene (the post
+/// filter engines ship, alone as `smaa` and after the resolve as
+/// `median+smaa`, FreeSpace Open's pipeline), in FLIP and in frame time,
+/// and what SMAA's three passes cost: `None` without a `smaa` or
+/// `median+smaa` run.
+pub fn smaa_standing(runs: &[&Run]) -> Option<String> {
+    let find = |method: &str| runs.iter().find(|r| r.method == method);
+    let smaa_runs: Vec<&&Run> = ["smaa", "median+smaa"]
+        .iter()
+        .filter_map(|m| find(m))
+        .collect();
+    if smaa_runs.is_empty() {
+        return None;
+    }
+    let mut parts = Vec::new();
+    if let Some(layers) = find("median:layers=2") {
+        for other in &smaa_runs {
+            parts.push(format!(
+                "`median:layers=2` against `{}`: FLIP {:.4} against {:.4} ({:.2} ×), {:.2} ms against {:.2} ms ({:.2} ×)",
+                other.method,
+                layers.flip_mean,
+                other.flip_mean,
+                layers.flip_mean / other.flip_mean.max(f64::MIN_POSITIVE),
+                layers.ms_total,
+                other.ms_total,
+                layers.ms_total / other.ms_total.max(f64::MIN_POSITIVE),
+            ));
+        }
+    }
+    for run in &smaa_runs {
+        parts.push(format!(
+            "SMAA's passes in `{}`: edges {:.2} ms, blending weights {:.2} ms, neighbourhood blending {:.2} ms",
+            run.method, run.ms_smaa_edges, run.ms_smaa_weights, run.ms_smaa_blend
+        ));
+    }
+    Some(format!("{}.", parts.join("; ")))
 }
 
 /// The orderings of one scene's lighting times the bench is about, and
@@ -610,6 +666,7 @@ pub(crate) mod tests {
             scene: "builtin:halo".into(),
             method: method.into(),
             fxaa: false,
+            smaa: false,
             samples: 4,
             width: 96,
             height: 54,
@@ -622,6 +679,10 @@ pub(crate) mod tests {
             gbuffer_bytes: 1 << 20,
             ms_resolve: 0.1,
             ms_fxaa: 0.0,
+            ms_smaa: 0.0,
+            ms_smaa_edges: 0.0,
+            ms_smaa_weights: 0.0,
+            ms_smaa_blend: 0.0,
             ms_lighting,
             ms_second_layer: 0.0,
             flip_p95: 0.2,
@@ -748,6 +809,31 @@ pub(crate) mod tests {
                 "{row}"
             );
         }
+    }
+
+    #[test]
+    fn the_smaa_line_sets_two_layers_against_smaa_in_error_and_time() {
+        let mut layers = run("median:layers=2", 1.0);
+        layers.flip_mean = 0.01;
+        layers.ms_total = 30.0;
+        let mut smaa = run("smaa", 1.0);
+        smaa.flip_mean = 0.02;
+        smaa.ms_total = 20.0;
+        smaa.ms_smaa_weights = 1.5;
+        let runs = [&layers, &smaa];
+        let line = smaa_standing(&runs).expect("a line");
+        assert!(
+            line.contains("FLIP 0.0100 against 0.0200 (0.50 ×)"),
+            "{line}"
+        );
+        assert!(
+            line.contains("30.00 ms against 20.00 ms (1.50 ×)"),
+            "{line}"
+        );
+        assert!(line.contains("blending weights 1.50 ms"), "{line}");
+        assert!(smaa_standing(&[&layers]).is_none());
+        let md = report(vec![layers.clone(), smaa.clone()]).to_markdown();
+        assert!(md.contains("`median:layers=2` against `smaa`"), "{md}");
     }
 
     #[test]

@@ -25,10 +25,11 @@ pub struct BenchCmd {
     samples: Vec<u32>,
     /// Comma-separated method entries, e.g. `none,median:hard,median+fxaa`
     /// (default: none,none+fxaa,average,front,median,back,median:hard,
-    /// median:nofast,median+fxaa,gbaa, then per-sample, complex and sparse
+    /// median:nofast,median+fxaa,gbaa,smaa,median+smaa, then per-sample, complex and sparse
     /// where the context has what they need). Options: `:hard`, `:c=F`,
     /// `:c_in=F`, `:nofast`, `:full` (the whole layout, not the plan's),
-    /// `sparse:pool=N`; `+fxaa` after any entry.
+    /// `sparse:pool=N`, `smaa:preset=P:edges=E`; `+fxaa` or `+smaa` (with
+    /// the same options) after any entry.
     #[arg(long, value_name = "LIST")]
     methods: Option<String>,
     /// Point lights to add around each scene.

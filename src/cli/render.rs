@@ -7,7 +7,7 @@ use crate::gl::TextureRef;
 use crate::readback::{Readback, SampleImage};
 use crate::renderer::plan::{Plan, PlanContext};
 use crate::renderer::technique::{self, Gbaa};
-use crate::renderer::{AaMode, DepthMode, RenderOptions, Renderer, SparseOptions};
+use crate::renderer::{AaMode, DepthMode, RenderOptions, Renderer, SmaaOptions, SparseOptions};
 use crate::resolve::{Region, ResolveMethod, ResolveSettings, Selection, Window};
 use crate::scene::{Aabb, CameraPath, MotionSpec, Scene};
 use crate::{Error, Result};
@@ -27,7 +27,8 @@ pub struct RenderArgs {
     /// Samples per pixel (the driver's real count is used and reported).
     #[arg(long, default_value_t = 4)]
     samples: u32,
-    /// none, average, front, median, back, per-sample, complex, gbaa or sparse.
+    /// none, average, front, median, back, per-sample, complex, gbaa,
+    /// sparse or smaa (`none` with --smaa).
     #[arg(long, default_value = "median")]
     method: String,
     /// Closeness window: hard or smooth.
@@ -59,6 +60,11 @@ pub struct RenderArgs {
     /// Apply the crate's FXAA after tonemapping.
     #[arg(long)]
     fxaa: bool,
+    /// Apply SMAA 1x after tonemapping, with options `preset=low|medium|high|ultra`
+    /// (default high) and `edges=luma|color|depth` (default luma), joined by
+    /// colons: `--smaa`, `--smaa preset=ultra:edges=color`.
+    #[arg(long, value_name = "OPTIONS", num_args = 0..=1, default_missing_value = "", value_parser = parse_smaa)]
+    smaa: Option<SmaaOptions>,
     /// Use FreeSpace Open's G-buffer layout (FP16 position, D24) instead of the recommended one.
     #[arg(long)]
     fso_layout: bool,
@@ -117,6 +123,10 @@ pub struct DumpCmd {
     out: PathBuf,
 }
 
+fn parse_smaa(s: &str) -> std::result::Result<SmaaOptions, String> {
+    s.parse().map_err(|e: Error| e.to_string())
+}
+
 fn parse_motion(s: &str) -> std::result::Result<MotionSpec, String> {
     s.parse().map_err(|e: Error| e.to_string())
 }
@@ -149,10 +159,17 @@ fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
 
 impl RenderArgs {
     fn options(&self) -> Result<RenderOptions> {
-        let known = AaMode::method_names().contains(&self.method.as_str());
-        let aa: AaMode = self.method.parse().ok().filter(|_| known).ok_or_else(|| {
+        // `smaa` is `none` with SMAA after the tonemap.
+        let smaa_method = self.method == "smaa";
+        let smaa = match (smaa_method, self.smaa) {
+            (true, None) => Some(SmaaOptions::default()),
+            (_, given) => given,
+        };
+        let method = if smaa_method { "none" } else { &self.method };
+        let known = AaMode::method_names().contains(&method);
+        let aa: AaMode = method.parse().ok().filter(|_| known).ok_or_else(|| {
             Error::invalid(format!(
-                "unknown method `{}`; available: {}",
+                "unknown method `{}`; available: {}, smaa",
                 self.method,
                 AaMode::method_names().join(", ")
             ))
@@ -227,6 +244,7 @@ impl RenderArgs {
             samples: self.samples,
             aa,
             fxaa: self.fxaa,
+            smaa,
             layout: if self.fso_layout {
                 GBufferLayout::freespace_open()
             } else {

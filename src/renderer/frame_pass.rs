@@ -34,6 +34,8 @@ pub enum Pass {
     Tonemap,
     /// The FXAA post filter.
     Fxaa,
+    /// SMAA 1x: its edge, blending-weight and neighbourhood-blending passes.
+    Smaa,
     /// Method `gbaa`: the post pass that blends across the edges the
     /// G-buffer pass recorded (the geometry pass then also runs a geometry
     /// shader and writes the edge buffers).
@@ -67,6 +69,7 @@ impl Pass {
             Pass::Transparent => "transparent",
             Pass::Tonemap => "tonemap",
             Pass::Fxaa => "fxaa",
+            Pass::Smaa => "smaa",
             Pass::GbaaPost => "gbaa",
             Pass::TaaResolve => "taa",
             Pass::SparseDepth => "sparse-depth",

@@ -40,7 +40,10 @@
 //! 7. **Transparent objects** (`transparent.frag`), forward, single-sampled,
 //!    alpha-blended, depth-tested against the resolved depth without writing it.
 //! 8. **Tonemap** (`tonemap.frag`) into an RGBA8 sRGB-encoded image.
-//! 9. **FXAA** (`fxaa.frag`), optional, into a second RGBA8 image.
+//! 9. **FXAA** (`fxaa.frag`), optional, into a second RGBA8 image; or
+//!    **SMAA 1x** ([`SmaaOptions`]: `smaa_edges.frag`, `smaa_weights.frag`,
+//!    `smaa_blend.frag`), optional, through its edge and weight targets
+//!    into another.
 //!
 //! With [`AaMode::Sparse`] steps 2 (the copy) to 4 become a multisampled
 //! depth pre-pass, a set-up pass and a G-buffer pass that writes per-pixel
@@ -83,6 +86,11 @@ mod pass;
 pub mod plan;
 mod second_layer_mask;
 mod slow_path;
+mod smaa;
+mod smaa_blend;
+mod smaa_edges;
+pub mod smaa_tables;
+mod smaa_weights;
 mod sparse;
 mod taa;
 mod targets;
@@ -115,6 +123,8 @@ use lighting_per_sample::PerSampleLightingPass;
 use mesh::GpuScene;
 pub use options::{AaMode, RenderOptions};
 use plan::{Pass, Plan, PlanContext, SceneNeeds};
+use smaa::{DepthInput, SmaaPasses, SmaaTargets};
+pub use smaa::{SmaaEdges, SmaaFilter, SmaaOptions, SmaaOutput, SmaaPreset};
 pub use sparse::{
     DEFAULT_POOL_BLOCKS_PER_PIXEL, MASK_OVERFLOW, MASK_SINGLE, MAX_SPARSE_SAMPLES, SparseMemory,
     SparseOptions, SparseStats,
@@ -228,6 +238,14 @@ pub struct FrameTimings {
     /// blend across edges (its G-buffer pass is in `geometry_ms`) or
     /// [`AaMode::Taa`]'s resolve; 0 with other modes.
     pub post_ms: f64,
+    /// SMAA's three passes (0 when off): the sum of the next three.
+    pub smaa_ms: f64,
+    /// SMAA's edge pass.
+    pub smaa_edges_ms: f64,
+    /// SMAA's blending-weight pass.
+    pub smaa_weights_ms: f64,
+    /// SMAA's neighbourhood-blending pass.
+    pub smaa_blend_ms: f64,
     /// How the times were measured.
     pub timer: TimerKind,
 }
@@ -245,6 +263,8 @@ struct Passes {
     transparent: TransparentPass,
     tonemap: TonemapPass,
     fxaa: FxaaPass,
+    /// SMAA's programs and tables, built when SMAA is first asked for.
+    smaa: Option<SmaaPasses>,
     fullscreen: VertexArray,
     timer: GpuTimer,
 }
@@ -258,13 +278,14 @@ impl GlObject for Passes {
         self.transparent.handles(out);
         self.tonemap.handles(out);
         self.fxaa.handles(out);
+        self.smaa.handles(out);
         self.fullscreen.handles(out);
         self.timer.handles(out);
     }
 }
 
 impl Passes {
-    fn new(gl: &glow::Context, slots: GBufferSlots) -> Result<Self> {
+    fn new(gl: &glow::Context, slots: GBufferSlots, smaa: bool) -> Result<Self> {
         Made::build(gl, |made| {
             Ok(Passes {
                 background: made.keep(BackgroundPass::new(gl)?),
@@ -274,6 +295,11 @@ impl Passes {
                 transparent: made.keep(TransparentPass::new(gl)?),
                 tonemap: made.keep(TonemapPass::new(gl)?),
                 fxaa: made.keep(FxaaPass::new(gl)?),
+                smaa: if smaa {
+                    Some(made.keep(SmaaPasses::new(gl)?))
+                } else {
+                    None
+                },
                 fullscreen: made.keep(VertexArray::new(gl, "renderer full-screen triangle")?),
                 timer: made.keep(GpuTimer::new(gl, false)?),
             })
@@ -324,7 +350,12 @@ impl Frame {
             } else {
                 None
             };
-            let targets = made.keep(Targets::new(gl, &gbuffer.depth, options.fxaa)?);
+            let targets = made.keep(Targets::new(
+                gl,
+                &gbuffer.depth,
+                options.fxaa,
+                options.smaa.is_some(),
+            )?);
             Ok(Frame {
                 gbuffer,
                 retrofit,
@@ -494,7 +525,7 @@ impl Renderer {
             log::warn!("scene `{}` ({depth_mode} depth): {w}", scene.name);
         }
         let (passes, gpu_scene, frame, opt_out_flag) = Made::build(gl, |made| {
-            let passes = made.keep(Passes::new(gl, slots)?);
+            let passes = made.keep(Passes::new(gl, slots, options.smaa.is_some())?);
             let gpu_scene = made.keep(GpuScene::new(gl, scene)?);
             // Objects that opted out of anti-aliasing (`Object::antialias`, a
             // glTF `extras` field) write 0 into `color.a`: the resolve reads it
@@ -690,6 +721,7 @@ impl Renderer {
             transparent,
             tonemap,
             fxaa,
+            smaa,
             fullscreen,
             timer,
         } = &mut self.passes;
@@ -704,6 +736,10 @@ impl Renderer {
             tonemap_ms: 0.0,
             fxaa_ms: 0.0,
             post_ms: 0.0,
+            smaa_ms: 0.0,
+            smaa_edges_ms: 0.0,
+            smaa_weights_ms: 0.0,
+            smaa_blend_ms: 0.0,
             timer: timer.kind(),
         };
 
@@ -811,6 +847,25 @@ impl Renderer {
                 fxaa.draw(gl, out, fullscreen, &targets.ldr.texture)
             })?;
         }
+        if let (Some(options), Some(passes), Some(out)) =
+            (self.options.smaa, smaa.as_ref(), targets.smaa.as_ref())
+        {
+            let depth_input = DepthInput::new(&projection, depth_mode.is_reversed());
+            let times = passes.draw(
+                gl,
+                &options,
+                out,
+                fullscreen,
+                &targets.ldr.texture,
+                &gbuffer.depth,
+                depth_input,
+                timer,
+            )?;
+            t.smaa_edges_ms = times.edges_ms;
+            t.smaa_weights_ms = times.weights_ms;
+            t.smaa_blend_ms = times.blend_ms;
+            t.smaa_ms = times.edges_ms + times.weights_ms + times.blend_ms;
+        }
         unsafe {
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
             gl.bind_vertex_array(None);
@@ -824,7 +879,8 @@ impl Renderer {
             + t.transparent_ms
             + t.tonemap_ms
             + t.post_ms
-            + t.fxaa_ms;
+            + t.fxaa_ms
+            + t.smaa_ms;
         Ok(t)
     }
 
@@ -957,7 +1013,7 @@ impl Renderer {
         self.decal_hook = hook;
     }
 
-    /// Change size, sample count, anti-aliasing method, FXAA or layout at run
+    /// Change size, sample count, anti-aliasing method, FXAA, SMAA or layout at run
     /// time, re-creating only what changed:
     /// - a new size re-allocates the G-buffer's textures on the same
     ///   framebuffer and lets the retrofit re-read it ([`MsaaRetrofit::set_samples`],
@@ -991,6 +1047,9 @@ impl Renderer {
         let options = &active;
         // The technique's programs first: they are kept either way.
         self.prepare_technique(gl, Some(options))?;
+        if options.smaa.is_some() && self.passes.smaa.is_none() {
+            self.passes.smaa = Some(SmaaPasses::new(gl)?);
+        }
         let depth_mode =
             depth::resolve_mode(gl, options.depth_mode, &self.clip, options.layout.depth)?;
         let mut warnings = depth::warnings(&options.layout, &self.camera, depth_mode, self.extent);
@@ -1054,7 +1113,12 @@ impl Renderer {
             let (colors, depth) =
                 GBuffer::allocate_textures(gl, &options.layout, options.width, options.height)?;
             let (colors, depth) = (made.keep(colors), made.keep(depth));
-            let targets = made.keep(Targets::new(gl, &depth, options.fxaa)?);
+            let targets = made.keep(Targets::new(
+                gl,
+                &depth,
+                options.fxaa,
+                options.smaa.is_some(),
+            )?);
             Ok::<_, Error>((colors, depth, targets))
         })?;
         let gb = &mut self.frame.gbuffer;
@@ -1084,7 +1148,7 @@ impl Renderer {
         Ok(())
     }
 
-    /// Same size and layout: the retrofit and the FXAA target may change.
+    /// Same size and layout: the retrofit and the FXAA and SMAA targets may change.
     fn update_in_place(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
         let (w, h) = (options.width, options.height);
         let new_fxaa = if options.fxaa && self.frame.targets.fxaa.is_none() {
@@ -1092,11 +1156,34 @@ impl Renderer {
         } else {
             None
         };
+        let new_smaa = if options.smaa.is_some() && self.frame.targets.smaa.is_none() {
+            match SmaaTargets::new(gl, w, h) {
+                Ok(t) => Some(t),
+                Err(e) => {
+                    if let Some(t) = new_fxaa {
+                        t.destroy(gl);
+                    }
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
         if let Err(e) = self.update_retrofit(gl, options, false) {
             if let Some(t) = new_fxaa {
                 t.destroy(gl);
             }
+            if let Some(t) = new_smaa {
+                t.destroy(gl);
+            }
             return Err(e);
+        }
+        if new_smaa.is_some() {
+            self.frame.targets.smaa = new_smaa;
+        } else if options.smaa.is_none() {
+            if let Some(t) = self.frame.targets.smaa.take() {
+                t.destroy(gl);
+            }
         }
         if new_fxaa.is_some() {
             self.frame.targets.fxaa = new_fxaa;
@@ -1203,7 +1290,7 @@ impl Renderer {
         GeometryPass::fragment_source(self.passes.geometry.slots())
     }
 
-    /// Read the final image (after tonemapping and FXAA); row 0 is the top.
+    /// Read the final image (after tonemapping and FXAA or SMAA); row 0 is the top.
     pub fn read_final(&self, gl: &glow::Context) -> Result<image::RgbaImage> {
         self.frame
             .targets

@@ -1,7 +1,9 @@
 //! What a frame is rendered with: the anti-aliasing method ([`AaMode`])
 //! and the rest of the options ([`RenderOptions`]).
 
-use super::{DepthMode, GBufferSlots, SparseOptions, TaaOptions, technique};
+use super::{
+    DepthMode, GBufferSlots, SmaaEdges, SmaaOptions, SparseOptions, TaaOptions, technique,
+};
 use crate::gbuffer::{GBufferLayout, MemoryBudget};
 use crate::gl::ColorAttachment;
 use crate::resolve::NormalEncoding;
@@ -187,6 +189,10 @@ pub struct RenderOptions {
     pub aa: AaMode,
     /// Run the FXAA-style post filter after tonemapping.
     pub fxaa: bool,
+    /// Run SMAA 1x ([`SmaaOptions`]) after tonemapping instead (not with
+    /// [`RenderOptions::fxaa`]: each is a post filter of the tonemapped
+    /// image; chaining them smooths twice). Default: `None`.
+    pub smaa: Option<SmaaOptions>,
     /// The full G-buffer layout. It must have colour attachments named
     /// `color`, `position` and `normal`, and `specular` and `emissive`
     /// unless the scene does without them (in any order; others are allowed
@@ -210,7 +216,8 @@ pub struct RenderOptions {
 }
 
 impl Default for RenderOptions {
-    /// 640×360, 4x MSAA with the default (median, smooth) resolve, no FXAA,
+    /// 640×360, 4x MSAA with the default (median, smooth) resolve, no FXAA
+    /// nor SMAA,
     /// the recommended layout adapted to the scene, the default memory
     /// budget, [`DepthMode::Auto`].
     fn default() -> Self {
@@ -220,6 +227,7 @@ impl Default for RenderOptions {
             samples: 4,
             aa: AaMode::Resolve(ResolveSettings::default()),
             fxaa: false,
+            smaa: None,
             layout: GBufferLayout::recommended(),
             adaptive: true,
             memory_budget: MemoryBudget::default(),
@@ -255,6 +263,19 @@ impl RenderOptions {
         }
         if let AaMode::Taa(taa) = &self.aa {
             taa.validate()?;
+        }
+        if let Some(smaa) = &self.smaa {
+            if self.fxaa {
+                return Err(Error::invalid(
+                    "FXAA and SMAA are both post filters of the tonemapped image; choose one",
+                ));
+            }
+            if smaa.edges == SmaaEdges::Depth && !technique::kind_of(&self.aa).fills_gbuffer() {
+                return Err(Error::invalid(format!(
+                    "SMAA's depth edges read the G-buffer's depth, which `{}` does not fill; use edges=luma or edges=color",
+                    self.aa.name()
+                )));
+            }
         }
         self.layout.validate()?;
         GBufferSlots::of(&self.layout).map(|_| ())

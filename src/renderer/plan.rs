@@ -835,6 +835,11 @@ fn decide_passes(
     } else {
         decisions.leave_out(Pass::Fxaa.name(), "not asked for");
     }
+    if options.smaa.is_some() {
+        passes.push(Pass::Smaa);
+    } else {
+        decisions.leave_out(Pass::Smaa.name(), "not asked for");
+    }
     passes
 }
 

@@ -1,10 +1,12 @@
 //! The renderer's own single-sample targets besides the G-buffer: the
 //! background, the HDR target (alone for lighting, with the resolved depth
-//! for transparent objects), the tonemapped LDR image and the FXAA output;
+//! for transparent objects), the tonemapped LDR image and the FXAA or SMAA
+//! outputs;
 //! and those of [`AaMode::Complex`](super::AaMode::Complex): the HDR target
 //! with a stencil mask, and the coverage flags.
 
 use super::pass::begin_fullscreen;
+use super::smaa::SmaaTargets;
 use crate::Result;
 use crate::gl::destroy_object;
 use crate::gl::{
@@ -76,12 +78,19 @@ pub(crate) struct Targets {
     pub(crate) ldr: ColorTarget,
     /// The FXAA output (RGBA8), when FXAA is on.
     pub(crate) fxaa: Option<ColorTarget>,
+    /// SMAA's edges, weights and output, when SMAA is on.
+    pub(crate) smaa: Option<SmaaTargets>,
 }
 
 impl Targets {
     /// Allocate the targets for a G-buffer whose depth texture is `depth`
     /// (their size is its size; the HDR target gets it attached).
-    pub(crate) fn new(gl: &glow::Context, depth: &Texture2d, fxaa: bool) -> Result<Self> {
+    pub(crate) fn new(
+        gl: &glow::Context,
+        depth: &Texture2d,
+        fxaa: bool,
+        smaa: bool,
+    ) -> Result<Self> {
         let (w, h) = (depth.width, depth.height);
         Made::build(gl, |made| {
             let background = made.keep(ColorTarget::new(gl, "background", Format::Rgba16f, w, h)?);
@@ -102,12 +111,18 @@ impl Targets {
             } else {
                 None
             };
+            let smaa = if smaa {
+                Some(made.keep(SmaaTargets::new(gl, w, h)?))
+            } else {
+                None
+            };
             Ok(Targets {
                 background,
                 hdr,
                 hdr_with_depth,
                 ldr,
                 fxaa,
+                smaa,
             })
         })
     }
@@ -124,9 +139,14 @@ impl Targets {
         Ok(target)
     }
 
-    /// The last target of the frame: FXAA's output, or the tonemapped image.
+    /// The last target of the frame: SMAA's or FXAA's output, or the
+    /// tonemapped image.
     pub(crate) fn final_target(&self) -> &ColorTarget {
-        self.fxaa.as_ref().unwrap_or(&self.ldr)
+        match (&self.smaa, &self.fxaa) {
+            (Some(smaa), _) => &smaa.out,
+            (None, Some(fxaa)) => fxaa,
+            (None, None) => &self.ldr,
+        }
     }
 
     /// Free everything.
@@ -142,6 +162,7 @@ impl GlObject for Targets {
         self.hdr.handles(out);
         self.ldr.handles(out);
         self.fxaa.handles(out);
+        self.smaa.handles(out);
     }
 }
 

@@ -26,6 +26,7 @@ mod resolve_layers;
 mod retrofit;
 mod scene;
 mod selective;
+mod smaa;
 mod sparse;
 mod stability;
 mod standalone;

@@ -583,7 +583,8 @@ fn viewer_runs_in_a_window_and_switches_live() {
     };
     let shot = scratch("viewer.png");
     let _ = std::fs::remove_file(&shot);
-    // One key per frame: no MSAA, taa, back to median, FXAA on and off, the next
+    // One key per frame: no MSAA, taa, back to median, FXAA on and off,
+    // SMAA on and off, the next
     // sample count, every view round to the final image, orbit away and
     // back. The viewer fails on any blank frame. The views are the final
     // image, the attachments the scene-adaptive plan keeps, depth and complex.
@@ -597,7 +598,7 @@ fn viewer_runs_in_a_window_and_switches_live() {
     )
     .expect("a plan");
     let views = 1 + plan.layout.colors.len() + 2;
-    let keys = format!("053ffn{}lh", "v".repeat(views));
+    let keys = format!("053ffssn{}lh", "v".repeat(views));
     let frames = keys.chars().count() + 2;
     let result = run_with_limit(
         Command::new(&viewer)
