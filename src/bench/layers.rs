@@ -102,7 +102,7 @@ pub fn layers_table(reports: &[&Report]) -> String {
     let _ = writeln!(md);
     let _ = writeln!(
         md,
-        "| scene | lights | ms AA median | ms AA **median:layers=2** | of which second lighting | ms AA per-sample | layers=2 / per-sample | second layer MiB | pixels with two clusters |"
+        "| scene | lights | ms AA median | ms AA **median:layers=2** | of which the second lighting with its copies, mask and mix | ms AA per-sample | layers=2 / per-sample | second layer MiB | pixels with two clusters |"
     );
     let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for report in reports {
