@@ -76,3 +76,36 @@ pub fn alone(module: &str, test: &str) -> bool {
     );
     false
 }
+
+/// The `deferred-msaa` binary on a real OpenGL 3.2 core / GLSL 1.50
+/// context (Mesa's version overrides, as CI's floor run sets them).
+pub fn floor_command() -> std::process::Command {
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_deferred-msaa"));
+    command
+        .env("MESA_GL_VERSION_OVERRIDE", "3.2")
+        .env("MESA_GLSL_VERSION_OVERRIDE", "150");
+    command
+}
+
+/// Runs `deferred-msaa ARGS` on the floor ([`floor_command`]), after
+/// checking once that `info` reports a 3.2 context there.
+pub fn floor_cli() -> impl Fn(&[&str]) -> std::process::Output {
+    let info = floor_command()
+        .args(["info", "--json"])
+        .output()
+        .expect("running deferred-msaa info");
+    assert!(
+        info.status.success(),
+        "{}",
+        String::from_utf8_lossy(&info.stderr)
+    );
+    let info: serde_json::Value = serde_json::from_slice(&info.stdout).expect("info JSON");
+    let version = info["gl_version"].as_str().unwrap_or("");
+    assert!(version.starts_with("3.2"), "not a 3.2 context: {version}");
+    |args| {
+        floor_command()
+            .args(args)
+            .output()
+            .expect("running deferred-msaa")
+    }
+}

@@ -63,10 +63,8 @@ fn info_on_the_gl_3_2_floor() {
         return;
     }
     for backend in ["egl", "osmesa"] {
-        let out = Command::new(env!("CARGO_BIN_EXE_deferred-msaa"))
+        let out = common::floor_command()
             .args(["info", "--json", "--backend", backend])
-            .env("MESA_GL_VERSION_OVERRIDE", "3.2")
-            .env("MESA_GLSL_VERSION_OVERRIDE", "150")
             .output()
             .unwrap();
         let info = json(&out);

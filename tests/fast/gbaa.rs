@@ -14,7 +14,6 @@ use deferred_msaa_lab::renderer::technique::Gbaa;
 use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
 use deferred_msaa_lab::scene::{Aabb, Background, Camera, Material, Object, Scene};
 use glam::{DMat4, DVec3, DVec4, Mat4, Vec3};
-use std::process::Command;
 
 /// What the edge buffer holds where no edge is (`Gbaa::edge_textures`).
 const NO_EDGE: f32 = 4.0;
@@ -729,24 +728,7 @@ fn gbaa_runs_on_the_gl_3_2_floor() {
     if common::egl_context().is_none() {
         return;
     }
-    let exe = env!("CARGO_BIN_EXE_deferred-msaa");
-    let floor = |args: &[&str]| {
-        Command::new(exe)
-            .args(args)
-            .env("MESA_GL_VERSION_OVERRIDE", "3.2")
-            .env("MESA_GLSL_VERSION_OVERRIDE", "150")
-            .output()
-            .expect("running deferred-msaa")
-    };
-    let info = floor(&["info", "--json"]);
-    assert!(
-        info.status.success(),
-        "{}",
-        String::from_utf8_lossy(&info.stderr)
-    );
-    let info: serde_json::Value = serde_json::from_slice(&info.stdout).expect("info JSON");
-    let version = info["gl_version"].as_str().unwrap_or("");
-    assert!(version.starts_with("3.2"), "not a 3.2 context: {version}");
+    let floor = common::floor_cli();
     let dir = std::env::temp_dir().join(format!("dmsaa-gbaa-floor-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     for view in ["final", "edges"] {

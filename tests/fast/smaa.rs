@@ -16,7 +16,6 @@ use deferred_msaa_lab::renderer::{
     AaMode, RenderOptions, Renderer, SmaaEdges, SmaaFilter, SmaaOptions, SmaaOutput, SmaaPreset,
 };
 use image::{Rgba, RgbaImage};
-use std::process::Command;
 
 /// An image from a function of the pixel in GL's orientation (`y` up from
 /// the bottom row), grey levels.
@@ -665,23 +664,7 @@ fn smaa_runs_on_the_gl_3_2_floor() {
     }
     let dir = std::env::temp_dir().join(format!("dmsaa-smaa-floor-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let floor = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_deferred-msaa"))
-            .args(args)
-            .env("MESA_GL_VERSION_OVERRIDE", "3.2")
-            .env("MESA_GLSL_VERSION_OVERRIDE", "150")
-            .output()
-            .expect("running deferred-msaa")
-    };
-    let info = floor(&["info", "--json"]);
-    assert!(
-        info.status.success(),
-        "{}",
-        String::from_utf8_lossy(&info.stderr)
-    );
-    let info: serde_json::Value = serde_json::from_slice(&info.stdout).expect("info JSON");
-    let version = info["gl_version"].as_str().unwrap_or("");
-    assert!(version.starts_with("3.2"), "not a 3.2 context: {version}");
+    let floor = common::floor_cli();
     for (k, extra) in [
         vec!["--method", "smaa"],
         vec!["--method", "median", "--smaa", "preset=ultra:edges=depth"],

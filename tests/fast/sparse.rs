@@ -35,7 +35,6 @@ const NOWHERE: Region = Region::Rect {
 };
 use glow::HasContext;
 use image::RgbaImage;
-use std::process::Command;
 
 const W: u32 = 128;
 const H: u32 = 72;
@@ -587,11 +586,9 @@ fn unsupported_contexts_get_a_typed_error() {
         common::skip("forcing missing extensions needs Mesa's MESA_EXTENSION_OVERRIDE");
         return;
     }
-    let out = Command::new(env!("CARGO_BIN_EXE_deferred-msaa"))
+    let out = common::floor_command()
         .args(["render", "--method", "sparse", "--size", "32x18", "--out"])
         .arg(std::env::temp_dir().join("deferred-msaa-sparse-unsupported.png"))
-        .env("MESA_GL_VERSION_OVERRIDE", "3.2")
-        .env("MESA_GLSL_VERSION_OVERRIDE", "150")
         .env(
             "MESA_EXTENSION_OVERRIDE",
             "-GL_ARB_shader_storage_buffer_object -GL_ARB_post_depth_coverage",
