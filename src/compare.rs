@@ -135,7 +135,7 @@ pub fn halo_pixels(reference: &RgbaImage, test: &RgbaImage, threshold: f32) -> u
 }
 
 /// An 8-bit sRGB value as linear light, 0 to 1.
-fn srgb_to_linear(v: u8) -> f32 {
+pub fn srgb_to_linear(v: u8) -> f32 {
     let c = f32::from(v) / 255.0;
     if c <= 0.04045 {
         c / 12.92

@@ -51,7 +51,7 @@ pub use methods::{MethodEntry, default_methods, parse_methods};
 use methods::{adds_geometry, adds_lighting};
 pub use report::{MotionMeasures, ProfileStep, Reference, Report, Run, pareto_front};
 
-use crate::compare;
+use crate::compare::{self, srgb_to_linear};
 use crate::context::{Backend, GlVersion, HeadlessContext};
 use crate::gbuffer::GBufferLayout;
 use crate::gl::TimerKind;
@@ -254,16 +254,6 @@ pub fn extra_lights(bounds: &Aabb, n: u32) -> Vec<Light> {
             )
         })
         .collect()
-}
-
-/// sRGB-encoded 8-bit value to linear light.
-fn srgb_to_linear(v: u8) -> f32 {
-    let c = v as f32 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
 }
 
 /// Linear light to an sRGB-encoded 8-bit value.
