@@ -311,7 +311,11 @@ impl RenderOptions {
             position_attachment,
             position_space,
             resolve,
-            // The layouts' normals are xyz; with two layers, clusters split by them.
+            // The layouts' normals are xyz; with two layers, clusters split by
+            // them. One layer leaves them unnamed: the layouts store normals
+            // unpacked, so a crease blends (or, recommended, selects) them
+            // without the specks packed normals make, and the one-layer
+            // tables and goldens stay comparable with earlier releases.
             normal_attachment: GBufferSlots::of(&self.layout)
                 .ok()
                 .filter(|_| resolve.layers == 2)

@@ -80,6 +80,14 @@ pub const REFUSALS: &[(&str, &str)] = &[
     ("empty normal point", "named as the normal attachment"),
     ("integer normal", "the normal test needs a float"),
     (
+        "blend-normal on unsigned normalised",
+        "`blend-normal` renormalises the stored vector",
+    ),
+    (
+        "signed normal encoding on unsigned normalised",
+        "is for signed components, but an unsigned normalised format",
+    ),
+    (
         "not multisampled by the driver",
         "cannot render to a multisampled texture",
     ),

@@ -828,8 +828,8 @@ fn plane_uniformity_takes_one_sample_on_a_tilted_triangle() {
     readback.destroy(gl);
 }
 
-/// The second layer, and the first layer with clusters split by normal,
-/// against the CPU reference for N = 2, 4, 8 and 16 over the adversarial
+/// The second layer, and the first layer with clusters split by normal
+/// (one layer or two), against the CPU reference for N = 2, 4, 8 and 16 over the adversarial
 /// cases, by depth alone and with each normal encoding; pixels of one
 /// cluster, two, and three or more all occur.
 #[test]
@@ -863,8 +863,14 @@ fn second_layer_matches_the_cpu_reference() {
                     layers: 2,
                     ..ResolveSettings::default()
                 };
-                // The first layer, its clusters split by normal.
+                // The first layer, its clusters split by normal, with two
+                // layers and with one (the normal test is the same).
                 harness.check(gl, &mut resolver, &mut readback, settings);
+                let one_layer = ResolveSettings {
+                    layers: 1,
+                    ..settings
+                };
+                harness.check(gl, &mut resolver, &mut readback, one_layer);
                 let layers = harness.check_second_layer(gl, &mut resolver, &mut readback, settings);
                 let two = layers.iter().filter(|l| l.reference.is_some()).count();
                 // Three or more clusters: the two kept share the pixel, so the

@@ -617,7 +617,55 @@ fn bad_host_framebuffers_are_typed_errors_naming_the_attachment() {
     .to_string();
     assert!(e.contains("RGBA8UI") && e.contains("selected"), "{e}");
     unsafe { gl.delete_framebuffer(fbo) };
-    for t in [colour, small, depth, ids] {
+    // Packed normals (RGB10_A2): `blend-normal` and a signed encoding are
+    // refused with the way to name them; blended and named `Unorm`, taken.
+    let packed = Texture2d::new(gl, "packed normals", Format::Rgb10A2, 32, 32).unwrap();
+    let fbo = attach(&[
+        (Attachment::Color(0), TextureRef::from(&packed)),
+        (Attachment::Depth, TextureRef::from(&depth)),
+    ]);
+    let named = |encoding| NormalAttachment {
+        attachment: ColorAttachment(0),
+        encoding,
+    };
+    let refused = [
+        RetrofitOptions {
+            rules: vec![(ColorAttachment(0), ResolveRule::BlendNormal)],
+            ..Default::default()
+        },
+        RetrofitOptions {
+            normal_attachment: Some(named(NormalEncoding::Xyz)),
+            ..Default::default()
+        },
+        RetrofitOptions {
+            normal_attachment: Some(named(NormalEncoding::Octahedral)),
+            ..Default::default()
+        },
+    ];
+    for options in &refused {
+        let e = MsaaRetrofit::new(gl, fbo, options).unwrap_err();
+        assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
+        let text = e.to_string();
+        assert_eq!(text.lines().count(), 1, "{text}");
+        assert!(
+            text.contains("GL_COLOR_ATTACHMENT0")
+                && text.contains("GL_RGB10_A2")
+                && text.contains("NormalEncoding::Unorm"),
+            "{text}"
+        );
+    }
+    let msaa = MsaaRetrofit::new(
+        gl,
+        fbo,
+        &RetrofitOptions {
+            normal_attachment: Some(named(NormalEncoding::Unorm)),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    msaa.destroy(gl);
+    unsafe { gl.delete_framebuffer(fbo) };
+    for t in [colour, small, depth, ids, packed] {
         t.destroy(gl);
     }
     assert_eq!(live_objects(), before);

@@ -193,12 +193,13 @@ pub struct DmsaaOptions {
     /// 1: the position attachment holds world-space positions, and each
     /// [`dmsaa_resolve`] passes the view matrix; 0 (default): view space.
     pub world_space_position: u8,
-    /// The colour attachment number holding normals, for the second
-    /// layer's normal test; `DMSAA_NO_ATTACHMENT` (default): by depth alone.
+    /// The colour attachment number holding normals, for the normal test
+    /// (one layer or two; name it for normals packed as `n*0.5+0.5`);
+    /// `DMSAA_NO_ATTACHMENT` (default): by depth alone.
     pub normal_attachment: i32,
     /// How `normal_attachment` stores normals (`DMSAA_NORMAL_*`).
     pub normal_encoding: DmsaaNormalEncoding,
-    /// With two layers and a normal attachment: samples close in depth are
+    /// With a normal attachment: samples close in depth are
     /// one surface only when the cosine between their normals is at least
     /// this, in `[-1, 1]` (default 0.95).
     pub normal_threshold: f64,

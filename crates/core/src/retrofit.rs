@@ -55,9 +55,13 @@ pub struct RetrofitOptions {
     /// (with a line in [`MsaaRetrofit::warnings`]) or, strict, the retrofit
     /// refuses with [`Error::MemoryBudget`].
     pub memory_budget: Option<MemoryBudget>,
-    /// The colour attachment holding normals, and how: with
-    /// [`ResolveSettings::layers`] = 2, samples whose normals differ are
-    /// different surfaces even when close in depth (`None`: by depth alone).
+    /// The colour attachment holding normals, and how: samples whose
+    /// normals differ are different surfaces even when close in depth, in
+    /// the one-layer resolve as in both of two layers (`None`: by depth
+    /// alone). A host whose normals are packed (`n * 0.5 + 0.5` in an
+    /// unsigned normalised format) should name it with
+    /// [`NormalEncoding::Unorm`]: without the test a crease pixel blends two
+    /// packed normals into one that lights like neither face.
     pub normal_attachment: Option<NormalAttachment>,
     /// How [`MsaaRetrofit::finish_second_layer`] mixes the two lit layers.
     pub layer_mix: LayerMix,
@@ -220,6 +224,15 @@ impl StencilCopyTargets {
 /// The format of a colour attachment's multisampled twin: the host's own
 /// where the driver multisamples it, else its stand-in
 /// ([`Format::multisample_stand_in`]).
+/// Whether `format` stores unsigned normalised components (`GL_RGBA8`,
+/// `GL_RGB10_A2`, ...): no negative value, so a normal in it is packed.
+fn unsigned_normalised(format: Format) -> bool {
+    matches!(
+        format.properties().component,
+        crate::gl::format::ComponentType::Unorm
+    )
+}
+
 fn twin_format(gl: &glow::Context, a: &HostAttachment, samples: u32) -> Result<Format> {
     if multisamples(gl, a.format, samples)? {
         return Ok(a.format);
@@ -423,6 +436,13 @@ impl MsaaRetrofit {
                     ),
                 });
             }
+            if rule == ResolveRule::BlendNormal && unsigned_normalised(a.format) {
+                return Err(Error::UnsupportedFormat {
+                    attachment: a.point.name(),
+                    format: a.requested_format.clone(),
+                    reason: "`blend-normal` renormalises the stored vector, and an unsigned normalised format holds no negative component: for normals packed as n*0.5+0.5 use `blend` or `select` and name the attachment in RetrofitOptions::normal_attachment with NormalEncoding::Unorm, so that samples of different normals are not blended".into(),
+                });
+            }
             rules.push(rule);
         }
         for (n, _) in &options.rules {
@@ -478,6 +498,17 @@ impl MsaaRetrofit {
                         format: host.colors[k].requested_format.clone(),
                         reason: "the normal test needs a float or normalised normal attachment"
                             .into(),
+                    });
+                }
+                let signed = matches!(n.encoding, NormalEncoding::Xyz | NormalEncoding::Octahedral);
+                if signed && unsigned_normalised(host.colors[k].format) {
+                    return Err(Error::UnsupportedFormat {
+                        attachment: n.attachment.name(),
+                        format: host.colors[k].requested_format.clone(),
+                        reason: format!(
+                            "the normal attachment's NormalEncoding::{:?} is for signed components, but an unsigned normalised format holds no negative one: normals packed into [0, 1] are NormalEncoding::Unorm (octahedral ones OctahedralUnorm)",
+                            n.encoding
+                        ),
                     });
                 }
                 Some((ResolveSlot(k), n.encoding))

@@ -358,9 +358,10 @@ pub fn program_with_locations(
     }
 }
 
-/// `options` with `layers` resolved layers; with two, clusters split by
-/// the host's normal attachment `normal` (its integrator names it, as a
-/// host names its position attachment).
+/// `options` with `layers` resolved layers, clusters split by the host's
+/// normal attachment `normal` (its integrator names it, as a host names
+/// its position attachment and as docs/resolve.md asks of every host,
+/// with one layer as with two).
 pub fn with_layers(
     options: RetrofitOptions,
     layers: u32,
@@ -368,9 +369,7 @@ pub fn with_layers(
 ) -> RetrofitOptions {
     let mut options = options;
     options.resolve.layers = layers;
-    if layers == 2 {
-        options.normal_attachment = Some(normal);
-    }
+    options.normal_attachment = Some(normal);
     options
 }
 

@@ -36,7 +36,7 @@ pub struct CpuResolve {
     /// `tan(fov_y / height_px)`: the view-space size of a pixel at distance 1.
     pub footprint: f64,
     /// The normal attachment (index into the pixel's attachments) and its
-    /// encoding: with two layers, clusters split by normal too.
+    /// encoding: clusters split by normal too (one layer or two).
     pub normal: Option<(usize, NormalEncoding)>,
 }
 
@@ -424,7 +424,7 @@ impl CpuResolve {
         let mut ambiguous = selection_ambiguous;
         for i in 0..n {
             let (w, near_edge) = self.closeness(&keys, i, r);
-            // With two layers a sample of another orientation is another surface.
+            // With a normal attachment a sample of another orientation is another surface.
             let (same, near_threshold) = self.same_normal(px, &keys, i, r);
             weights.push(if same { w } else { 0.0 });
             ambiguous |= near_edge || (w > 0.0 && near_threshold);
@@ -472,9 +472,10 @@ impl CpuResolve {
 }
 
 impl CpuResolve {
-    /// Whether clusters split by normal: two layers and a normal attachment.
+    /// Whether clusters split by normal: a normal attachment, with one
+    /// layer or two.
     fn splits_by_normal(&self) -> Option<(usize, NormalEncoding)> {
-        self.normal.filter(|_| self.settings.layers == 2)
+        self.normal
     }
 
     /// Whether samples `i` and `j` may be one surface by their normals (always,
@@ -908,9 +909,8 @@ mod tests {
     }
 
     #[test]
-    fn normals_split_a_crease_only_with_two_layers() {
+    fn normals_split_a_crease_with_one_layer_or_two() {
         let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
-        cpu.normal = Some((0, NormalEncoding::Xyz));
         // One depth, two orientations 90 degrees apart (attachment 0 holds
         // the normals here): samples 0, 1 face +z, samples 2, 3 face +x.
         let mut px = pixel(&[10.0, 10.01, 10.0, 10.01]);
@@ -920,7 +920,11 @@ mod tests {
             [1.0, 0.0, 0.0, 0.0],
             [1.0, 0.0, 0.0, 0.0],
         ];
+        // By depth alone the crease is one surface.
         assert_eq!(cpu.resolve_pixel(&px).weights, vec![1.0; 4]);
+        // With the normals named it is two, with one layer and with two.
+        cpu.normal = Some((0, NormalEncoding::Xyz));
+        assert_eq!(cpu.resolve_pixel(&px).weights, vec![1.0, 1.0, 0.0, 0.0]);
         cpu.settings.layers = 2;
         let first = cpu.resolve_pixel(&px);
         assert_eq!(first.weights, vec![1.0, 1.0, 0.0, 0.0]);

@@ -118,8 +118,8 @@ pub(crate) struct ResolveProgramKey {
     pub reference_output: bool,
     /// Selective anti-aliasing criteria compiled in.
     pub selection: SelectionKey,
-    /// With two layers: the normal attachment's slot and encoding, whose
-    /// test splits clusters.
+    /// The normal attachment's slot and encoding, whose test splits
+    /// clusters (one layer or two).
     pub normal: Option<(ResolveSlot, NormalEncoding)>,
     /// Write the second layer and its coverage instead of the first.
     pub second_layer_output: bool,
@@ -365,8 +365,8 @@ pub struct ResolveInputs<'a> {
     pub key: KeySource,
     /// Sample count; for layer arrays, the number of layers.
     pub samples: u32,
-    /// The colour input holding normals and their encoding: with two
-    /// layers, clusters split by normal too ([`ResolveSettings::normal_threshold`]).
+    /// The colour input holding normals and their encoding: clusters split
+    /// by normal too, with one layer or two ([`ResolveSettings::normal_threshold`]).
     pub normal: Option<(ResolveSlot, NormalEncoding)>,
 }
 
@@ -510,7 +510,7 @@ impl Resolver {
             }
         }
         let normal = match inputs.normal {
-            Some((slot, encoding)) if settings.layers == 2 => {
+            Some((slot, encoding)) => {
                 let input = inputs.colors.get(slot.0).ok_or_else(|| {
                     Error::Layout(format!(
                         "the normals are in colour input {}, but there are {}",
@@ -531,7 +531,7 @@ impl Resolver {
                 }
                 Some((slot, encoding))
             }
-            _ => None,
+            None => None,
         };
         if second_layer_output && (extra.complex || extra.outside) {
             return Err(Error::invalid(

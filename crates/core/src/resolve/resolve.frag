@@ -37,7 +37,7 @@
 //                          selective AA: a pixel none of whose samples has this
 //                          attachment component >= 0.5 takes one sample
 //   CLUSTER_NORMALS, NORMAL_SAMPLER, NORMAL_ENCODING
-//                          two layers with a normal attachment: samples whose
+//                          a normal attachment (one layer or two): samples whose
 //                          normals' cosine is below u_normal_threshold are
 //                          different surfaces (cpu.rs's same_normal)
 //   SECOND_LAYER_OUTPUT    write the second layer (cpu.rs's

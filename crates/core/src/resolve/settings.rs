@@ -122,9 +122,9 @@ pub struct ResolveSettings {
     /// as by depth where a normal attachment is named.
     #[cfg_attr(feature = "serde", serde(default = "one_layer"))]
     pub layers: u32,
-    /// With two layers and a normal attachment: two geometry samples close
-    /// in depth are one surface only when the cosine between their normals
-    /// is at least this (default 0.95).
+    /// With a normal attachment (one layer or two): two geometry samples
+    /// close in depth are one surface only when the cosine between their
+    /// normals is at least this (default 0.95).
     #[cfg_attr(feature = "serde", serde(default = "default_normal_threshold"))]
     pub normal_threshold: f64,
 }
