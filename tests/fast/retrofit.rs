@@ -1132,3 +1132,118 @@ fn profiling_times_each_step_and_changes_nothing() {
     host.destroy(gl);
     assert_eq!(live_objects(), before);
 }
+
+/// The second layer's selection, used as a host would (attached as the
+/// depth-stencil of its own framebuffer, a pass drawn with
+/// `GL_EQUAL 1`), marks exactly the pixels whose coverage is above 0, on a
+/// frame where some pixels have a second cluster and most do not; with
+/// one layer there is none.
+#[test]
+fn the_second_layer_selection_marks_exactly_the_covered_pixels() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let host = host(gl);
+    let mut readback = Readback::new(gl).unwrap();
+    let one = RetrofitOptions {
+        position_attachment: Some(ColorAttachment(1)),
+        ..RetrofitOptions::default()
+    };
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &one).unwrap();
+    assert!(msaa.second_layer_selection().is_none());
+    let two = RetrofitOptions {
+        resolve: ResolveSettings {
+            layers: 2,
+            ..ResolveSettings::default()
+        },
+        ..one
+    };
+    msaa.set_options(gl, &two).unwrap();
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    host.draw(gl, &projection(), false);
+    msaa.resolve(gl, &frame()).unwrap();
+    let selection = msaa
+        .second_layer_selection()
+        .expect("two layers on GL 3.2+ with draw buffers to spare: a selection");
+    let marks = Texture2d::new(gl, "marks", Format::R8, W, H).unwrap();
+    let fbo = Framebuffer::new(
+        gl,
+        "a host's pass with the selection",
+        &[
+            (Attachment::Color(0), TextureRef::from(&marks)),
+            (Attachment::DepthStencil, selection),
+        ],
+        &[Some(0)],
+    )
+    .unwrap();
+    // Clears and blits ignore the stencil test: a draw, as a host's
+    // lighting pass is (no depth test: the selection's depth is not defined).
+    let white = deferred_msaa_lab::gl::FullscreenPass::new(
+        gl,
+        "white",
+        &deferred_msaa_lab::gl::ShaderSource::new().part(
+            "white.frag",
+            "out vec4 o_color;\nvoid main() { o_color = vec4(1.0); }\n",
+        ),
+        &[("o_color", 0)],
+    )
+    .unwrap();
+    let vao = deferred_msaa_lab::gl::VertexArray::new(gl, "white").unwrap();
+    white.begin(gl, &fbo);
+    unsafe {
+        gl.viewport(0, 0, W as i32, H as i32);
+        gl.clear_color(0.0, 0.0, 0.0, 0.0);
+        gl.clear(glow::COLOR_BUFFER_BIT);
+        gl.enable(glow::STENCIL_TEST);
+        gl.stencil_func(
+            glow::EQUAL,
+            i32::from(deferred_msaa::second_layer::SECOND_LAYER_SELECTED),
+            0xFF,
+        );
+        gl.stencil_mask(0);
+    }
+    white.draw(gl, &vao);
+    unsafe {
+        gl.disable(glow::STENCIL_TEST);
+        gl.stencil_mask(0xFF);
+    }
+    let marked = readback.read(gl, TextureRef::from(&marks), 1).unwrap();
+    let coverage = readback
+        .read(gl, msaa.second_layer_coverage().unwrap(), 1)
+        .unwrap();
+    let (mut covered, mut mismatched) = (0, Vec::new());
+    for y in 0..H {
+        for x in 0..W {
+            let c = coverage.get(0, x, y)[0] > 0.0;
+            let m = marked.get(0, x, y)[0] > 0.5;
+            covered += usize::from(c);
+            if c != m {
+                mismatched.push((x, y, c));
+            }
+        }
+    }
+    assert!(
+        covered > 0 && covered < (W * H) as usize / 2,
+        "{covered} covered pixels"
+    );
+    let marked_count = (0..H)
+        .flat_map(|y| (0..W).map(move |x| (x, y)))
+        .filter(|&(x, y)| marked.get(0, x, y)[0] > 0.5)
+        .count();
+    assert!(
+        mismatched.is_empty(),
+        "{} pixels where the selection and coverage > 0 differ ({covered} covered, {marked_count} marked), first {:?}",
+        mismatched.len(),
+        &mismatched[..mismatched.len().min(5)]
+    );
+    white.destroy(gl);
+    vao.destroy(gl);
+    fbo.destroy(gl);
+    marks.destroy(gl);
+    msaa.destroy(gl);
+    readback.destroy(gl);
+    host.destroy(gl);
+    assert_eq!(live_objects(), before);
+}

@@ -935,6 +935,24 @@ impl MsaaRetrofit {
         self.second.as_ref().map(|s| TextureRef::from(s.coverage()))
     }
 
+    /// The pixels of the last resolve that have a second cluster, as a
+    /// stencil: a `DEPTH24_STENCIL8` texture whose stencil is
+    /// [`SECOND_LAYER_SELECTED`](crate::second_layer::SECOND_LAYER_SELECTED)
+    /// exactly where the coverage is above 0 and 0 elsewhere (its depth is
+    /// not defined: test the stencil only, and do not write it). A host
+    /// may attach it as the depth-stencil attachment of the framebuffer its
+    /// second lighting draws into and light only those pixels
+    /// (`glStencilFunc(GL_EQUAL, 1, 0xFF)`), instead of a mask of its own;
+    /// the mix keeps the first layer's lit value everywhere else. `None`
+    /// with one layer, or where the first resolve had no draw buffer left
+    /// for the flag the selection is made from.
+    pub fn second_layer_selection(&self) -> Option<TextureRef> {
+        self.second
+            .as_ref()
+            .and_then(SecondLayer::selection)
+            .map(TextureRef::from)
+    }
+
     /// The second layer's G-buffer as of the last resolve: its colour
     /// textures in host colour order (the host's formats; meaningful where
     /// the coverage is above 0) and its depth-buffer values (R32F, the

@@ -31,8 +31,10 @@ pub const SECOND_LAYER_SELECT_FRAG: &str = include_str!("second_layer_select.fra
 /// `second_layer_depth.frag`.
 pub const SECOND_LAYER_DEPTH_FRAG: &str = include_str!("second_layer_depth.frag");
 
-/// The stencil value of the pixels the second layer's resolve runs on.
-const SELECTED: u8 = 1;
+/// The stencil value of the pixels the second layer's resolve runs on
+/// ([`MsaaRetrofit::second_layer_selection`](crate::MsaaRetrofit::second_layer_selection)).
+pub const SECOND_LAYER_SELECTED: u8 = 1;
+const SELECTED: u8 = SECOND_LAYER_SELECTED;
 
 /// How the two lit layers are mixed by the second layer's coverage `α`.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -516,6 +518,15 @@ impl SecondLayer {
         check_error(gl, "selecting the second layer's pixels")?;
         self.selected.set(true);
         Ok(Some(SELECTED))
+    }
+
+    /// The selection stencil (`DEPTH24_STENCIL8`; its stencil is
+    /// [`SECOND_LAYER_SELECTED`] exactly where the last resolve found a
+    /// second cluster, 0 elsewhere; its depth is not defined), when the
+    /// last resolve marked it (the first resolve had a draw buffer for its
+    /// outside flag).
+    pub(crate) fn selection(&self) -> Option<&Texture2d> {
+        self.selected.get().then_some(&self.stencil)
     }
 
     /// The second layer's resolve target: layer 2's colours at `Color(k)`,

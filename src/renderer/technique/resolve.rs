@@ -4,9 +4,10 @@
 //! G-buffer; lighting is per pixel. With two layers
 //! ([`ResolveSettings::layers`](crate::resolve::ResolveSettings::layers))
 //! the renderer, as a host of the retrofit, lights the second layer with the
-//! same lighting pass, only where the layer's coverage is above 0 (a stencil
-//! mask on the HDR target, `second_layer_mask.frag`), and the retrofit
-//! mixes the two lit layers after the tonemap curve.
+//! same lighting pass, only where the layer's coverage is above 0 (the
+//! retrofit's selection stencil attached to the HDR target, or, where the
+//! retrofit has none, a mask of its own, `second_layer_mask.frag`), and
+//! the retrofit mixes the two lit layers after the tonemap curve.
 
 use super::{ComplexPixelsInput, FrameParts, LightingStep, Setup, Technique, resolve_twins};
 use crate::frame::Frame as ResolveFrame;
@@ -19,6 +20,7 @@ use crate::renderer::second_layer_mask::SecondLayerMaskPass;
 use crate::renderer::{AaMode, RenderOptions, slow_path, timed};
 use crate::resolve::{ResolveMethod, ResolveSettings, Window};
 use crate::retrofit::MsaaRetrofit;
+use crate::second_layer::SECOND_LAYER_SELECTED;
 use crate::{Error, Result};
 use std::any::Any;
 
@@ -30,6 +32,25 @@ pub(crate) struct Resolve {
     /// The HDR texture with a stencil mask, for the second lighting; made by
     /// the first frame after a change of options.
     targets: Option<MaskedHdr>,
+    /// The HDR texture with the retrofit's own selection stencil attached,
+    /// where the retrofit has one: the second lighting is masked by it and
+    /// the renderer's mask pass is not needed.
+    shared: Option<SharedSelection>,
+}
+
+/// The HDR texture with the retrofit's selection stencil
+/// ([`MsaaRetrofit::second_layer_selection`]).
+#[derive(Debug)]
+struct SharedSelection {
+    /// The selection texture it was made for.
+    stencil: glow::Texture,
+    fbo: Framebuffer,
+}
+
+impl GlObject for SharedSelection {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.fbo.handles(out);
+    }
 }
 
 /// The HDR texture with a stencil attachment of its own.
@@ -73,6 +94,40 @@ impl MaskedHdr {
         self.fbo.destroy(gl);
         self.stencil.destroy(gl);
     }
+}
+
+/// The HDR framebuffer with the retrofit's selection `stencil` attached
+/// (in `shared`), made again when the retrofit's selection texture changed.
+fn shared_selection(
+    shared: &mut Option<SharedSelection>,
+    gl: &glow::Context,
+    hdr: &Texture2d,
+    stencil: TextureRef,
+) -> Result<glow::Framebuffer> {
+    if shared.as_ref().is_some_and(|s| s.stencil != stencil.raw) {
+        if let Some(old) = shared.take() {
+            old.fbo.destroy(gl);
+        }
+    }
+    if shared.is_none() {
+        let fbo = Framebuffer::new(
+            gl,
+            "hdr with the retrofit's second-layer selection",
+            &[
+                (Attachment::Color(0), TextureRef::from(hdr)),
+                (Attachment::DepthStencil, stencil),
+            ],
+            &[Some(0)],
+        )?;
+        *shared = Some(SharedSelection {
+            stencil: stencil.raw,
+            fbo,
+        });
+    }
+    shared
+        .as_ref()
+        .map(|s| s.fbo.raw())
+        .ok_or_else(|| Error::invalid("the shared selection framebuffer was not made"))
 }
 
 fn two_layers(aa: &AaMode) -> bool {
@@ -124,6 +179,9 @@ impl Technique for Resolve {
         if let Some(t) = self.targets.take() {
             t.destroy(gl);
         }
+        if let Some(s) = self.shared.take() {
+            s.fbo.destroy(gl);
+        }
     }
 
     fn after_geometry(
@@ -168,12 +226,31 @@ impl Technique for Resolve {
                 height: hdr.texture.height,
                 stencil: StencilSelect::All,
             };
+            // The retrofit's selection stencil, where it has one, masks the
+            // second lighting as it is; else the renderer's own mask.
+            let selection = retrofit.second_layer_selection();
+            let shared = match selection {
+                Some(stencil) => Some(shared_selection(
+                    &mut self.shared,
+                    gl,
+                    &hdr.texture,
+                    stencil,
+                )?),
+                None => None,
+            };
             // The renderer's own steps go into the retrofit's profile
             // beside the retrofit's (when profiling).
             let profile = retrofit.profile_mut();
-            let masked = profile.time(gl, "second layer: the renderer's mask", || {
-                mask.draw(gl, target, step.fullscreen, coverage)
-            })?;
+            let masked = match shared {
+                Some(fbo) => LightTarget {
+                    fbo,
+                    stencil: StencilSelect::Equal(SECOND_LAYER_SELECTED),
+                    ..target
+                },
+                None => profile.time(gl, "second layer: the renderer's mask", || {
+                    mask.draw(gl, target, step.fullscreen, coverage)
+                })?,
+            };
             profile.time(gl, "second layer: the renderer's second lighting", || {
                 step.light_per_pixel_into(gl, masked)
             })?;
@@ -205,6 +282,9 @@ impl Technique for Resolve {
     fn destroy(self: Box<Self>, gl: &glow::Context) {
         if let Some(t) = self.targets {
             t.destroy(gl);
+        }
+        if let Some(s) = self.shared {
+            s.fbo.destroy(gl);
         }
         if let Some(m) = self.mask {
             m.destroy(gl);
