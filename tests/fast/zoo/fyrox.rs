@@ -512,6 +512,10 @@ fn one_layer_splits_clusters_by_the_named_packed_normals() {
     };
     let named = outcome(&ctx, 1);
     named.assert_ok();
+    if named.not_run.is_some() {
+        // The host's own shaders need a newer context (the 3.2 floor run).
+        return;
+    }
     let unnamed = harness::run::<FyroxEngine>(
         &ctx,
         "fyrox (normals not named)",
