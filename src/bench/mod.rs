@@ -560,7 +560,14 @@ impl Pool {
         if let Some(i) = self.renderers.iter().position(|(k, _)| *k == key) {
             return Ok(i);
         }
-        let renderer = Renderer::new(ctx.gl(), |name| ctx.get_proc_address(name), scene, options)?;
+        let mut renderer =
+            Renderer::new(ctx.gl(), |name| ctx.get_proc_address(name), scene, options)?;
+        // The bench reads the lit image alone, as a host whose passes after
+        // lighting leave the G-buffer alone would: no first-layer restore.
+        if let Err(e) = renderer.set_keep_gbuffer(ctx.gl(), false) {
+            renderer.destroy(ctx.gl());
+            return Err(e);
+        }
         self.renderers.push((key, renderer));
         Ok(self.renderers.len() - 1)
     }

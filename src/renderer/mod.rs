@@ -107,7 +107,7 @@ use crate::gl::{
     TimerKind, VertexArray, check_error, framebuffer_status_name,
 };
 use crate::resolve::SelectionFlag;
-use crate::retrofit::MsaaRetrofit;
+use crate::retrofit::{MsaaRetrofit, RetrofitOptions};
 use crate::scene::{Background, Camera, Light, Scene};
 use crate::{Error, Result};
 use background::BackgroundPass;
@@ -466,6 +466,9 @@ pub struct Renderer {
     passes: Passes,
     frame: Frame,
     decal_hook: Option<DecalHook>,
+    /// Whether the G-buffer holds the first layer again after the frame
+    /// ([`Renderer::set_keep_gbuffer`]).
+    keep_gbuffer: bool,
     /// Every anti-aliasing technique with what it has built; the one that
     /// renders `options.aa` runs the frame's method-specific steps.
     techniques: Techniques,
@@ -560,6 +563,7 @@ impl Renderer {
             passes,
             frame,
             decal_hook: None,
+            keep_gbuffer: true,
             techniques: Techniques::new(),
         };
         if let Err(e) = renderer.prepare_technique(gl, None) {
@@ -688,6 +692,7 @@ impl Renderer {
         let footprint = (self.camera.fov_y / height as f32).tan();
         let slots = self.passes.geometry.slots();
         let runs_transparent = self.plan.runs(Pass::Transparent);
+        self.align_first_layer_restore(gl)?;
         let specular_constant = self
             .plan
             .constant_specular
@@ -1195,6 +1200,47 @@ impl Renderer {
         Ok(())
     }
 
+    /// Keep the G-buffer's first layer after each frame (`true`, the
+    /// default) or not. With two layers the retrofit puts the host's
+    /// second layer into the G-buffer for the second lighting; a caller that
+    /// reads the G-buffer after [`Renderer::render`] ([`Renderer::gbuffer`],
+    /// `dump`, the goldens) needs it back. One that reads only the lit image
+    /// (the bench) may say `false`: the retrofit then skips its save and
+    /// restore copies ([`RetrofitOptions::restore_first_layer`]). The
+    /// frame's own passes after lighting that read the G-buffer (transparent
+    /// objects, which depth-test against it, and SMAA's depth edges) keep
+    /// the restore whatever this says. The lit image is the same either way.
+    pub fn set_keep_gbuffer(&mut self, gl: &glow::Context, keep: bool) -> Result<()> {
+        self.keep_gbuffer = keep;
+        self.align_first_layer_restore(gl)
+    }
+
+    /// Whether the frame's G-buffer must hold the first layer again after
+    /// the second lighting.
+    fn restores_first_layer(&self) -> bool {
+        let smaa_reads_depth = self
+            .options
+            .smaa
+            .is_some_and(|smaa| smaa.edges == SmaaEdges::Depth);
+        self.keep_gbuffer || self.plan.runs(Pass::Transparent) || smaa_reads_depth
+    }
+
+    /// Set the retrofit's [`RetrofitOptions::restore_first_layer`] to what
+    /// this frame needs, where it differs (a change of no twin: no rebuild).
+    fn align_first_layer_restore(&mut self, gl: &glow::Context) -> Result<()> {
+        let restore = self.restores_first_layer();
+        if let Some(r) = self.frame.retrofit.as_mut() {
+            if r.options().restore_first_layer != restore {
+                let options = RetrofitOptions {
+                    restore_first_layer: restore,
+                    ..r.options().clone()
+                };
+                r.set_options(gl, &options)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Bring the retrofit in line with `options` (each branch is all or
     /// nothing). `host_changed`: the G-buffer's textures were re-allocated.
     fn update_retrofit(
@@ -1203,7 +1249,11 @@ impl Renderer {
         options: &RenderOptions,
         host_changed: bool,
     ) -> Result<()> {
-        let retrofit_options = options.retrofit_options(self.opt_out_flag);
+        let retrofit_options = RetrofitOptions {
+            // Checked again each frame against the plan then in effect.
+            restore_first_layer: self.restores_first_layer(),
+            ..options.retrofit_options(self.opt_out_flag)
+        };
         match (&mut self.frame.retrofit, options.aa.is_multisampled()) {
             (Some(r), true) => {
                 if host_changed {

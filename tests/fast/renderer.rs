@@ -339,6 +339,90 @@ fn decal_hook_sees_and_writes_the_resolved_gbuffer() {
     assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
 }
 
+/// `Renderer::set_keep_gbuffer(false)`, as the bench sets it: with two
+/// layers the retrofit stops putting the first layer back after the second
+/// lighting (the G-buffer then holds the second layer's copy), the lit
+/// image is the same bit for bit, and `true` brings the restore back. A
+/// scene with transparent objects, which depth-test against the G-buffer
+/// after lighting, keeps the restore whatever the caller says.
+#[test]
+fn not_keeping_the_gbuffer_skips_the_restore_and_leaves_the_lit_image_alone() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let two_layers = AaMode::Resolve(ResolveSettings {
+        method: ResolveMethod::Median,
+        layers: 2,
+        ..ResolveSettings::default()
+    });
+    let normal = GBufferLayout::recommended()
+        .index_of("normal")
+        .expect("normal attachment") as u32;
+    let scene = Scene::load("builtin:greebles").expect("scene");
+    let mut renderer = renderer(&ctx, &scene, &options(two_layers.clone()));
+    let restores = |r: &Renderer| {
+        r.retrofit()
+            .expect("a retrofit with two layers")
+            .options()
+            .restore_first_layer
+    };
+    assert!(restores(&renderer), "the default keeps the G-buffer");
+    let kept_image = render_checked(gl, &mut renderer, "two layers, G-buffer kept");
+    let kept_normals = read_attachment(gl, renderer.gbuffer(), normal);
+
+    renderer
+        .set_keep_gbuffer(gl, false)
+        .expect("keep_gbuffer off");
+    assert!(
+        !restores(&renderer),
+        "keep_gbuffer(false) turns the restore off"
+    );
+    let image = render_checked(gl, &mut renderer, "two layers, G-buffer not kept");
+    assert!(
+        image == kept_image,
+        "the lit image changed without the restore"
+    );
+    let normals = read_attachment(gl, renderer.gbuffer(), normal);
+    let changed = normals
+        .chunks_exact(4)
+        .zip(kept_normals.chunks_exact(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        changed > 0,
+        "without the restore the G-buffer should hold the second layer's normals"
+    );
+
+    renderer
+        .set_keep_gbuffer(gl, true)
+        .expect("keep_gbuffer on");
+    assert!(restores(&renderer));
+    let image = render_checked(gl, &mut renderer, "two layers, G-buffer kept again");
+    assert!(
+        image == kept_image,
+        "the lit image changed with the restore back"
+    );
+    assert!(
+        read_attachment(gl, renderer.gbuffer(), normal) == kept_normals,
+        "the restore is back: the G-buffer holds the first layer again"
+    );
+    renderer.destroy(gl);
+
+    let scene = Scene::load("builtin:transparent").expect("scene");
+    let mut with_glass = self::renderer(&ctx, &scene, &options(two_layers));
+    with_glass
+        .set_keep_gbuffer(gl, false)
+        .expect("keep_gbuffer off");
+    render_checked(gl, &mut with_glass, "two layers, transparent objects");
+    assert!(
+        restores(&with_glass),
+        "transparent objects depth-test against the G-buffer after lighting: the restore stays"
+    );
+    with_glass.destroy(gl);
+    assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
+}
+
 #[test]
 fn set_options_switches_at_run_time_without_leaks() {
     let Some(ctx) = common::egl_context() else {
