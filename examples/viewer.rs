@@ -7,7 +7,7 @@
 //!
 //! ```sh
 //! cargo run --release --example viewer -- [SCENE] [--size 960x540] [--samples N]
-//!     [--method none|average|front|median|back|taa] [--fxaa | --smaa]
+//!     [--method none|average|front|median|back|taa|per-sample] [--layers 1|2] [--fxaa | --smaa]
 //!     [--frames N --screenshot FILE.png] [--keys KEYS]
 //! ```
 //! `SCENE` is `builtin:NAME` (default `builtin:greebles`) or a `.gltf`/`.glb` path.
@@ -16,8 +16,9 @@
 //!
 //! | key | what |
 //! |---|---|
-//! | `M` / `Shift+M` | next / previous method: none, average, front, median, back, taa |
-//! | `0` … `5` | none, average, front, median, back, taa (temporal anti-aliasing: orbit to see its lag and smear) |
+//! | `M` / `Shift+M` | next / previous method: none, average, front, median, back, taa, per-sample |
+//! | `0` … `6` | none, average, front, median, back, taa (temporal anti-aliasing: orbit to see its lag and smear), per-sample (every sample lit: the cost the resolve avoids) |
+//! | `T` | the second resolved layer on / off (front, median and back; `:layers=2`: the lighting runs twice, the second time only where a pixel has a second surface) |
 //! | `N` | next sample count the driver really offers for every G-buffer format |
 //! | `F` | FXAA on / off (turns SMAA off) |
 //! | `S` | SMAA 1x (preset high) on / off (turns FXAA off) |
@@ -74,7 +75,15 @@ type AnyResult<T> = Result<T, Box<dyn Error>>;
 const WARMUP_FRAMES: u32 = 100;
 
 /// The methods, in key order (`0` … `5`), as method specs.
-const METHODS: [&str; 6] = ["none", "average", "front", "median", "back", "taa"];
+const METHODS: [&str; 7] = [
+    "none",
+    "average",
+    "front",
+    "median",
+    "back",
+    "taa",
+    "per-sample",
+];
 
 fn main() -> ExitCode {
     let args = match parse_args::<Cli>() {
@@ -150,6 +159,7 @@ struct Args {
     height: u32,
     samples: u32,
     method: usize,
+    layers: u32,
     fxaa: bool,
     smaa: bool,
     frames: Option<u32>,
@@ -173,6 +183,9 @@ struct Cli {
     /// The method to start with.
     #[arg(long, default_value = "median", value_parser = METHODS)]
     method: String,
+    /// Resolved layers of front, median and back to start with (`T` toggles).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=2))]
+    layers: u32,
     /// Start with FXAA on.
     #[arg(long, conflicts_with = "smaa")]
     fxaa: bool,
@@ -199,6 +212,7 @@ impl From<Cli> for Args {
             samples: cli.samples,
             // clap admitted only the methods' names.
             method: METHODS.iter().position(|m| *m == cli.method).unwrap_or(3),
+            layers: cli.layers,
             fxaa: cli.fxaa,
             smaa: cli.smaa,
             frames: cli.frames.or_else(|| cli.screenshot.as_ref().map(|_| 1)),
@@ -216,7 +230,7 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
 }
 
 /// The keys, for `--help` and `?`.
-const KEYS: &str = "keys: M/Shift+M method, 0-5 none/average/front/median/back/taa, N sample count, F FXAA, S SMAA, \
+const KEYS: &str = "keys: M/Shift+M method, 0-6 none/average/front/median/back/taa/per-sample, T second layer, N sample count, F FXAA, S SMAA, \
 V/Shift+V view, arrows/HJKL or drag orbit, +/- or wheel zoom, R reset camera, P screenshot, ? keys, Esc/Q quit";
 
 fn print_keys() {
@@ -228,6 +242,7 @@ fn print_keys() {
 enum Action {
     Method(usize),
     StepMethod(isize),
+    ToggleLayers,
     NextSamples,
     ToggleFxaa,
     ToggleSmaa,
@@ -245,7 +260,8 @@ fn action_for_char(c: char) -> Option<Action> {
     Some(match c {
         'm' => Action::StepMethod(1),
         'M' => Action::StepMethod(-1),
-        '0'..='5' => Action::Method(c as usize - '0' as usize),
+        '0'..='6' => Action::Method(c as usize - '0' as usize),
+        't' | 'T' => Action::ToggleLayers,
         'n' | 'N' => Action::NextSamples,
         'f' | 'F' => Action::ToggleFxaa,
         's' | 'S' => Action::ToggleSmaa,
@@ -479,6 +495,8 @@ struct Viewer {
     scene: Scene,
     options: RenderOptions,
     method: usize,
+    /// 1 or 2: the resolved layers front, median and back run with.
+    layers: u32,
     sample_counts: Vec<u32>,
     view: View,
     orbit: Orbit,
@@ -552,7 +570,7 @@ impl Viewer {
             width: w.get(),
             height: h.get(),
             samples: args.samples,
-            aa: aa_mode(METHODS[args.method]),
+            aa: aa_mode(METHODS[args.method], args.layers),
             fxaa: args.fxaa,
             smaa: args.smaa.then(SmaaOptions::default),
             ..RenderOptions::default()
@@ -599,6 +617,7 @@ impl Viewer {
             scene,
             options,
             method: args.method,
+            layers: args.layers,
             sample_counts,
             view: View::Final,
             orbit,
@@ -645,12 +664,17 @@ impl Viewer {
         match action {
             Action::Method(i) => {
                 self.method = i.min(METHODS.len() - 1);
-                options.aa = aa_mode(METHODS[self.method]);
+                options.aa = aa_mode(METHODS[self.method], self.layers);
             }
             Action::StepMethod(step) => {
                 self.method =
                     (self.method as isize + step).rem_euclid(METHODS.len() as isize) as usize;
-                options.aa = aa_mode(METHODS[self.method]);
+                options.aa = aa_mode(METHODS[self.method], self.layers);
+            }
+            // Kept across method changes; only the layered methods use it.
+            Action::ToggleLayers => {
+                self.layers = 3 - self.layers;
+                options.aa = aa_mode(METHODS[self.method], self.layers);
             }
             Action::NextSamples => {
                 if let Some(i) = self
@@ -833,7 +857,13 @@ impl Viewer {
     }
 
     fn title(&self) -> String {
-        let method = METHODS[self.method];
+        let method = self.options.aa.name();
+        let layers = match self.options.aa.settings() {
+            Some(s) if s.layers == 2 && matches!(self.options.aa, AaMode::Resolve(_)) => {
+                ":layers=2"
+            }
+            _ => "",
+        };
         let samples = match self.renderer.samples() {
             1 => String::new(),
             n => format!(" {n}x"),
@@ -846,7 +876,7 @@ impl Viewer {
             ""
         };
         format!(
-            "deferred-msaa — {} — {method}{samples}{fxaa} — view: {} — {:.1} ms",
+            "deferred-msaa — {} — {method}{layers}{samples}{fxaa} — view: {} — {:.1} ms",
             self.scene.name,
             self.view_name(self.view),
             self.frame_ms
@@ -854,11 +884,19 @@ impl Viewer {
     }
 }
 
-fn aa_mode(method: &str) -> AaMode {
-    // The list holds the registry's own method names, which parse.
-    method
-        .parse()
-        .unwrap_or_else(|e| panic!("the viewer's method `{method}`: {e}"))
+/// `method` with `layers` resolved layers where it has a second
+/// (front, median and back).
+fn aa_mode(method: &str, layers: u32) -> AaMode {
+    let layered = matches!(method, "front" | "median" | "back") && layers == 2;
+    let spec = if layered {
+        format!("{method}:layers=2")
+    } else {
+        method.to_string()
+    };
+    // The list holds the registry's own method names, which parse, with
+    // an option every resolve method but average takes.
+    spec.parse()
+        .unwrap_or_else(|e| panic!("the viewer's method `{spec}`: {e}"))
 }
 
 /// The sample counts every attachment of the layout really gets.

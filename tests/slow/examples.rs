@@ -583,8 +583,8 @@ fn viewer_runs_in_a_window_and_switches_live() {
     };
     let shot = scratch("viewer.png");
     let _ = std::fs::remove_file(&shot);
-    // One key per frame: no MSAA, taa, back to median, FXAA on and off,
-    // SMAA on and off, the next
+    // One key per frame: no MSAA, taa, per-sample, back to median, its
+    // second layer on, off and on, FXAA on and off, SMAA on and off, the next
     // sample count, every view round to the final image, orbit away and
     // back. The viewer fails on any blank frame. The views are the final
     // image, the attachments the scene-adaptive plan keeps, depth and complex.
@@ -598,7 +598,7 @@ fn viewer_runs_in_a_window_and_switches_live() {
     )
     .expect("a plan");
     let views = 1 + plan.layout.colors.len() + 2;
-    let keys = format!("053ffssn{}lh", "v".repeat(views));
+    let keys = format!("0563tttffssn{}lh", "v".repeat(views));
     let frames = keys.chars().count() + 2;
     let result = run_with_limit(
         Command::new(&viewer)
@@ -618,13 +618,17 @@ fn viewer_runs_in_a_window_and_switches_live() {
     assert_not_blank(&img, "viewer screenshot");
     let stdout = String::from_utf8_lossy(&result.stdout);
     assert!(
-        stdout.contains("median"),
-        "the title should name the method: {stdout}"
+        stdout.contains("median:layers=2"),
+        "the title should name the method and its second layer: {stdout}"
     );
 
     // The window shows what the renderer renders: the model is there.
     let scene = Scene::load("builtin:box").expect("the built-in scene");
-    let Some(reference) = builtin_render(&scene, median()) else {
+    let two_layers = AaMode::Resolve(ResolveSettings {
+        layers: 2,
+        ..ResolveSettings::default()
+    });
+    let Some(reference) = builtin_render(&scene, two_layers) else {
         return;
     };
     let stats = flip(&reference, &img).expect("same sizes");
