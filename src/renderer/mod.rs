@@ -107,7 +107,7 @@ use crate::gl::{
     TimerKind, VertexArray, check_error, framebuffer_status_name,
 };
 use crate::resolve::SelectionFlag;
-use crate::retrofit::{MsaaRetrofit, RetrofitOptions};
+use crate::retrofit::{FirstLayerRestore, MsaaRetrofit, RetrofitOptions};
 use crate::scene::{Background, Camera, Light, Scene};
 use crate::{Error, Result};
 use background::BackgroundPass;
@@ -1205,30 +1205,36 @@ impl Renderer {
     /// second layer into the G-buffer for the second lighting; a caller that
     /// reads the G-buffer after [`Renderer::render`] ([`Renderer::gbuffer`],
     /// `dump`, the goldens) needs it back. One that reads only the lit image
-    /// (the bench) may say `false`: the retrofit then skips its save and
-    /// restore copies ([`RetrofitOptions::restore_first_layer`]). The
-    /// frame's own passes after lighting that read the G-buffer (transparent
-    /// objects, which depth-test against it, and SMAA's depth edges) keep
-    /// the restore whatever this says. The lit image is the same either way.
+    /// (the bench) may say `false`: the retrofit then copies back only what
+    /// the frame's own passes after lighting read (the depth, which
+    /// transparent objects are tested against and SMAA's depth edges read),
+    /// or nothing ([`RetrofitOptions::restore_first_layer`]). The lit image
+    /// is the same either way.
     pub fn set_keep_gbuffer(&mut self, gl: &glow::Context, keep: bool) -> Result<()> {
         self.keep_gbuffer = keep;
         self.align_first_layer_restore(gl)
     }
 
-    /// Whether the frame's G-buffer must hold the first layer again after
+    /// What of the first layer the frame's G-buffer must hold again after
     /// the second lighting.
-    fn restores_first_layer(&self) -> bool {
+    fn first_layer_restore(&self) -> FirstLayerRestore {
         let smaa_reads_depth = self
             .options
             .smaa
             .is_some_and(|smaa| smaa.edges == SmaaEdges::Depth);
-        self.keep_gbuffer || self.plan.runs(Pass::Transparent) || smaa_reads_depth
+        if self.keep_gbuffer {
+            FirstLayerRestore::Everything
+        } else if self.plan.runs(Pass::Transparent) || smaa_reads_depth {
+            FirstLayerRestore::DepthAndStencil
+        } else {
+            FirstLayerRestore::Nothing
+        }
     }
 
     /// Set the retrofit's [`RetrofitOptions::restore_first_layer`] to what
     /// this frame needs, where it differs (a change of no twin: no rebuild).
     fn align_first_layer_restore(&mut self, gl: &glow::Context) -> Result<()> {
-        let restore = self.restores_first_layer();
+        let restore = self.first_layer_restore();
         if let Some(r) = self.frame.retrofit.as_mut() {
             if r.options().restore_first_layer != restore {
                 let options = RetrofitOptions {
@@ -1251,7 +1257,7 @@ impl Renderer {
     ) -> Result<()> {
         let retrofit_options = RetrofitOptions {
             // Checked again each frame against the plan then in effect.
-            restore_first_layer: self.restores_first_layer(),
+            restore_first_layer: self.first_layer_restore(),
             ..options.retrofit_options(self.opt_out_flag)
         };
         match (&mut self.frame.retrofit, options.aa.is_multisampled()) {

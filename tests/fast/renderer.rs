@@ -18,6 +18,7 @@ use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::renderer::technique::Complex;
 use deferred_msaa_lab::renderer::{AaMode, DepthMode, RenderOptions, Renderer};
 use deferred_msaa_lab::resolve::{ResolveMethod, ResolveRule, ResolveSettings};
+use deferred_msaa_lab::retrofit::FirstLayerRestore;
 use deferred_msaa_lab::scene::Scene;
 use glow::HasContext;
 
@@ -360,22 +361,27 @@ fn not_keeping_the_gbuffer_skips_the_restore_and_leaves_the_lit_image_alone() {
         .index_of("normal")
         .expect("normal attachment") as u32;
     let scene = Scene::load("builtin:greebles").expect("scene");
-    let mut renderer = renderer(&ctx, &scene, &options(two_layers.clone()));
+    let mut renderer = renderer(&ctx, &scene, &options(two_layers));
     let restores = |r: &Renderer| {
         r.retrofit()
             .expect("a retrofit with two layers")
             .options()
             .restore_first_layer
     };
-    assert!(restores(&renderer), "the default keeps the G-buffer");
+    assert_eq!(
+        restores(&renderer),
+        FirstLayerRestore::Everything,
+        "the default keeps the G-buffer"
+    );
     let kept_image = render_checked(gl, &mut renderer, "two layers, G-buffer kept");
     let kept_normals = read_attachment(gl, renderer.gbuffer(), normal);
 
     renderer
         .set_keep_gbuffer(gl, false)
         .expect("keep_gbuffer off");
-    assert!(
-        !restores(&renderer),
+    assert_eq!(
+        restores(&renderer),
+        FirstLayerRestore::Nothing,
         "keep_gbuffer(false) turns the restore off"
     );
     let image = render_checked(gl, &mut renderer, "two layers, G-buffer not kept");
@@ -397,7 +403,7 @@ fn not_keeping_the_gbuffer_skips_the_restore_and_leaves_the_lit_image_alone() {
     renderer
         .set_keep_gbuffer(gl, true)
         .expect("keep_gbuffer on");
-    assert!(restores(&renderer));
+    assert_eq!(restores(&renderer), FirstLayerRestore::Everything);
     let image = render_checked(gl, &mut renderer, "two layers, G-buffer kept again");
     assert!(
         image == kept_image,
@@ -411,13 +417,19 @@ fn not_keeping_the_gbuffer_skips_the_restore_and_leaves_the_lit_image_alone() {
 
     let scene = Scene::load("builtin:transparent").expect("scene");
     let mut with_glass = self::renderer(&ctx, &scene, &options(two_layers));
+    let kept = render_checked(gl, &mut with_glass, "two layers, transparent objects");
     with_glass
         .set_keep_gbuffer(gl, false)
         .expect("keep_gbuffer off");
-    render_checked(gl, &mut with_glass, "two layers, transparent objects");
-    assert!(
+    assert_eq!(
         restores(&with_glass),
-        "transparent objects depth-test against the G-buffer after lighting: the restore stays"
+        FirstLayerRestore::DepthAndStencil,
+        "transparent objects depth-test against the G-buffer after lighting: its depth comes back"
+    );
+    let image = render_checked(gl, &mut with_glass, "two layers, transparent objects");
+    assert!(
+        image == kept,
+        "with the depth alone put back, the transparent objects' image changed"
     );
     with_glass.destroy(gl);
     assert_eq!(live_objects().total(), 0, "{:?}", live_objects());

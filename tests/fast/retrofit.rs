@@ -6,7 +6,7 @@
 use crate::common;
 
 use deferred_msaa::resolve::NormalEncoding;
-use deferred_msaa::{ColorAttachment, Error, LayerMix, NormalAttachment};
+use deferred_msaa::{ColorAttachment, Error, FirstLayerRestore, LayerMix, NormalAttachment};
 use deferred_msaa_lab::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef, live_objects};
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
@@ -932,12 +932,14 @@ fn the_lit_layers_mix_by_coverage_in_the_chosen_domain() {
     assert_eq!(live_objects(), before, "GL objects leaked");
 }
 
-/// `restore_first_layer: false`, for hosts that read nothing of their
-/// G-buffer after lighting: the lit image is bit for bit the one with the
-/// first layer restored, and the host's textures and depth hold the second
-/// layer afterwards instead of the first; the option changes without a
-/// rebuild, and switching it between `begin` and `finish` restores exactly
-/// when `begin` saved.
+/// `restore_first_layer: Nothing`, for hosts that read nothing of their
+/// G-buffer after lighting, and `DepthAndStencil`, for hosts that only
+/// depth-test against it: the lit image is bit for bit the one with the
+/// first layer restored; without a restore the host's textures and depth
+/// hold the second layer afterwards instead of the first, with the depth
+/// alone restored its colours do and its depth is the first layer's; the
+/// option changes without a rebuild, and switching it between `begin` and
+/// `finish` restores exactly what `begin` saved.
 #[test]
 fn without_restoring_the_first_layer_the_lit_image_is_the_same() {
     let Some(ctx) = common::egl_context() else {
@@ -977,35 +979,36 @@ fn without_restoring_the_first_layer_the_lit_image_is_the_same() {
     // One frame with the three calls; `flip` sets the option between begin
     // and finish. Returns the mixed image, the host's G-buffer before begin
     // and after finish, and the second layer's G-buffer.
-    let mut frame_with = |msaa: &mut MsaaRetrofit, restore: bool, flip: bool| {
-        let mut options = options.clone();
-        options.restore_first_layer = restore;
-        msaa.set_options(gl, &options).unwrap();
-        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
-        host.draw(gl, &projection(), false);
-        msaa.resolve(gl, &frame()).unwrap();
-        host.light(gl, fbo.raw(), 1.0);
-        let first = gbuffer(&mut readback);
-        assert!(msaa.begin_second_layer(gl, Some(fbo.raw())).unwrap());
-        if flip {
-            options.restore_first_layer = !restore;
+    let mut frame_with =
+        |msaa: &mut MsaaRetrofit, restore: FirstLayerRestore, flip: Option<FirstLayerRestore>| {
+            let mut options = options.clone();
+            options.restore_first_layer = restore;
             msaa.set_options(gl, &options).unwrap();
-        }
-        host.light(gl, fbo.raw(), 1.0);
-        msaa.finish_second_layer(gl, Some(fbo.raw())).unwrap();
-        let mixed = readback
-            .read(gl, TextureRef::from(&output), 1)
-            .unwrap()
-            .data;
-        let after = gbuffer(&mut readback);
-        let (colors, depth) = msaa.second_layer_gbuffer().unwrap();
-        let mut second: Vec<Vec<f32>> = colors
-            .iter()
-            .map(|t| readback.read(gl, *t, 1).unwrap().data)
-            .collect();
-        second.push(readback.read(gl, depth, 1).unwrap().data);
-        (mixed, first, after, second)
-    };
+            unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+            host.draw(gl, &projection(), false);
+            msaa.resolve(gl, &frame()).unwrap();
+            host.light(gl, fbo.raw(), 1.0);
+            let first = gbuffer(&mut readback);
+            assert!(msaa.begin_second_layer(gl, Some(fbo.raw())).unwrap());
+            if let Some(flipped) = flip {
+                options.restore_first_layer = flipped;
+                msaa.set_options(gl, &options).unwrap();
+            }
+            host.light(gl, fbo.raw(), 1.0);
+            msaa.finish_second_layer(gl, Some(fbo.raw())).unwrap();
+            let mixed = readback
+                .read(gl, TextureRef::from(&output), 1)
+                .unwrap()
+                .data;
+            let after = gbuffer(&mut readback);
+            let (colors, depth) = msaa.second_layer_gbuffer().unwrap();
+            let mut second: Vec<Vec<f32>> = colors
+                .iter()
+                .map(|t| readback.read(gl, *t, 1).unwrap().data)
+                .collect();
+            second.push(readback.read(gl, depth, 1).unwrap().data);
+            (mixed, first, after, second)
+        };
     // How many values of two sets of planes differ (bit for bit).
     let differ = |a: &[Vec<f32>], b: &[Vec<f32>]| -> usize {
         a.iter()
@@ -1018,13 +1021,14 @@ fn without_restoring_the_first_layer_the_lit_image_is_the_same() {
             })
             .sum()
     };
-    let (mixed_restored, first, after, _) = frame_with(&mut msaa, true, false);
+    use FirstLayerRestore::{DepthAndStencil, Everything, Nothing};
+    let (mixed_restored, first, after, _) = frame_with(&mut msaa, Everything, None);
     assert_eq!(
         differ(&after, &first),
         0,
         "restored: the first layer is back"
     );
-    let (mixed_kept, first, after, second) = frame_with(&mut msaa, false, false);
+    let (mixed_kept, first, after, second) = frame_with(&mut msaa, Nothing, None);
     assert_eq!(
         differ(
             std::slice::from_ref(&mixed_kept),
@@ -1042,13 +1046,32 @@ fn without_restoring_the_first_layer_the_lit_image_is_the_same() {
         0,
         "not restored: the host's colours are the second layer's"
     );
+    // The depth alone: it is the first layer's again, the colours are the
+    // second layer's.
+    let (mixed, first, after, second) = frame_with(&mut msaa, DepthAndStencil, None);
+    assert_eq!(differ(&[mixed], std::slice::from_ref(&mixed_restored)), 0);
+    assert_eq!(differ(&after[3..], &first[3..]), 0, "the depth is back");
+    assert!(
+        differ(&after[..3], &first[..3]) > 0,
+        "the second layer's colours differ from the first's somewhere"
+    );
+    assert_eq!(
+        differ(&after[..3], &second[..3]),
+        0,
+        "depth alone restored: the host's colours are the second layer's"
+    );
     // Turned off after begin: begin saved, so finish restores.
-    let (_, first, after, _) = frame_with(&mut msaa, true, true);
+    let (_, first, after, _) = frame_with(&mut msaa, Everything, Some(Nothing));
     assert_eq!(differ(&after, &first), 0);
     // Turned on after begin: nothing was saved, so nothing is put back.
-    let (mixed, first, after, _) = frame_with(&mut msaa, false, true);
-    assert_eq!(differ(&[mixed], &[mixed_restored]), 0);
+    let (mixed, first, after, _) = frame_with(&mut msaa, Nothing, Some(Everything));
+    assert_eq!(differ(&[mixed], std::slice::from_ref(&mixed_restored)), 0);
     assert!(differ(&after, &first) > 0);
+    // The depth saved at begin, everything asked for at finish: the depth
+    // alone comes back.
+    let (_, first, after, _) = frame_with(&mut msaa, DepthAndStencil, Some(Everything));
+    assert_eq!(differ(&after[3..], &first[3..]), 0);
+    assert!(differ(&after[..3], &first[..3]) > 0);
     msaa.destroy(gl);
     fbo.destroy(gl);
     output.destroy(gl);

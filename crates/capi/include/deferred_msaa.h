@@ -110,6 +110,10 @@ typedef uint32_t DmsaaStencilCopy;
 // How the two lit layers are mixed by the second layer's coverage.
 typedef uint32_t DmsaaLayerMix;
 
+// What `dmsaa_finish_second_layer` puts back of the first layer in the
+// host's G-buffer; what it does not put back holds the second layer.
+typedef uint32_t DmsaaRestore;
+
 // How the host's depth buffer holds depth.
 typedef uint32_t DmsaaDepthMode;
 
@@ -172,11 +176,10 @@ typedef struct {
   // With `DMSAA_LAYER_MIX_CURVE`: the curve's GLSL, NUL-terminated UTF-8,
   // copied by the call that reads the options; otherwise ignored.
   const char *layer_mix_curve;
-  // 1 (default): `dmsaa_finish_second_layer` puts the first layer back
-  // into the host's G-buffer (textures, depth, stencil). 0, for a host
-  // that reads nothing of its G-buffer after lighting until its next
-  // geometry pass: two full copies a frame fewer, the same lit image.
-  uint8_t restore_first_layer;
+  // `DMSAA_RESTORE_*` (default everything): what
+  // `dmsaa_finish_second_layer` puts back of the first layer in the
+  // host's G-buffer. The lit image is the same whichever is chosen.
+  DmsaaRestore restore_first_layer;
   // A limit on the twins' memory in bytes: `DMSAA_MEMORY_BUDGET_NONE`
   // (default), `DMSAA_MEMORY_BUDGET_DRIVER`, or a number of bytes. Over
   // it, the sample count steps down (or, strict, the call fails).
@@ -264,6 +267,18 @@ typedef const void *(*DmsaaGetProcAddress)(const char *name, void *user_data);
 // In the domain of the host's own tonemap curve: `layer_mix_curve` is GLSL
 // defining `vec3 dmsaa_curve(vec3)` and `vec3 dmsaa_curve_inverse(vec3)`.
 #define DMSAA_LAYER_MIX_CURVE 3
+
+// Nothing: for a host that reads nothing of its G-buffer after lighting
+// until its next geometry pass (no copies).
+#define DMSAA_RESTORE_NOTHING 0
+
+// Colours, depth and stencil (the default).
+#define DMSAA_RESTORE_EVERYTHING 1
+
+// Depth and stencil only: for a host whose passes after lighting test
+// against them (transparent objects drawn with depth testing) but read
+// no colour attachment.
+#define DMSAA_RESTORE_DEPTH_AND_STENCIL 2
 
 // OpenGL's default: the near plane at 0, cleared to 1 (the default).
 #define DMSAA_DEPTH_STANDARD 0
@@ -375,7 +390,7 @@ DmsaaStatus dmsaa_begin_second_layer(DmsaaRetrofit *retrofit,
 // After the host lit the second layer into `output_fbo` (the one given to
 // [`dmsaa_begin_second_layer`]): mix the two lit layers into it by the
 // second layer's coverage and put the first layer back into the host's
-// G-buffer (unless the options' `restore_first_layer` is 0).
+// G-buffer (as much of it as the options' `restore_first_layer` says).
 //
 // Threading: the host's context current on the calling thread. The host's
 // GL state is as it was.

@@ -34,8 +34,8 @@
 use deferred_msaa::gbuffer::MemoryBudget;
 use deferred_msaa::resolve::{NormalEncoding, ResolveMethod, ResolveRule, StencilCopy, Window};
 use deferred_msaa::{
-    ColorAttachment, DepthMode, Error, Frame, LayerMix, MsaaRetrofit, NormalAttachment,
-    PositionSpace, RetrofitOptions,
+    ColorAttachment, DepthMode, Error, FirstLayerRestore, Frame, LayerMix, MsaaRetrofit,
+    NormalAttachment, PositionSpace, RetrofitOptions,
 };
 use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char, c_void};
@@ -150,6 +150,19 @@ pub const DMSAA_LAYER_MIX_TONEMAPPED: DmsaaLayerMix = 2;
 /// defining `vec3 dmsaa_curve(vec3)` and `vec3 dmsaa_curve_inverse(vec3)`.
 pub const DMSAA_LAYER_MIX_CURVE: DmsaaLayerMix = 3;
 
+/// What `dmsaa_finish_second_layer` puts back of the first layer in the
+/// host's G-buffer; what it does not put back holds the second layer.
+pub type DmsaaRestore = u32;
+/// Nothing: for a host that reads nothing of its G-buffer after lighting
+/// until its next geometry pass (no copies).
+pub const DMSAA_RESTORE_NOTHING: DmsaaRestore = 0;
+/// Colours, depth and stencil (the default).
+pub const DMSAA_RESTORE_EVERYTHING: DmsaaRestore = 1;
+/// Depth and stencil only: for a host whose passes after lighting test
+/// against them (transparent objects drawn with depth testing) but read
+/// no colour attachment.
+pub const DMSAA_RESTORE_DEPTH_AND_STENCIL: DmsaaRestore = 2;
+
 /// How the host's depth buffer holds depth.
 pub type DmsaaDepthMode = u32;
 /// OpenGL's default: the near plane at 0, cleared to 1 (the default).
@@ -233,11 +246,10 @@ pub struct DmsaaOptions {
     /// With `DMSAA_LAYER_MIX_CURVE`: the curve's GLSL, NUL-terminated UTF-8,
     /// copied by the call that reads the options; otherwise ignored.
     pub layer_mix_curve: *const c_char,
-    /// 1 (default): `dmsaa_finish_second_layer` puts the first layer back
-    /// into the host's G-buffer (textures, depth, stencil). 0, for a host
-    /// that reads nothing of its G-buffer after lighting until its next
-    /// geometry pass: two full copies a frame fewer, the same lit image.
-    pub restore_first_layer: u8,
+    /// `DMSAA_RESTORE_*` (default everything): what
+    /// `dmsaa_finish_second_layer` puts back of the first layer in the
+    /// host's G-buffer. The lit image is the same whichever is chosen.
+    pub restore_first_layer: DmsaaRestore,
     /// A limit on the twins' memory in bytes: `DMSAA_MEMORY_BUDGET_NONE`
     /// (default), `DMSAA_MEMORY_BUDGET_DRIVER`, or a number of bytes. Over
     /// it, the sample count steps down (or, strict, the call fails).
@@ -547,7 +559,18 @@ fn convert(o: &DmsaaOptions) -> Result<Converted, Failure> {
             ],
         )?,
     };
-    options.restore_first_layer = flag("restore_first_layer", o.restore_first_layer)?;
+    options.restore_first_layer = pick(
+        "restore_first_layer",
+        o.restore_first_layer,
+        &[
+            ("DMSAA_RESTORE_NOTHING", FirstLayerRestore::Nothing),
+            ("DMSAA_RESTORE_EVERYTHING", FirstLayerRestore::Everything),
+            (
+                "DMSAA_RESTORE_DEPTH_AND_STENCIL",
+                FirstLayerRestore::DepthAndStencil,
+            ),
+        ],
+    )?;
     let strict = flag("memory_budget_strict", o.memory_budget_strict)?;
     options.memory_budget = match o.memory_budget_bytes {
         DMSAA_MEMORY_BUDGET_NONE => None,
@@ -613,7 +636,11 @@ pub extern "C" fn dmsaa_options_default() -> DmsaaOptions {
         stencil_copy: DMSAA_STENCIL_AUTO,
         layer_mix: DMSAA_LAYER_MIX_AUTO,
         layer_mix_curve: std::ptr::null(),
-        restore_first_layer: u8::from(rust.restore_first_layer),
+        restore_first_layer: match rust.restore_first_layer {
+            FirstLayerRestore::Nothing => DMSAA_RESTORE_NOTHING,
+            FirstLayerRestore::Everything => DMSAA_RESTORE_EVERYTHING,
+            FirstLayerRestore::DepthAndStencil => DMSAA_RESTORE_DEPTH_AND_STENCIL,
+        },
         memory_budget_bytes: DMSAA_MEMORY_BUDGET_NONE,
         memory_budget_strict: 0,
         depth_mode: DMSAA_DEPTH_STANDARD,
@@ -849,7 +876,7 @@ pub unsafe extern "C" fn dmsaa_begin_second_layer(
 /// After the host lit the second layer into `output_fbo` (the one given to
 /// [`dmsaa_begin_second_layer`]): mix the two lit layers into it by the
 /// second layer's coverage and put the first layer back into the host's
-/// G-buffer (unless the options' `restore_first_layer` is 0).
+/// G-buffer (as much of it as the options' `restore_first_layer` says).
 ///
 /// Threading: the host's context current on the calling thread. The host's
 /// GL state is as it was.
@@ -1038,7 +1065,7 @@ mod tests {
         o.rules[1] = DMSAA_RULE_SELECT;
         o.stencil_copy = DMSAA_STENCIL_BLIT;
         o.layer_mix = DMSAA_LAYER_MIX_TONEMAPPED;
-        o.restore_first_layer = 0;
+        o.restore_first_layer = DMSAA_RESTORE_DEPTH_AND_STENCIL;
         o.memory_budget_bytes = 1 << 20;
         o.memory_budget_strict = 1;
         o.depth_mode = DMSAA_DEPTH_REVERSED_Z;
@@ -1061,7 +1088,18 @@ mod tests {
         );
         assert_eq!(c.options.stencil, StencilCopy::Blit);
         assert_eq!(c.options.layer_mix, LayerMix::Tonemapped);
-        assert!(!c.options.restore_first_layer);
+        assert_eq!(
+            c.options.restore_first_layer,
+            FirstLayerRestore::DepthAndStencil
+        );
+        o.restore_first_layer = DMSAA_RESTORE_NOTHING;
+        assert_eq!(
+            convert(&o)
+                .expect("valid options")
+                .options
+                .restore_first_layer,
+            FirstLayerRestore::Nothing
+        );
         assert_eq!(
             c.options.memory_budget,
             Some(MemoryBudget {
@@ -1086,8 +1124,8 @@ mod tests {
             ("DmsaaOptions.stencil_copy is 4", |o| o.stencil_copy = 4),
             ("DmsaaOptions.rules[3] is 5", |o| o.rules[3] = 5),
             ("DmsaaOptions.depth_mode is 3", |o| o.depth_mode = 3),
-            ("DmsaaOptions.restore_first_layer is 7", |o| {
-                o.restore_first_layer = 7
+            ("DmsaaOptions.restore_first_layer is 3", |o| {
+                o.restore_first_layer = 3
             }),
             ("DmsaaOptions.normal_attachment is -2", |o| {
                 o.normal_attachment = -2

@@ -111,5 +111,7 @@ pub use frame::{DepthMode, Frame, Projection};
 pub use gl::ColorAttachment;
 /// The GL bindings the crate is written against; hosts use the same version.
 pub use glow;
-pub use retrofit::{MsaaRetrofit, NormalAttachment, PositionSpace, RetrofitOptions};
+pub use retrofit::{
+    FirstLayerRestore, MsaaRetrofit, NormalAttachment, PositionSpace, RetrofitOptions,
+};
 pub use second_layer::LayerMix;

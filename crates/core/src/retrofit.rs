@@ -65,18 +65,51 @@ pub struct RetrofitOptions {
     pub normal_attachment: Option<NormalAttachment>,
     /// How [`MsaaRetrofit::finish_second_layer`] mixes the two lit layers.
     pub layer_mix: LayerMix,
-    /// Whether [`MsaaRetrofit::finish_second_layer`] puts the first layer
-    /// (colours, depth and stencil) back into the host's G-buffer (the
-    /// default, `true`). A host whose passes after lighting read the
-    /// G-buffer or test against its depth or stencil (decals, transparent
-    /// objects drawn into the lit image with depth testing, screen-space
-    /// effects, picking) needs it. A host that touches none of them again
-    /// before its next geometry pass may set `false`:
-    /// [`MsaaRetrofit::begin_second_layer`] then does not copy the host's
-    /// G-buffer aside and `finish` does not copy it back, two full copies
-    /// fewer a frame, and the host's textures, depth and stencil hold the
-    /// second layer afterwards. The lit image is the same.
-    pub restore_first_layer: bool,
+    /// What [`MsaaRetrofit::finish_second_layer`] puts back of the first
+    /// layer in the host's G-buffer ([`FirstLayerRestore`]; by default
+    /// everything). The lit image is the same whichever is chosen.
+    pub restore_first_layer: FirstLayerRestore,
+}
+
+/// What of the host's G-buffer [`MsaaRetrofit::finish_second_layer`] puts
+/// back as the first layer had it ([`RetrofitOptions::restore_first_layer`]).
+/// [`MsaaRetrofit::begin_second_layer`] copies that much aside and `finish`
+/// copies it back; what is not put back holds the second layer afterwards
+/// (where a pixel has none, what the second layer's resolve left there).
+///
+/// Which a host may choose depends on what its passes after lighting read
+/// before the next geometry pass overwrites the G-buffer: any colour
+/// attachment (screen-space reflections or ambient occlusion, picking from
+/// an ID attachment, a debug view): [`FirstLayerRestore::Everything`].
+/// Only depth or stencil (transparent objects or particles drawn into the
+/// lit image with depth testing, a stencil-masked outline):
+/// [`FirstLayerRestore::DepthAndStencil`]. Nothing (the lit image goes
+/// straight to tonemapping and post filters that read only colour):
+/// [`FirstLayerRestore::Nothing`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FirstLayerRestore {
+    /// Colours, depth and stencil (default): the G-buffer afterwards is
+    /// bit for bit the one `resolve` wrote.
+    #[default]
+    Everything,
+    /// Depth and stencil only: one copy each way instead of one per
+    /// attachment; the colour attachments hold the second layer afterwards.
+    DepthAndStencil,
+    /// Nothing: no copies; colours, depth and stencil hold the second layer
+    /// afterwards.
+    Nothing,
+}
+
+impl FirstLayerRestore {
+    /// Whether the depth and stencil come back.
+    pub fn restores_depth(self) -> bool {
+        self != FirstLayerRestore::Nothing
+    }
+
+    /// Whether the colour attachments come back.
+    pub fn restores_colors(self) -> bool {
+        self == FirstLayerRestore::Everything
+    }
 }
 
 /// A host's normal attachment and its encoding.
@@ -100,7 +133,7 @@ impl Default for RetrofitOptions {
             memory_budget: None,
             normal_attachment: None,
             layer_mix: LayerMix::Auto,
-            restore_first_layer: true,
+            restore_first_layer: FirstLayerRestore::Everything,
         }
     }
 }
@@ -909,8 +942,8 @@ impl MsaaRetrofit {
     /// [`MsaaRetrofit::begin_second_layer`]): write
     /// `mix(first, second, α)` into it ([`RetrofitOptions::layer_mix`]; the
     /// first layer exactly where `α` is 0) and put the first layer back into
-    /// the host's G-buffer textures and depth (unless
-    /// [`RetrofitOptions::restore_first_layer`] was off at `begin`). The
+    /// the host's G-buffer textures and depth (as much of it as
+    /// [`RetrofitOptions::restore_first_layer`] said at `begin`). The
     /// host's GL state is as it was.
     pub fn finish_second_layer(
         &mut self,

@@ -17,6 +17,7 @@ use crate::gl::{
 };
 use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect_point};
 use crate::profile::StepProfile;
+use crate::retrofit::FirstLayerRestore;
 use crate::{Error, Result};
 use glow::HasContext;
 
@@ -200,8 +201,9 @@ pub(crate) struct SecondLayer {
     selected: std::cell::Cell<bool>,
     /// The second layer was resolved since the last `finish_second_layer`.
     pub(crate) resolved: bool,
-    /// `begin` copied the host's G-buffer aside, so `finish` puts it back.
-    host_saved: bool,
+    /// What `begin` copied of the host's G-buffer aside, so `finish` puts
+    /// it back.
+    host_saved: FirstLayerRestore,
 }
 
 impl GlObject for SecondLayer {
@@ -469,7 +471,7 @@ impl SecondLayer {
                 vao,
                 output: None,
                 lighting: false,
-                host_saved: false,
+                host_saved: FirstLayerRestore::Nothing,
                 selected: std::cell::Cell::new(false),
                 resolved: false,
             })
@@ -659,12 +661,12 @@ impl SecondLayer {
         }
     }
 
-    /// Copy the colours and depth of `from` into `to`: with
+    /// Copy the colours (with `colors`) and depth of `from` into `to`: with
     /// `glCopyImageSubData` where the context has it, bit for bit (a
     /// packed depth-stencil's stencil with its depth, unless `keep_stencil`,
     /// when its depth alone is blitted), else by blits (the stencil with the
     /// depth unless `keep_stencil`).
-    fn copy_set(&self, gl: &glow::Context, from: Set, to: Set, keep_stencil: bool) {
+    fn copy_set(&self, gl: &glow::Context, from: Set, to: Set, colors: bool, keep_stencil: bool) {
         let (src, dst) = (self.images(from), self.images(to));
         let (a, b) = (self.framebuffer(from), self.framebuffer(to));
         let (w, h) = (self.width as i32, self.height as i32);
@@ -678,6 +680,9 @@ impl SecondLayer {
         let mut blitted = false;
         for k in 0..=self.colors {
             let depth = k == self.colors;
+            if !depth && !colors {
+                continue;
+            }
             // The second layer's depth comes through its own pass.
             if depth && (self.depth_bits == 0 || from == Set::Second || to == Set::Second) {
                 continue;
@@ -836,14 +841,14 @@ impl SecondLayer {
     }
 
     /// Keep the lit first layer from `output` and put the second layer into
-    /// the host's textures (the caller saves the host's state); with
-    /// `restore`, copy the host's G-buffer aside first, for `finish` to put
-    /// back.
+    /// the host's textures (the caller saves the host's state); first copy
+    /// aside what `restore` says of the host's G-buffer, for `finish` to
+    /// put back.
     pub(crate) fn begin(
         &mut self,
         gl: &glow::Context,
         output: Option<glow::Framebuffer>,
-        restore: bool,
+        restore: FirstLayerRestore,
         profile: &mut StepProfile,
     ) -> Result<()> {
         if self.lighting {
@@ -860,15 +865,23 @@ impl SecondLayer {
         profile.time(gl, "second layer: keep lit first layer", || {
             self.keep_lit(gl, true)
         });
-        if restore {
-            profile.time(gl, "second layer: save host G-buffer", || {
-                self.copy_set(gl, Set::Host, Set::Saved, false)
-            });
+        match restore {
+            FirstLayerRestore::Everything => {
+                profile.time(gl, "second layer: save host G-buffer", || {
+                    self.copy_set(gl, Set::Host, Set::Saved, true, false)
+                })
+            }
+            FirstLayerRestore::DepthAndStencil => {
+                profile.time(gl, "second layer: save host depth", || {
+                    self.copy_set(gl, Set::Host, Set::Saved, false, false)
+                })
+            }
+            FirstLayerRestore::Nothing => {}
         }
         self.host_saved = restore;
         // The host's stencil stays: its lighting may test it.
         profile.time(gl, "second layer: copy in", || {
-            self.copy_set(gl, Set::Second, Set::Host, true)
+            self.copy_set(gl, Set::Second, Set::Host, true, true)
         });
         profile.time(gl, "second layer: depth into host", || {
             self.depth_into_host(gl)
@@ -904,10 +917,18 @@ impl SecondLayer {
         });
         profile.time(gl, "second layer: mix", || self.draw_mix(gl))?;
         // Depth and stencil as they were before the second lighting.
-        if self.host_saved {
-            profile.time(gl, "second layer: restore host G-buffer", || {
-                self.copy_set(gl, Set::Saved, Set::Host, false)
-            });
+        match self.host_saved {
+            FirstLayerRestore::Everything => {
+                profile.time(gl, "second layer: restore host G-buffer", || {
+                    self.copy_set(gl, Set::Saved, Set::Host, true, false)
+                })
+            }
+            FirstLayerRestore::DepthAndStencil => {
+                profile.time(gl, "second layer: restore host depth", || {
+                    self.copy_set(gl, Set::Saved, Set::Host, false, false)
+                })
+            }
+            FirstLayerRestore::Nothing => {}
         }
         check_error(gl, "mixing the two lit layers")
     }

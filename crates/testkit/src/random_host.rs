@@ -16,7 +16,9 @@
 use crate::Rng;
 use deferred_msaa::resolve::{NormalEncoding, ResolveMethod, ResolveRule, StencilCopy, Window};
 use deferred_msaa::retrofit::PositionSpace;
-use deferred_msaa::{ColorAttachment, LayerMix, NormalAttachment, RetrofitOptions};
+use deferred_msaa::{
+    ColorAttachment, FirstLayerRestore, LayerMix, NormalAttachment, RetrofitOptions,
+};
 use glow::HasContext;
 
 /// An internal format a host may ask for: its enum, its name, and the
@@ -527,7 +529,12 @@ pub fn random_options(rng: &mut Rng, points: &[u32], limits: Limits) -> Retrofit
         rng,
         &[LayerMix::Auto, LayerMix::Linear, LayerMix::Tonemapped],
     );
-    o.restore_first_layer = chance(rng, 80);
+    // One draw, as the flag this was took: the same seeds make the same hosts.
+    o.restore_first_layer = match rng.below(100) {
+        0..=79 => FirstLayerRestore::Everything,
+        80..=89 => FirstLayerRestore::DepthAndStencil,
+        _ => FirstLayerRestore::Nothing,
+    };
     match rng.below(100) {
         0..=3 => o.memory_budget = Some(deferred_msaa::gbuffer::MemoryBudget::limit(64).strict()),
         4..=7 => o.memory_budget = Some(deferred_msaa::gbuffer::MemoryBudget::limit(4096)),
