@@ -92,9 +92,17 @@ pub(crate) fn sanitize(raw: RawMesh) -> (Geometry, Report) {
     }
 
     // Keep only the vertices the remaining triangles use, in first-use order
-    // when something was dropped (so no NaN vertex survives unreferenced).
-    let dropped = kept.len() + report.ragged_indices != indices.len();
-    let (positions, normals, uvs, kept) = if dropped {
+    // when any is unused (dropped with a triangle, named only by ragged
+    // trailing indices or never indexed), so no NaN vertex survives
+    // unreferenced and the bounds hold only what is drawn.
+    let mut used = vec![false; n];
+    for &i in &kept {
+        if let Some(u) = used.get_mut(i as usize) {
+            *u = true;
+        }
+    }
+    let all_used = used.iter().all(|&u| u);
+    let (positions, normals, uvs, kept) = if !all_used {
         compact(&positions, normals.as_deref(), uvs.as_deref(), &kept)
     } else {
         (positions, normals, uvs, kept)

@@ -561,6 +561,41 @@ fn non_finite_normals_drop_triangles() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Vertices no kept triangle uses are dropped even when no triangle is:
+/// an unreferenced NaN vertex (indexed), and one only a ragged trailing
+/// index names (unindexed), would otherwise reach the bounds and the GPU.
+#[test]
+fn vertices_no_triangle_uses_are_compacted_away() {
+    let dir = scratch("unreferenced");
+    let mut t = Tiny::default();
+    let (mut p, mut n, i) = quad();
+    p.push([f32::NAN, 1e30, 0.0]);
+    n.push([0.0, 0.0, 0.0]);
+    let unreferenced = json!({
+        "attributes": {"POSITION": t.vec3(&p), "NORMAL": t.vec3(&n)},
+        "indices": t.indices(&i),
+    });
+    let ragged = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [f32::INFINITY, 0.0, 0.0],
+    ];
+    let unindexed = json!({"attributes": {"POSITION": t.vec3(&ragged)}});
+    let doc = json!({
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"mesh": 1}],
+        "meshes": [{"primitives": [unreferenced]}, {"primitives": [unindexed]}],
+    });
+    let scene = load_path(&t.write(&dir, "unreferenced", doc)).expect("loads");
+    assert_sane(&scene);
+    assert_eq!(scene.objects.len(), 2);
+    assert_eq!(scene.objects[0].positions.len(), 4, "the quad's own four");
+    assert_eq!(scene.objects[1].triangle_count(), 1);
+    assert!(scene.bounds.max.x <= 1.0, "bounds {:?}", scene.bounds);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn strips_fans_and_missing_normals() {
     let dir = scratch("modes");
@@ -909,6 +944,66 @@ fn missing_bin_and_missing_texture() {
         "{msg}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// What glTF requires but its schema validation does not check: an image
+/// in a buffer view without `mimeType` (read from its bytes), an image with
+/// neither a buffer view nor a URI (a warning), a camera whose `type` names
+/// an object it lacks (ignored with a warning). Each once panicked inside
+/// the `gltf` crate's accessors.
+#[test]
+fn images_and_cameras_the_schema_leaves_incomplete_load() {
+    let mut t = Tiny::default();
+    let (p, n, i) = quad();
+    let (pos, nrm, idx) = (t.vec3(&p), t.vec3(&n), t.indices(&i));
+    let mut png = Vec::new();
+    image::RgbaImage::from_pixel(2, 3, image::Rgba([200, 100, 50, 255]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .expect("encode png");
+    let png_view = t.view(&png);
+    let primitive = |material: usize| json!({"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx, "material": material});
+    let doc = json!({
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [
+            {"mesh": 0, "name": "sniffed"},
+            {"mesh": 1, "name": "sourceless"},
+            {"camera": 0, "translation": [0.0, 0.0, 50.0]},
+        ],
+        "meshes": [{"primitives": [primitive(0)]}, {"primitives": [primitive(1)]}],
+        "materials": [
+            {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
+            {"pbrMetallicRoughness": {"baseColorTexture": {"index": 1}}},
+        ],
+        "textures": [{"source": 0}, {"source": 1}],
+        "images": [{"bufferView": png_view}, {"name": "nowhere"}],
+        "cameras": [{"type": "perspective", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 9.0}}],
+    });
+    let scene = Scene::from_bytes(&t.glb(doc), "incomplete").expect("loads");
+    assert_sane(&scene);
+    let object = |name: &str| {
+        let o = scene.objects.iter().find(|o| o.name == name).expect(name);
+        scene.material_of(o)
+    };
+    let texture = object("sniffed")
+        .base_color_texture
+        .and_then(|t| scene.textures.get(t))
+        .expect("the PNG in the buffer view is decoded");
+    assert_eq!((texture.width, texture.height), (2, 3));
+    assert_eq!(object("sourceless").base_color_texture, None);
+    let all = scene.warnings.join("\n");
+    assert!(all.contains("image 0") && all.contains("mimeType"), "{all}");
+    assert!(all.contains("neither a bufferView nor a uri"), "{all}");
+    assert!(
+        all.contains("camera 0") && all.contains("no perspective"),
+        "{all}"
+    );
+    // The camera is ignored: the scene is framed, not seen from z = 50.
+    assert!(
+        scene.camera.position().z < 50.0,
+        "{:?}",
+        scene.camera.position()
+    );
 }
 
 #[test]

@@ -8,22 +8,38 @@ use super::super::{Camera, Light, LightKind, Warnings, camera::look_at};
 
 /// The scene camera from a glTF camera at `world`; `None` (with a warning)
 /// when it is orthographic or unusable. `label` names its node.
+// Not gltf::Camera::projection (gltf 1.4.1): it unwraps the object its
+// `type` names, while validation only asks for one of the two objects, so a
+// perspective camera with only an orthographic object panics there.
 pub(super) fn camera(
+    document: &gltf::Document,
     cam: &gltf::Camera,
     world: Mat4,
     label: &str,
     warnings: &mut Warnings,
 ) -> Option<Camera> {
-    let p = match cam.projection() {
-        gltf::camera::Projection::Perspective(p) => p,
-        gltf::camera::Projection::Orthographic(_) => {
+    use gltf::json::camera::Type;
+    use gltf::json::validation::Checked;
+    let index = cam.index();
+    let json = document.as_json().cameras.get(index)?;
+    let p = match (json.type_, json.perspective.as_ref()) {
+        (Checked::Valid(Type::Perspective), Some(p)) => p,
+        (Checked::Valid(Type::Perspective), None) => {
+            warnings.push(format!(
+                "{label}: camera {index} is of type perspective but has no perspective object; ignored"
+            ));
+            return None;
+        }
+        (Checked::Valid(Type::Orthographic), _) => {
             warnings.push(format!(
                 "{label}: orthographic cameras are not supported; looking for a perspective one"
             ));
             return None;
         }
+        // Validation refuses an unknown type before the walk.
+        (Checked::Invalid, _) => return None,
     };
-    let (yfov, znear) = (p.yfov(), p.znear());
+    let (yfov, znear) = (p.yfov, p.znear);
     let usable = yfov.is_finite()
         && yfov > 0.0
         && yfov < std::f32::consts::PI
@@ -35,7 +51,7 @@ pub(super) fn camera(
         ));
         return None;
     }
-    let far = match p.zfar() {
+    let far = match p.zfar {
         Some(f) if f.is_finite() && f > znear => Some(f),
         Some(f) => {
             warnings.push(format!(

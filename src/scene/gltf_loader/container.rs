@@ -145,6 +145,7 @@ pub(super) fn parse_document(json: &[u8]) -> Result<(gltf::Document, Vec<String>
     }
     let mut notes = Vec::new();
     prepare_positions(&mut root, &mut notes)?;
+    note_images_without_mime_type(&root, &mut notes);
     let document = gltf::Document::from_json(root).map_err(|e| match e {
         gltf::Error::Validation(errors) => {
             let mut msg = match errors.first() {
@@ -221,6 +222,19 @@ fn prepare_positions(root: &mut gltf::json::Root, notes: &mut Vec<String>) -> Re
         ));
     }
     Ok(())
+}
+
+/// Notes each image in a buffer view without the `mimeType` glTF requires
+/// there (validation does not check it): the decoder reads the format from
+/// the bytes, so such an image still loads.
+fn note_images_without_mime_type(root: &gltf::json::Root, notes: &mut Vec<String>) {
+    for (i, image) in root.images.iter().enumerate() {
+        if image.buffer_view.is_some() && image.mime_type.is_none() {
+            notes.push(format!(
+                "image {i}: a bufferView without the mimeType glTF requires; its format is read from its bytes"
+            ));
+        }
+    }
 }
 
 /// Warns about the extensions used but not honoured, and about skins.

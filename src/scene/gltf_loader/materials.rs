@@ -22,10 +22,12 @@ pub(super) struct Materials {
 }
 
 impl Materials {
-    /// Our index of glTF material `m`, converting it (and decoding its
-    /// textures from `buffers` or files under `base`) the first time.
+    /// Our index of glTF material `m` of `document`, converting it (and
+    /// decoding its textures from `buffers` or files under `base`) the
+    /// first time.
     pub(super) fn material(
         &mut self,
+        document: &gltf::Document,
         m: gltf::Material,
         buffers: &[Vec<u8>],
         base: Option<&Path>,
@@ -48,10 +50,10 @@ impl Materials {
             .map(|e| finite_or(e, 0.0).max(0.0) * strength);
         let base_color_texture = pbr
             .base_color_texture()
-            .and_then(|info| self.texture(&info.texture(), buffers, base, warnings));
+            .and_then(|info| self.texture(document, &info.texture(), buffers, base, warnings));
         let emissive_texture = m
             .emissive_texture()
-            .and_then(|info| self.texture(&info.texture(), buffers, base, warnings));
+            .and_then(|info| self.texture(document, &info.texture(), buffers, base, warnings));
         let material = Material {
             name: m.name().unwrap_or_default().to_string(),
             base_color,
@@ -77,17 +79,17 @@ impl Materials {
     /// Decodes a texture's image once; `None` (with a warning) when it cannot.
     fn texture(
         &mut self,
+        document: &gltf::Document,
         texture: &gltf::Texture,
         buffers: &[Vec<u8>],
         base: Option<&Path>,
         warnings: &mut Warnings,
     ) -> Option<usize> {
-        let image = texture.source();
-        let index = image.index();
+        let index = texture.source().index();
         if let Some(&known) = self.texture_map.get(&index) {
             return known;
         }
-        let result = match decode_image(&image, buffers, base) {
+        let result = match decode_image(document, index, buffers, base) {
             Ok(t) => {
                 self.textures.push(t);
                 Some(self.textures.len() - 1)

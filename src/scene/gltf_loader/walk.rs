@@ -198,7 +198,8 @@ impl<'a> Loader<'a> {
             self.add_mesh(node, &mesh, world, aa)?;
         }
         if let Some(cam) = node.camera().filter(|_| self.camera.is_none()) {
-            self.camera = cameras_lights::camera(&cam, world, &label, &mut self.warnings);
+            self.camera =
+                cameras_lights::camera(self.document, &cam, world, &label, &mut self.warnings);
         }
         if let Some(light) = node.light() {
             if let Some(light) = cameras_lights::light(&light, world, &label, &mut self.warnings) {
@@ -277,6 +278,7 @@ impl<'a> Loader<'a> {
                 geometry::flip_winding(&mut g.indices);
             }
             let material = self.materials.material(
+                self.document,
                 prim.material(),
                 self.buffers,
                 self.base,
