@@ -251,7 +251,22 @@ pub struct FrameTimings {
 }
 
 /// A decal hook; see [`Renderer::set_decal_hook`].
-pub type DecalHook = Box<dyn FnMut(&glow::Context, &GBuffer)>;
+pub type DecalHook = Box<dyn FnMut(&glow::Context, &DecalTarget<'_>)>;
+
+/// What a decal hook is given: the resolved G-buffer and the matrices the
+/// frame's G-buffer pass drew with, so that decals land on the surfaces
+/// they decorate.
+#[derive(Debug, Clone, Copy)]
+pub struct DecalTarget<'a> {
+    /// The resolved single-sample G-buffer; its framebuffer is bound.
+    pub gbuffer: &'a GBuffer,
+    /// World to view: the camera's view matrix.
+    pub view: Mat4,
+    /// View to clip: [`Renderer::projection`], moved by the frame's
+    /// sub-pixel jitter under [`AaMode::Taa`] (a decal drawn unjittered
+    /// there would swim against the jittered geometry under it).
+    pub projection: Mat4,
+}
 
 /// Programs, the full-screen vertex array and the timer: built once.
 #[derive(Debug)]
@@ -792,9 +807,14 @@ impl Renderer {
         } = &mut self.frame;
         let (gbuffer, targets) = (&*gbuffer, &*targets);
         if let Some(hook) = self.decal_hook.as_mut() {
+            let decal_target = DecalTarget {
+                gbuffer,
+                view: self.camera.view,
+                projection,
+            };
             t.decal_ms = timed(gl, timer, || {
                 gbuffer.fbo.bind(gl);
-                hook(gl, gbuffer);
+                hook(gl, &decal_target);
                 Ok(check_error(gl, "the decal hook")?)
             })?;
         }
@@ -1006,8 +1026,9 @@ impl Renderer {
     /// (it runs inside the renderer's own). A GL error it leaves fails the frame.
     /// Depth follows [`Renderer::depth_mode`]: with reversed-Z the clip
     /// control is `GL_ZERO_TO_ONE` during the hook, the nearer fragment
-    /// passes GREATER and the background's depth is 0.0
-    /// ([`Renderer::projection`] is the matrix to draw with).
+    /// passes GREATER and the background's depth is 0.0. Draw with the
+    /// [`DecalTarget`]'s matrices: they are the frame's own, jitter
+    /// included under [`AaMode::Taa`].
     ///
     /// With [`AaMode::PerSample`] and [`AaMode::Complex`] the hook still
     /// gets the resolved G-buffer (transparent objects are depth-tested

@@ -16,7 +16,7 @@ use deferred_msaa_lab::gl::TextureRef;
 use deferred_msaa_lab::gl::{Capabilities, ExtraFns, live_objects};
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::renderer::technique::Complex;
-use deferred_msaa_lab::renderer::{AaMode, DepthMode, RenderOptions, Renderer};
+use deferred_msaa_lab::renderer::{AaMode, DecalTarget, DepthMode, RenderOptions, Renderer};
 use deferred_msaa_lab::resolve::{ResolveMethod, ResolveRule, ResolveSettings};
 use deferred_msaa_lab::retrofit::FirstLayerRestore;
 use deferred_msaa_lab::scene::Scene;
@@ -280,9 +280,16 @@ fn decal_hook_sees_and_writes_the_resolved_gbuffer() {
     // multisampled twin), then paint a green decal over a rectangle.
     let seen = Rc::new(RefCell::new(Vec::new()));
     let seen_in_hook = Rc::clone(&seen);
+    let matrices = Rc::new(RefCell::new(Vec::new()));
+    let matrices_in_hook = Rc::clone(&matrices);
     let rect = (W as i32 / 4, H as i32 / 4, W as i32 / 2, H as i32 / 2);
     renderer.set_decal_hook(Some(Box::new(
-        move |gl: &glow::Context, gbuffer: &GBuffer| {
+        move |gl: &glow::Context, target: &DecalTarget<'_>| {
+            let gbuffer = target.gbuffer;
+            // Without jitter the hook draws with the renderer's projection.
+            matrices_in_hook
+                .borrow_mut()
+                .push((target.view, target.projection));
             let bound = unsafe { gl.get_parameter_i32(glow::DRAW_FRAMEBUFFER_BINDING) };
             assert_eq!(
                 bound as u32,
@@ -307,6 +314,11 @@ fn decal_hook_sees_and_writes_the_resolved_gbuffer() {
     let after = renderer.read_final(gl).expect("final image");
     let seen = seen.borrow().clone();
     assert_eq!(seen.len(), 1, "the hook runs once per frame");
+    assert_eq!(
+        matrices.borrow().as_slice(),
+        &[(scene.camera.view, renderer.projection())],
+        "the hook draws with the frame's matrices"
+    );
     assert!(
         seen[0] > (W * H) as usize / 10,
         "the hook saw {} model texels",

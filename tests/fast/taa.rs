@@ -469,3 +469,59 @@ fn bad_taa_options_are_one_line_errors() {
         Ok(AaMode::Taa(TaaOptions { phases: 16, .. }))
     ));
 }
+
+/// The decal hook draws with the frame's own matrices: under `taa` the
+/// projection it is given is the renderer's moved by that frame's jitter
+/// (a decal drawn with the unjittered one would swim against the jittered
+/// surface under it), a different one each frame.
+#[test]
+fn the_decal_hook_is_given_each_frames_jittered_projection() {
+    use std::cell::RefCell;
+    use std::rc::Rc;
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let plane = patterned_plane();
+    let mut renderer = Renderer::new(
+        gl,
+        |name| ctx.get_proc_address(name),
+        &plane,
+        &taa_options(DepthMode::Auto),
+    )
+    .expect("renderer");
+    let given = Rc::new(RefCell::new(Vec::new()));
+    let given_in_hook = Rc::clone(&given);
+    renderer.set_decal_hook(Some(Box::new(move |_, target| {
+        given_in_hook
+            .borrow_mut()
+            .push((target.view, target.projection));
+    })));
+    let mut projections: Vec<Mat4> = Vec::new();
+    for frame in 0..3 {
+        renderer.render(gl).expect("frame");
+        let [jx, jy] = renderer
+            .technique::<Taa>()
+            .and_then(Taa::last_jitter)
+            .expect("the frame's jitter");
+        assert!(jx != 0.0 || jy != 0.0, "frame {frame}: no jitter");
+        let shift =
+            Mat4::from_translation(Vec3::new(2.0 * jx / W as f32, 2.0 * jy / H as f32, 0.0));
+        let (view, projection) = *given.borrow().last().expect("the hook ran");
+        assert_eq!(view, plane.camera.view, "frame {frame}");
+        let expected = shift * renderer.projection();
+        assert!(
+            projection.abs_diff_eq(expected, 1e-6),
+            "frame {frame}: the hook got {projection:?}, the frame drew with {expected:?}"
+        );
+        assert!(
+            !projection.abs_diff_eq(renderer.projection(), 1e-6),
+            "frame {frame}: unjittered"
+        );
+        projections.push(projection);
+    }
+    assert!(projections[0] != projections[1] && projections[1] != projections[2]);
+    assert_eq!(given.borrow().len(), 3, "once a frame");
+    renderer.destroy(gl);
+    assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
+}
