@@ -11,6 +11,9 @@
 //!   with two layers than without MSAA; the GL state around every call is
 //!   unchanged, nothing of the library's is left after `dmsaa_destroy`,
 //!   and the host's frame afterwards is its frame before, bit for bit.
+//!   Its second lighting masked by `dmsaa_second_layer_selection`'s stencil
+//!   (which marks some pixels, not all, with 0 or 1 only) gives the same
+//!   two-layer image, bit for bit.
 //! - `bad_calls.c`: every bad call returns an error status with a one-line
 //!   message, and the process keeps running.
 //! - `minimal_host.c`, a host outside the repository, built with only
@@ -174,10 +177,15 @@ fn c_hosts_build_against_the_installed_library_and_run() {
     let none = image(&images, "none.rgba", w, h);
     let msaa = image(&images, "msaa.rgba", w, h);
     let layers = image(&images, "layers.rgba", w, h);
+    let layers_masked = image(&images, "layers-masked.rgba", w, h);
     let after = image(&images, "after.rgba", w, h);
     assert!(
         after == none,
         "the host's frame after dmsaa_destroy differs from its frame before the retrofit"
+    );
+    assert!(
+        layers_masked == layers,
+        "the second lighting masked by dmsaa_second_layer_selection changed the mixed image"
     );
     let error = |test: &image::RgbaImage| flip(&reference, test).expect("same sizes").mean;
     let (e_none, e_msaa, e_layers) = (error(&none), error(&msaa), error(&layers));

@@ -53,6 +53,10 @@
 // reports (or the crate's fixed default where it reports none).
 #define DMSAA_MEMORY_BUDGET_DRIVER UINT64_MAX
 
+// The stencil value [`dmsaa_second_layer_selection`]'s texture holds at the
+// pixels that have a second layer (0 elsewhere).
+#define DMSAA_SECOND_LAYER_SELECTED 1
+
 // What every fallible call returns. Any value other than
 // `DMSAA_STATUS_OK` leaves a one-line message in [`dmsaa_last_error`].
 typedef enum {
@@ -346,6 +350,28 @@ DmsaaStatus dmsaa_framebuffer(DmsaaRetrofit *retrofit, uint32_t *out_fbo);
 // Threading: the calling thread's context need not be current.
 // Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `out_samples`.
 DmsaaStatus dmsaa_samples(DmsaaRetrofit *retrofit, uint32_t *out_samples);
+
+// The pixels of the last resolve that have a second layer, as a stencil,
+// for a host to light only those in its second lighting: the name of a
+// `GL_TEXTURE_2D` of format `GL_DEPTH24_STENCIL8` whose stencil is
+// `DMSAA_SECOND_LAYER_SELECTED` exactly there and 0 elsewhere (its depth is
+// not defined, and a lighting pass that clears depth may clear it: the
+// library reads the stencil alone). Attach it as the `GL_DEPTH_STENCIL_ATTACHMENT` of the
+// framebuffer the second lighting draws into and test
+// `glStencilFunc(GL_EQUAL, DMSAA_SECOND_LAYER_SELECTED, 0xFF)` with a
+// stencil write mask of 0; [`dmsaa_finish_second_layer`] keeps the first
+// layer's lit value wherever the second lighting was masked off, so the
+// image is the same, for the cost of the selected pixels. Writes 0 with
+// one layer, or where the resolve had no draw buffer to spare for the
+// flag the selection is made from.
+//
+// Ownership: the texture belongs to the handle; do not delete it or write
+// its stencil. It changes after [`dmsaa_set_options`] or
+// [`dmsaa_refresh`] rebuild the twins, so a host asks for it each frame
+// (the call is cheap: no GL call).
+// Threading: the calling thread's context need not be current.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `out_texture`.
+DmsaaStatus dmsaa_second_layer_selection(DmsaaRetrofit *retrofit, uint32_t *out_texture);
 
 // Resolve the twins into the host's own G-buffer textures (and depth):
 // call it after the geometry pass, before the host's lighting reads its

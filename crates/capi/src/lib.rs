@@ -765,6 +765,54 @@ pub unsafe extern "C" fn dmsaa_samples(
     })
 }
 
+/// The stencil value [`dmsaa_second_layer_selection`]'s texture holds at the
+/// pixels that have a second layer (0 elsewhere).
+pub const DMSAA_SECOND_LAYER_SELECTED: u8 = 1;
+// A literal, for the header; the same as the core's.
+const _: () =
+    assert!(DMSAA_SECOND_LAYER_SELECTED == deferred_msaa::second_layer::SECOND_LAYER_SELECTED);
+
+/// The pixels of the last resolve that have a second layer, as a stencil,
+/// for a host to light only those in its second lighting: the name of a
+/// `GL_TEXTURE_2D` of format `GL_DEPTH24_STENCIL8` whose stencil is
+/// `DMSAA_SECOND_LAYER_SELECTED` exactly there and 0 elsewhere (its depth is
+/// not defined, and a lighting pass that clears depth may clear it: the
+/// library reads the stencil alone). Attach it as the `GL_DEPTH_STENCIL_ATTACHMENT` of the
+/// framebuffer the second lighting draws into and test
+/// `glStencilFunc(GL_EQUAL, DMSAA_SECOND_LAYER_SELECTED, 0xFF)` with a
+/// stencil write mask of 0; [`dmsaa_finish_second_layer`] keeps the first
+/// layer's lit value wherever the second lighting was masked off, so the
+/// image is the same, for the cost of the selected pixels. Writes 0 with
+/// one layer, or where the resolve had no draw buffer to spare for the
+/// flag the selection is made from.
+///
+/// Ownership: the texture belongs to the handle; do not delete it or write
+/// its stencil. It changes after [`dmsaa_set_options`] or
+/// [`dmsaa_refresh`] rebuild the twins, so a host asks for it each frame
+/// (the call is cheap: no GL call).
+/// Threading: the calling thread's context need not be current.
+/// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `out_texture`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn dmsaa_second_layer_selection(
+    retrofit: *mut DmsaaRetrofit,
+    out_texture: *mut u32,
+) -> DmsaaStatus {
+    const F: &str = "dmsaa_second_layer_selection";
+    entry(F, || {
+        if out_texture.is_null() {
+            return Err(Failure::null(F, "out_texture"));
+        }
+        let texture = with_handle(F, retrofit, |h| {
+            Ok(h.retrofit
+                .second_layer_selection()
+                .map_or(0, |t| t.raw.0.get()))
+        })?;
+        // SAFETY: checked non-null; the header requires a writable pointer.
+        unsafe { *out_texture = texture };
+        Ok(())
+    })
+}
+
 /// Sixteen floats from C.
 fn matrix(function: &str, name: &str, m: *const f32) -> Result<[f32; 16], Failure> {
     if m.is_null() {

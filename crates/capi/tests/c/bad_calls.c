@@ -80,6 +80,9 @@ int main(void)
     }
     expect(dmsaa_resolve(NULL, projection, NULL), DMSAA_STATUS_NULL_POINTER, "null handle (resolve)");
     expect(dmsaa_framebuffer(NULL, &fbo), DMSAA_STATUS_NULL_POINTER, "null handle (framebuffer)");
+    uint32_t selection = 7;
+    expect(dmsaa_second_layer_selection(NULL, &selection), DMSAA_STATUS_NULL_POINTER,
+           "null handle (second_layer_selection)");
     expect(dmsaa_begin_second_layer(NULL, 0, &run_lighting), DMSAA_STATUS_NULL_POINTER,
            "null handle (begin_second_layer)");
     if (run_lighting) {
@@ -162,6 +165,8 @@ int main(void)
     bad.window = 7;
     expect(dmsaa_set_options(msaa, &bad), DMSAA_STATUS_INVALID_ARGUMENT, "set_options window 7");
     expect(dmsaa_framebuffer(msaa, NULL), DMSAA_STATUS_NULL_POINTER, "null out_fbo");
+    expect(dmsaa_second_layer_selection(msaa, NULL), DMSAA_STATUS_NULL_POINTER,
+           "null out_texture");
 
     /* the process keeps running and the retrofit keeps working */
     if (dmsaa_resolve(msaa, projection, NULL) != DMSAA_STATUS_OK) {
@@ -196,6 +201,12 @@ int main(void)
     if (dmsaa_retrofit_new(load_gl, NULL, gbuffer, &world, &msaa) != DMSAA_STATUS_OK) {
         fprintf(stderr, "FAIL: a world-space retrofit failed: %s\n", dmsaa_last_error());
         return 1;
+    }
+    /* one layer: no selection, and that is no error */
+    if (dmsaa_second_layer_selection(msaa, &selection) != DMSAA_STATUS_OK || selection != 0) {
+        fprintf(stderr, "FAIL: one layer, yet a selection texture %u (%s)\n", selection,
+                dmsaa_last_error());
+        failures++;
     }
     expect(dmsaa_resolve(msaa, projection, NULL), DMSAA_STATUS_NULL_POINTER,
            "world-space positions without a view");

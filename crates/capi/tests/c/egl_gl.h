@@ -36,6 +36,8 @@
     X(PFNGLCLEARPROC, glClear)                                                 \
     X(PFNGLDEPTHFUNCPROC, glDepthFunc)                                         \
     X(PFNGLBLENDFUNCPROC, glBlendFunc)                                         \
+    X(PFNGLSTENCILFUNCPROC, glStencilFunc)                                     \
+    X(PFNGLSTENCILMASKPROC, glStencilMask)                                     \
     X(PFNGLPIXELSTOREIPROC, glPixelStorei)                                     \
     X(PFNGLREADPIXELSPROC, glReadPixels)                                       \
     X(PFNGLREADBUFFERPROC, glReadBuffer)                                       \

@@ -719,8 +719,61 @@ static DmsaaOptions tutorial_options(uint32_t layers)
     return options;
 }
 
-/* One frame with the retrofit; two layers run the lighting twice. */
-static void retrofitted_frame(Engine *e, uint32_t layers, const char *dir, const char *name)
+/* The pixels the selection stencil marks, read back through a framebuffer
+ * of its own (the host reads, never writes, the library's texture); -1 when
+ * a value is neither 0 nor DMSAA_SECOND_LAYER_SELECTED. */
+static long count_selected(const Engine *e, GLuint selection)
+{
+    GLuint fbo = 0;
+    glGenFramebuffers(1, &fbo);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo);
+    glFramebufferTexture2D(GL_READ_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_TEXTURE_2D, selection, 0);
+    glReadBuffer(GL_NONE);
+    size_t n = (size_t)e->width * (size_t)e->height;
+    unsigned char *stencil = malloc(n);
+    long count = -1;
+    if (stencil && glCheckFramebufferStatus(GL_READ_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE) {
+        glPixelStorei(GL_PACK_ALIGNMENT, 1);
+        glReadPixels(0, 0, e->width, e->height, GL_STENCIL_INDEX, GL_UNSIGNED_BYTE, stencil);
+        glPixelStorei(GL_PACK_ALIGNMENT, 4);
+        count = 0;
+        for (size_t i = 0; i < n && count >= 0; i++) {
+            if (stencil[i] == DMSAA_SECOND_LAYER_SELECTED)
+                count++;
+            else if (stencil[i] != 0)
+                count = -1;
+        }
+    }
+    free(stencil);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    glDeleteFramebuffers(1, &fbo);
+    return count;
+}
+
+/* The second lighting where the host masks it with the library's selection
+ * stencil: the selection stands in for the screen's depth attachment while
+ * the unchanged lighting pass runs under an EQUAL stencil test that writes
+ * nothing, then the screen gets its own depth back. */
+static void masked_lighting_pass(Engine *e, GLuint selection)
+{
+    glBindFramebuffer(GL_FRAMEBUFFER, e->screen);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_TEXTURE_2D, selection, 0);
+    glEnable(GL_STENCIL_TEST);
+    glStencilFunc(GL_EQUAL, DMSAA_SECOND_LAYER_SELECTED, 0xFF);
+    glStencilMask(0x00);
+    lighting_pass(e);
+    glStencilMask(0xFF);
+    glDisable(GL_STENCIL_TEST);
+    glBindFramebuffer(GL_FRAMEBUFFER, e->screen);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_TEXTURE_2D, 0, 0);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, e->screenDepth);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+/* One frame with the retrofit; two layers run the lighting twice, the
+ * second time masked by the selection stencil when `masked`. */
+static void retrofitted_frame(Engine *e, uint32_t layers, bool masked, const char *dir,
+                              const char *name)
 {
     GlState state;
     DmsaaOptions options = tutorial_options(layers);
@@ -755,8 +808,22 @@ static void retrofitted_frame(Engine *e, uint32_t layers, const char *dir, const
                      "dmsaa_begin_second_layer");
         check_state(e, &state, "dmsaa_begin_second_layer");
         CHECK(run_lighting, "two layers, yet dmsaa_begin_second_layer asked for no second lighting");
+        GLuint selection = 0;
+        check_status(dmsaa_second_layer_selection(msaa, &selection), "dmsaa_second_layer_selection");
+        CHECK(selection != 0 && glIsTexture(selection),
+              "two layers, yet dmsaa_second_layer_selection gave no texture (%u)", selection);
+        if (selection != 0) {
+            long selected = count_selected(e, selection);
+            printf("%s: %ld of %d pixels selected for the second layer\n", name, selected,
+                   e->width * e->height);
+            CHECK(selected > 0 && selected < (long)e->width * e->height,
+                  "the selection stencil marks %ld of %d pixels", selected, e->width * e->height);
+        }
         if (run_lighting) {
-            lighting_pass(e);
+            if (masked && selection != 0)
+                masked_lighting_pass(e, selection);
+            else
+                lighting_pass(e);
             capture(e, &state);
             check_status(dmsaa_finish_second_layer(msaa, e->screen), "dmsaa_finish_second_layer");
             check_state(e, &state, "dmsaa_finish_second_layer");
@@ -807,8 +874,9 @@ int main(int argc, char **argv)
     check_gl_errors("the frame without MSAA");
     write_screen(&e, dir, "none.rgba");
 
-    retrofitted_frame(&e, 1, dir, "msaa.rgba");
-    retrofitted_frame(&e, 2, dir, "layers.rgba");
+    retrofitted_frame(&e, 1, false, dir, "msaa.rgba");
+    retrofitted_frame(&e, 2, false, dir, "layers.rgba");
+    retrofitted_frame(&e, 2, true, dir, "layers-masked.rgba");
 
     /* the host still draws as before */
     geometry_pass(&e, e.gBuffer);
