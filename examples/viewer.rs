@@ -858,11 +858,10 @@ impl Viewer {
 
     fn title(&self) -> String {
         let method = self.options.aa.name();
-        let layers = match self.options.aa.settings() {
-            Some(s) if s.layers == 2 && matches!(self.options.aa, AaMode::Resolve(_)) => {
-                ":layers=2"
-            }
-            _ => "",
+        let layers = if matches!(&self.options.aa, AaMode::Resolve(s) if s.layers == 2) {
+            ":layers=2"
+        } else {
+            ""
         };
         let samples = match self.renderer.samples() {
             1 => String::new(),
