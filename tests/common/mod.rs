@@ -2,12 +2,13 @@
 //! `deferred-msaa-testkit` crate (the toy host, the generator, projections):
 //! contexts and the skip rule, a test run alone (`alone`), goldens (`golden`),
 //! the GL state snapshot (`gl_state`), the property test over random host
-//! G-buffers (`property`).
+//! G-buffers (`property`), the sRGB transfer function in f64 (`srgb`).
 #![allow(dead_code)]
 
 pub mod gl_state;
 pub mod golden;
 pub mod property;
+pub mod srgb;
 
 use deferred_msaa_lab::context::{Backend, HeadlessContext};
 

@@ -470,25 +470,6 @@ fn at(x: f32) -> (f32, f32) {
     (x, x)
 }
 
-fn srgb_to_linear(v: u8) -> f64 {
-    let c = v as f64 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-fn linear_to_srgb(l: f64) -> f64 {
-    let l = l.clamp(0.0, 1.0);
-    255.0
-        * if l <= 0.003_130_8 {
-            l * 12.92
-        } else {
-            1.055 * l.powf(1.0 / 2.4) - 0.055
-        }
-}
-
 /// Render `scene` with `none` and `gbaa`; the two final images and the
 /// gbaa edge buffers.
 fn render_pair(
@@ -531,7 +512,12 @@ fn render_pair(
 /// sampler's sub-texel weight steps).
 fn assert_mix(what: &str, got: &image::Rgba<u8>, parts: &[(f64, image::Rgba<u8>)]) {
     for c in 0..3 {
-        let want = linear_to_srgb(parts.iter().map(|(w, p)| w * srgb_to_linear(p[c])).sum());
+        let want = common::srgb::encode(
+            parts
+                .iter()
+                .map(|(w, p)| w * common::srgb::decode(p[c]))
+                .sum(),
+        );
         assert!(
             (got[c] as f64 - want).abs() <= 2.0,
             "{what}: channel {c} is {}, expected {want:.1} ({got:?} from {parts:?})",

@@ -10,6 +10,7 @@ use std::rc::Rc;
 
 use deferred_msaa::Error as CoreError;
 use deferred_msaa_lab::Error;
+use deferred_msaa_lab::bench;
 use deferred_msaa_lab::context::HeadlessContext;
 use deferred_msaa_lab::gbuffer::{GBuffer, GBufferLayout};
 use deferred_msaa_lab::gl::TextureRef;
@@ -964,47 +965,6 @@ fn render_with(
     img
 }
 
-fn srgb_decode(v: u8) -> f32 {
-    let c = f32::from(v) / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-fn srgb_encode(l: f32) -> u8 {
-    let c = if l <= 0.003_130_8 {
-        l * 12.92
-    } else {
-        1.055 * l.powf(1.0 / 2.4) - 0.055
-    };
-    (c.clamp(0.0, 1.0) * 255.0).round() as u8
-}
-
-/// Box-filter `factor`×`factor` blocks of an sRGB-encoded image in linear light.
-fn downsample(img: &image::RgbaImage, factor: u32) -> image::RgbaImage {
-    let (w, h) = (img.width() / factor, img.height() / factor);
-    image::RgbaImage::from_fn(w, h, |x, y| {
-        let mut sum = [0.0f32; 3];
-        for dy in 0..factor {
-            for dx in 0..factor {
-                let p = img.get_pixel(x * factor + dx, y * factor + dy);
-                for c in 0..3 {
-                    sum[c] += srgb_decode(p[c]);
-                }
-            }
-        }
-        let n = (factor * factor) as f32;
-        image::Rgba([
-            srgb_encode(sum[0] / n),
-            srgb_encode(sum[1] / n),
-            srgb_encode(sum[2] / n),
-            255,
-        ])
-    })
-}
-
 /// The scene rendered without MSAA at 4W×4H, tonemapped per pixel and
 /// box-filtered 4×4 in linear light: the 16-sample supersampled reference.
 fn supersampled(gl: &glow::Context, ctx: &HeadlessContext, scene: &Scene) -> image::RgbaImage {
@@ -1013,7 +973,8 @@ fn supersampled(gl: &glow::Context, ctx: &HeadlessContext, scene: &Scene) -> ima
         height: 4 * H,
         ..options(AaMode::None)
     };
-    downsample(&render_with(gl, ctx, scene, &big, "4x4 reference"), 4)
+    bench::downsample_srgb(&render_with(gl, ctx, scene, &big, "4x4 reference"), 4)
+        .expect("4W x 4H divides into 4x4 blocks")
 }
 
 #[test]

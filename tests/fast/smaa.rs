@@ -217,7 +217,7 @@ fn a_z_step_and_a_staircase_give_the_trapezoids_of_their_line() {
                 // The blend mixes each pixel with the one across by that
                 // much, in linear light.
                 let linear = if y <= 2 + x / 4 { takes } else { 1.0 - given };
-                let want = srgb_byte(linear);
+                let want = srgb_byte_of(linear);
                 let got = i32::from(r.value(x, y));
                 assert!((got - want).abs() <= 1, "stair {x},{y}: {got} vs {want}");
             }
@@ -304,7 +304,7 @@ fn a_diagonal_run_takes_its_areas_from_the_diagonal_table() {
                 assert_near(*v, 1.0 / 8.0, &format!("orthogonal {i} channel {k}"));
             }
             let dark = i32::from(r.value(i, i));
-            assert!((dark - srgb_byte(1.0 / 8.0)).abs() <= 1, "{i}: {dark}");
+            assert!((dark - srgb_byte_of(1.0 / 8.0)).abs() <= 1, "{i}: {dark}");
         }
         // With them, the run's cells hold the table's areas across their top
         // edges and none across their left ones.
@@ -321,10 +321,10 @@ fn a_diagonal_run_takes_its_areas_from_the_diagonal_table() {
             // area is several of sRGB).
             let (t8, g8) = (f64::from(w[0]) / 255.0, f64::from(w[1]) / 255.0);
             let dark = i32::from(r.value(i, i));
-            assert!((dark - srgb_byte(t8)).abs() <= 1, "cell {i}: {dark}");
+            assert!((dark - srgb_byte_of(t8)).abs() <= 1, "cell {i}: {dark}");
             let light = i32::from(r.value(i, i + 1));
             assert!(
-                (light - srgb_byte(1.0 - g8)).abs() <= 1,
+                (light - srgb_byte_of(1.0 - g8)).abs() <= 1,
                 "above {i}: {light}"
             );
         }
@@ -385,7 +385,7 @@ fn diagonal_runs_bring_near_diagonal_lines_nearer_their_coverage() {
                         if cover <= 0.0 || cover >= 1.0 {
                             continue;
                         }
-                        err += (to_linear(r.value(x, y)) - (1.0 - cover)).abs();
+                        err += (common::srgb::decode(r.value(x, y)) - (1.0 - cover)).abs();
                         n += 1;
                     }
                 }
@@ -398,24 +398,6 @@ fn diagonal_runs_bring_near_diagonal_lines_nearer_their_coverage() {
             assert!(with < without, "slope {slope}: {with} against {without}");
         }
     });
-}
-
-fn srgb_byte(linear: f64) -> i32 {
-    let c = if linear <= 0.003_130_8 {
-        12.92 * linear
-    } else {
-        1.055 * linear.powf(1.0 / 2.4) - 0.055
-    };
-    (c * 255.0).round() as i32
-}
-
-fn to_linear(byte: u8) -> f64 {
-    let c = f64::from(byte) / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
 }
 
 /// The share of pixel (x, y) below the line through `(0, c)` with
@@ -465,7 +447,7 @@ fn aliased_half_planes_come_near_their_exact_coverage() {
                         continue;
                     }
                     let want = 1.0 - cover;
-                    let got = to_linear(r.value(x, y));
+                    let got = common::srgb::decode(r.value(x, y));
                     let aliased = if dark(x, y) { 0.0 } else { 1.0 };
                     err_smaa += (got - want).abs();
                     err_aliased += (aliased - want).abs();
@@ -772,4 +754,9 @@ fn smaa_leaves_less_error_than_none_and_fxaa_on_silhouettes() {
             assert!(s < n, "{scene}: smaa's FLIP edges {s} against none's {n}");
         }
     }
+}
+
+/// Linear light as the nearest 8-bit sRGB value.
+fn srgb_byte_of(linear: f64) -> i32 {
+    common::srgb::encode(linear).round() as i32
 }

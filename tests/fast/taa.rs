@@ -232,25 +232,6 @@ fn reprojected(gl: &glow::Context, renderer: &Renderer) -> image::RgbaImage {
         .expect("a frame was rendered")
 }
 
-fn srgb_decode(v: u8) -> f64 {
-    let c = f64::from(v) / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-fn srgb_encode(l: f64) -> f64 {
-    let l = l.clamp(0.0, 1.0);
-    255.0
-        * if l <= 0.0031308 {
-            l * 12.92
-        } else {
-            1.055 * l.powf(1.0 / 2.4) - 0.055
-        }
-}
-
 /// The Catmull-Rom weights of the taps at −1, 0, 1, 2 for a point `f` of
 /// the way from tap 0 to tap 1.
 fn catmull_rom(f: f64) -> [f64; 4] {
@@ -320,10 +301,12 @@ fn reprojection_is_exact_for_a_camera_translated_parallel_to_a_plane() {
                     let linear: f64 = (0..4)
                         .map(|i| {
                             let tx = (base as i64 - 1 + i as i64).clamp(0, i64::from(W) - 1);
-                            weights[i] * srgb_decode(before.get_pixel(tx as u32, srow as u32)[c])
+                            weights[i]
+                                * common::srgb::decode(before.get_pixel(tx as u32, srow as u32)[c])
                         })
                         .sum();
-                    worst = worst.max((f64::from(p[c]) - srgb_encode(linear.max(0.0))).abs());
+                    worst =
+                        worst.max((f64::from(p[c]) - common::srgb::encode(linear.max(0.0))).abs());
                 }
                 compared += 1;
             }
