@@ -50,6 +50,19 @@ fn finite3(v: &[f32; 3]) -> bool {
     v.iter().all(|c| c.is_finite())
 }
 
+/// `v` scaled to unit length, or `fallback` when it has no direction (zero
+/// or not finite). Scaled by its largest component first: glam's
+/// `normalize_or` squares the components, which underflows into subnormals
+/// for a tiny triangle's cross product (a "unit" normal of length 1.013
+/// came out) and overflows for a huge one's (the fallback came out).
+pub(crate) fn unit_or(v: Vec3, fallback: Vec3) -> Vec3 {
+    let largest = v.abs().max_element();
+    if !(largest.is_finite() && largest > 0.0) {
+        return fallback;
+    }
+    (v / largest).normalize_or(fallback)
+}
+
 /// The (unnormalised, area-weighted) normal of a counter-clockwise triangle.
 pub(crate) fn face_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     (b - a).cross(c - a)
@@ -189,7 +202,7 @@ pub(crate) fn flat_shaded(positions: &[[f32; 3]], uvs: &[[f32; 2]], indices: &[u
             let i = tri[k] as usize;
             Vec3::from(positions.get(i).copied().unwrap_or_default())
         };
-        let normal = face_normal(p(0), p(1), p(2)).normalize_or(Vec3::Z);
+        let normal = unit_or(face_normal(p(0), p(1), p(2)), Vec3::Z);
         for &i in tri {
             g.indices.push(g.positions.len() as u32);
             g.positions
@@ -238,7 +251,7 @@ fn repair_normals(
         }
         for ((n, &is_bad), a) in normals.iter_mut().zip(&bad).zip(&acc) {
             if is_bad {
-                *n = a.normalize_or(Vec3::Z).to_array();
+                *n = unit_or(*a, Vec3::Z).to_array();
             }
         }
     }
@@ -253,7 +266,7 @@ fn repair_normals(
         if (l - 1.0).abs() > 0.01 {
             rescaled += 1;
         }
-        *n = (v / l).to_array();
+        *n = unit_or(v, Vec3::Z).to_array();
     }
     (bad_count, rescaled)
 }

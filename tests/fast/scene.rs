@@ -596,6 +596,37 @@ fn vertices_no_triangle_uses_are_compacted_away() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Flat normals of triangles whose cross product squares into subnormals
+/// (sides of 1e-19) or past f32's range (sides of 1e19) are unit vectors
+/// facing the face: +x for a triangle in the y-z plane, not +z.
+#[test]
+fn tiny_and_huge_triangles_get_unit_normals_facing_them() {
+    let dir = scratch("extreme-sizes");
+    let mut t = Tiny::default();
+    let triangle = |s: f32| [[0.0, 0.0, 0.0], [0.0, s, 0.0], [0.0, 0.0, s]];
+    let (tiny, huge) = (t.vec3(&triangle(1e-19)), t.vec3(&triangle(1e19)));
+    let doc = json!({
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"mesh": 1}],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": tiny}}]},
+            {"primitives": [{"attributes": {"POSITION": huge}}]},
+        ],
+    });
+    let scene = load_path(&t.write(&dir, "extreme", doc)).expect("loads");
+    assert_sane(&scene);
+    for o in &scene.objects {
+        for n in &o.normals {
+            assert!(
+                (Vec3::from(*n) - Vec3::X).length() < 1e-6,
+                "{}: normal {n:?}",
+                o.name
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn strips_fans_and_missing_normals() {
     let dir = scratch("modes");
