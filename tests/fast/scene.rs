@@ -627,6 +627,31 @@ fn tiny_and_huge_triangles_get_unit_normals_facing_them() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Two triangles, each finite, 6e38 apart: no f32 camera frames them and no
+/// depth range holds them, so the file is refused in one line (the framing
+/// camera's near plane and position came out infinite and NaN).
+#[test]
+fn a_scene_wider_than_f32_is_a_one_line_error() {
+    let dir = scratch("too-wide");
+    let mut t = Tiny::default();
+    let at = |x: f32| [[x, 0.0, 0.0], [x, 1.0, 0.0], [x, 0.0, 1.0]];
+    let (left, right) = (t.vec3(&at(-3e38)), t.vec3(&at(3e38)));
+    let doc = json!({
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"mesh": 1}],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": left}}]},
+            {"primitives": [{"attributes": {"POSITION": right}}]},
+        ],
+    });
+    let msg = err_line(load_path(&t.write(&dir, "wide", doc)));
+    assert!(
+        msg.contains("wide.gltf") && msg.contains("too far for single-precision"),
+        "{msg}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn strips_fans_and_missing_normals() {
     let dir = scratch("modes");

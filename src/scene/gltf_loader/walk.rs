@@ -337,6 +337,24 @@ impl<'a> Loader<'a> {
         if scene.lights.is_empty() {
             scene.lights = default_lights(&scene.bounds);
         }
+        // Vertices can each be finite and still span more than an f32 can
+        // measure: the camera framing them (or the rig lighting them) then
+        // overflows, and no depth range could hold them.
+        let camera = &scene.camera;
+        let measurable = (scene.bounds.max - scene.bounds.min).length().is_finite()
+            && camera.view.is_finite()
+            && camera.near.is_finite()
+            && camera.far.is_none_or(f32::is_finite)
+            && scene.lights.iter().all(|l| {
+                l.position.is_finite() && l.direction.is_finite() && l.intensity.is_finite()
+            });
+        if !measurable {
+            let (lo, hi) = (scene.bounds.min, scene.bounds.max);
+            return Err(format!(
+                "the scene spans [{}, {}, {}] to [{}, {}, {}], too far for single-precision floats to frame, light and depth-test",
+                lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+            ));
+        }
         scene.warnings = warnings.into_vec();
         Ok(scene)
     }
