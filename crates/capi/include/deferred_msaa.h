@@ -87,6 +87,13 @@ typedef enum {
   // A panic inside the library, caught at the boundary. The handle it
   // happened on refuses every call but `dmsaa_destroy` from then on.
   DMSAA_STATUS_PANIC = 8,
+  // The host's second lighting drew nothing where pixels have a second
+  // layer (a depth or stencil test left on from the first lighting
+  // rejected it): the message says how to set it up instead. Returned
+  // by `dmsaa_finish_second_layer`, or, where the result was not ready
+  // then, by the next `dmsaa_resolve` (which has still resolved its
+  // frame).
+  DMSAA_STATUS_SECOND_LIGHTING = 9,
 } DmsaaStatus;
 
 // A host G-buffer retrofitted with MSAA: the multisampled twins, the
@@ -111,7 +118,9 @@ typedef uint32_t DmsaaRule;
 // How a depth-stencil host's stencil is written back after the resolve.
 typedef uint32_t DmsaaStencilCopy;
 
-// How the two lit layers are mixed by the second layer's coverage.
+// What the host's lit values mean, and so how the two lit layers are
+// mixed by the second layer's coverage (and the forward target's samples
+// averaged).
 typedef uint32_t DmsaaLayerMix;
 
 // What `dmsaa_finish_second_layer` puts back of the first layer in the
@@ -259,10 +268,14 @@ typedef const void *(*DmsaaGetProcAddress)(const char *name, void *user_data);
 // `glBlitFramebuffer`: the sample the driver picks.
 #define DMSAA_STENCIL_BLIT 3
 
-// Tonemapped for a floating-point output, linear otherwise (the default).
+// Inferred (the default): tonemapped for a floating-point output; in
+// linear light for an sRGB output the host writes with
+// `GL_FRAMEBUFFER_SRGB` on, and for any other 8-bit output (display
+// values, taken as sRGB-encoded); as stored otherwise.
 #define DMSAA_LAYER_MIX_AUTO 0
 
-// `mix(first, second, a)` as the output stores it.
+// Linear values (linear light, or any values to be mixed as they are):
+// `mix(first, second, a)` as the output stores them.
 #define DMSAA_LAYER_MIX_LINEAR 1
 
 // In the domain `x / (1 + max3(x))`, mapped back.
@@ -271,6 +284,11 @@ typedef const void *(*DmsaaGetProcAddress)(const char *name, void *user_data);
 // In the domain of the host's own tonemap curve: `layer_mix_curve` is GLSL
 // defining `vec3 dmsaa_curve(vec3)` and `vec3 dmsaa_curve_inverse(vec3)`.
 #define DMSAA_LAYER_MIX_CURVE 3
+
+// sRGB-encoded display values the host's shader wrote (or an sRGB image
+// written with `GL_FRAMEBUFFER_SRGB` off): decoded, mixed in linear light,
+// encoded again.
+#define DMSAA_LAYER_MIX_SRGB_ENCODED 4
 
 // Nothing: for a host that reads nothing of its G-buffer after lighting
 // until its next geometry pass (no copies).
@@ -412,6 +430,66 @@ DmsaaStatus dmsaa_resolve(DmsaaRetrofit *retrofit,
 DmsaaStatus dmsaa_begin_second_layer(DmsaaRetrofit *retrofit,
                                      uint32_t output_fbo,
                                      bool *run_lighting);
+
+// [`dmsaa_begin_second_layer`], for a host that lights the second layer
+// into the library's own target instead of `output_fbo`: `*out_fbo` is a
+// framebuffer of `output_fbo`'s colour format and the G-buffer's size,
+// whose colour is cleared to the host's clear colour (`glClearColor`),
+// whose depth is cleared to the host's clear depth (`glClearDepth`), and
+// whose stencil is `DMSAA_SECOND_LAYER_SELECTED` exactly where a pixel has
+// a second layer (every pixel where no selection could be made). The host
+// binds it where it would bind `output_fbo` for its second lighting,
+// changing nothing else; with `glStencilFunc(GL_EQUAL,
+// DMSAA_SECOND_LAYER_SELECTED, 0xFF)` and `glStencilMask(0)` it lights only
+// the pixels the mix reads. It must not clear the stencil. This is the
+// route for a host lighting into the default framebuffer (0), to which no
+// texture attaches, and one whose lighting keeps its depth test on. Then
+// [`dmsaa_finish_second_layer`] with the same `output_fbo`. With one layer
+// nothing is done and `*out_fbo` is 0.
+//
+// Threading: the host's context current on the calling thread. The host's
+// GL state is as it was.
+// Errors: those of [`dmsaa_begin_second_layer`], with `out_fbo` for
+// `run_lighting`.
+DmsaaStatus dmsaa_begin_second_layer_own_target(DmsaaRetrofit *retrofit,
+                                                uint32_t output_fbo,
+                                                uint32_t *out_fbo);
+
+// MSAA for what the host draws forward after lighting (light cubes,
+// transparent objects, particles): after the lighting (with two layers,
+// after [`dmsaa_finish_second_layer`]), copy the lit image of
+// `output_fbo` (its first draw buffer's image; 0 for the default
+// framebuffer) into every sample of a multisampled colour target attached
+// with the G-buffer's multisampled depth and stencil as the geometry pass
+// drew them, and give that framebuffer in `*out_fbo`. The host binds it in
+// place of `output_fbo`, draws its forward objects unchanged (depth test,
+// blending, stencil as it likes), and calls [`dmsaa_finish_forward`].
+// `output_fbo`'s own depth is not changed; what the forward objects write
+// into depth goes into the multisampled depth, which the next geometry
+// pass clears.
+//
+// Threading: the host's context current on the calling thread. The host's
+// GL state is as it was.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `out_fbo`;
+// `DMSAA_STATUS_OUT_OF_ORDER` between the second layer's begin and finish
+// or when already begun; `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` for an
+// output of another size or without a colour draw buffer;
+// `DMSAA_STATUS_UNSUPPORTED`, `DMSAA_STATUS_GL`.
+DmsaaStatus dmsaa_begin_forward(DmsaaRetrofit *retrofit, uint32_t output_fbo, uint32_t *out_fbo);
+
+// After the host drew its forward objects into [`dmsaa_begin_forward`]'s
+// framebuffer: average each pixel's samples into `output_fbo`'s lit image
+// (the one given to begin), in the blend domain of the options'
+// `layer_mix`; a pixel no forward object touched keeps its value bit for
+// bit.
+//
+// Threading: the host's context current on the calling thread. The host's
+// GL state is as it was.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit`;
+// `DMSAA_STATUS_OUT_OF_ORDER` without [`dmsaa_begin_forward`];
+// `DMSAA_STATUS_INVALID_ARGUMENT` for another output than begin's;
+// `DMSAA_STATUS_GL`.
+DmsaaStatus dmsaa_finish_forward(DmsaaRetrofit *retrofit, uint32_t output_fbo);
 
 // After the host lit the second layer into `output_fbo` (the one given to
 // [`dmsaa_begin_second_layer`]): mix the two lit layers into it by the

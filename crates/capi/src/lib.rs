@@ -74,6 +74,13 @@ pub enum DmsaaStatus {
     /// A panic inside the library, caught at the boundary. The handle it
     /// happened on refuses every call but `dmsaa_destroy` from then on.
     Panic = 8,
+    /// The host's second lighting drew nothing where pixels have a second
+    /// layer (a depth or stencil test left on from the first lighting
+    /// rejected it): the message says how to set it up instead. Returned
+    /// by `dmsaa_finish_second_layer`, or, where the result was not ready
+    /// then, by the next `dmsaa_resolve` (which has still resolved its
+    /// frame).
+    SecondLighting = 9,
 }
 
 /// The GL loader a host already has: returns the address of the GL entry
@@ -138,17 +145,27 @@ pub const DMSAA_STENCIL_BIT_PASSES: DmsaaStencilCopy = 2;
 /// `glBlitFramebuffer`: the sample the driver picks.
 pub const DMSAA_STENCIL_BLIT: DmsaaStencilCopy = 3;
 
-/// How the two lit layers are mixed by the second layer's coverage.
+/// What the host's lit values mean, and so how the two lit layers are
+/// mixed by the second layer's coverage (and the forward target's samples
+/// averaged).
 pub type DmsaaLayerMix = u32;
-/// Tonemapped for a floating-point output, linear otherwise (the default).
+/// Inferred (the default): tonemapped for a floating-point output; in
+/// linear light for an sRGB output the host writes with
+/// `GL_FRAMEBUFFER_SRGB` on, and for any other 8-bit output (display
+/// values, taken as sRGB-encoded); as stored otherwise.
 pub const DMSAA_LAYER_MIX_AUTO: DmsaaLayerMix = 0;
-/// `mix(first, second, a)` as the output stores it.
+/// Linear values (linear light, or any values to be mixed as they are):
+/// `mix(first, second, a)` as the output stores them.
 pub const DMSAA_LAYER_MIX_LINEAR: DmsaaLayerMix = 1;
 /// In the domain `x / (1 + max3(x))`, mapped back.
 pub const DMSAA_LAYER_MIX_TONEMAPPED: DmsaaLayerMix = 2;
 /// In the domain of the host's own tonemap curve: `layer_mix_curve` is GLSL
 /// defining `vec3 dmsaa_curve(vec3)` and `vec3 dmsaa_curve_inverse(vec3)`.
 pub const DMSAA_LAYER_MIX_CURVE: DmsaaLayerMix = 3;
+/// sRGB-encoded display values the host's shader wrote (or an sRGB image
+/// written with `GL_FRAMEBUFFER_SRGB` off): decoded, mixed in linear light,
+/// encoded again.
+pub const DMSAA_LAYER_MIX_SRGB_ENCODED: DmsaaLayerMix = 4;
 
 /// What `dmsaa_finish_second_layer` puts back of the first layer in the
 /// host's G-buffer; what it does not put back holds the second layer.
@@ -273,6 +290,9 @@ pub struct DmsaaRetrofit {
     /// The second layer's phase as the calls so far left it, to tell a
     /// call out of order from a bad argument.
     phase: Phase,
+    /// Between `dmsaa_begin_forward` and `dmsaa_finish_forward`, for this
+    /// output (0: default).
+    forward: Option<u32>,
     /// A panic happened on this handle: its state may be half-changed.
     poisoned: bool,
 }
@@ -327,6 +347,7 @@ impl Failure {
             | Error::UnsupportedSampleCount { .. }
             | Error::UnsupportedFormat { .. } => DmsaaStatus::Unsupported,
             Error::MemoryBudget { .. } => DmsaaStatus::MemoryBudget,
+            Error::SecondLighting(_) => DmsaaStatus::SecondLighting,
             _ => DmsaaStatus::Gl,
         };
         Failure::new(status, error.to_string())
@@ -554,6 +575,7 @@ fn convert(o: &DmsaaOptions) -> Result<Converted, Failure> {
                 ("DMSAA_LAYER_MIX_AUTO", LayerMix::Auto),
                 ("DMSAA_LAYER_MIX_LINEAR", LayerMix::Linear),
                 ("DMSAA_LAYER_MIX_TONEMAPPED", LayerMix::Tonemapped),
+                ("DMSAA_LAYER_MIX_SRGB_ENCODED", LayerMix::SrgbEncoded),
                 // Taken above, with its text; listed for the message.
                 ("DMSAA_LAYER_MIX_CURVE", LayerMix::Auto),
             ],
@@ -710,6 +732,7 @@ pub unsafe extern "C" fn dmsaa_retrofit_new(
             depth_mode: converted.depth_mode,
             world_space: converted.world_space,
             phase: Phase::Idle,
+            forward: None,
             poisoned: false,
         });
         // SAFETY: as above.
@@ -866,6 +889,11 @@ pub unsafe extern "C" fn dmsaa_resolve(
                     h.phase = Phase::Resolved;
                     Ok(())
                 }
+                // The last frame's check: this frame is resolved.
+                Err(e @ Error::SecondLighting(_)) => {
+                    h.phase = Phase::Resolved;
+                    Err(e.into())
+                }
                 Err(e) if out_of_order => Err(Failure::new(DmsaaStatus::OutOfOrder, e.to_string())),
                 Err(e) => Err(e.into()),
             }
@@ -918,6 +946,148 @@ pub unsafe extern "C" fn dmsaa_begin_second_layer(
         // SAFETY: as above.
         unsafe { *run_lighting = began };
         Ok(())
+    })
+}
+
+/// [`dmsaa_begin_second_layer`], for a host that lights the second layer
+/// into the library's own target instead of `output_fbo`: `*out_fbo` is a
+/// framebuffer of `output_fbo`'s colour format and the G-buffer's size,
+/// whose colour is cleared to the host's clear colour (`glClearColor`),
+/// whose depth is cleared to the host's clear depth (`glClearDepth`), and
+/// whose stencil is `DMSAA_SECOND_LAYER_SELECTED` exactly where a pixel has
+/// a second layer (every pixel where no selection could be made). The host
+/// binds it where it would bind `output_fbo` for its second lighting,
+/// changing nothing else; with `glStencilFunc(GL_EQUAL,
+/// DMSAA_SECOND_LAYER_SELECTED, 0xFF)` and `glStencilMask(0)` it lights only
+/// the pixels the mix reads. It must not clear the stencil. This is the
+/// route for a host lighting into the default framebuffer (0), to which no
+/// texture attaches, and one whose lighting keeps its depth test on. Then
+/// [`dmsaa_finish_second_layer`] with the same `output_fbo`. With one layer
+/// nothing is done and `*out_fbo` is 0.
+///
+/// Threading: the host's context current on the calling thread. The host's
+/// GL state is as it was.
+/// Errors: those of [`dmsaa_begin_second_layer`], with `out_fbo` for
+/// `run_lighting`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn dmsaa_begin_second_layer_own_target(
+    retrofit: *mut DmsaaRetrofit,
+    output_fbo: u32,
+    out_fbo: *mut u32,
+) -> DmsaaStatus {
+    const F: &str = "dmsaa_begin_second_layer_own_target";
+    entry(F, || {
+        if out_fbo.is_null() {
+            return Err(Failure::null(F, "out_fbo"));
+        }
+        // SAFETY: checked non-null; the header requires a writable pointer.
+        unsafe { *out_fbo = 0 };
+        let target = with_handle(F, retrofit, |h| {
+            let out_of_order = h.phase != Phase::Resolved;
+            let gl = &h.gl;
+            let r = &mut h.retrofit;
+            let output = NonZeroU32::new(output_fbo).map(deferred_msaa::glow::NativeFramebuffer);
+            match r.begin_second_layer_own_target(gl, output) {
+                Ok(Some(target)) => {
+                    h.phase = Phase::Lighting(output_fbo);
+                    Ok(target.0.get())
+                }
+                Ok(None) => Ok(0),
+                Err(e) if out_of_order => Err(Failure::new(DmsaaStatus::OutOfOrder, e.to_string())),
+                Err(e) => Err(e.into()),
+            }
+        })?;
+        // SAFETY: as above.
+        unsafe { *out_fbo = target };
+        Ok(())
+    })
+}
+
+/// MSAA for what the host draws forward after lighting (light cubes,
+/// transparent objects, particles): after the lighting (with two layers,
+/// after [`dmsaa_finish_second_layer`]), copy the lit image of
+/// `output_fbo` (its first draw buffer's image; 0 for the default
+/// framebuffer) into every sample of a multisampled colour target attached
+/// with the G-buffer's multisampled depth and stencil as the geometry pass
+/// drew them, and give that framebuffer in `*out_fbo`. The host binds it in
+/// place of `output_fbo`, draws its forward objects unchanged (depth test,
+/// blending, stencil as it likes), and calls [`dmsaa_finish_forward`].
+/// `output_fbo`'s own depth is not changed; what the forward objects write
+/// into depth goes into the multisampled depth, which the next geometry
+/// pass clears.
+///
+/// Threading: the host's context current on the calling thread. The host's
+/// GL state is as it was.
+/// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `out_fbo`;
+/// `DMSAA_STATUS_OUT_OF_ORDER` between the second layer's begin and finish
+/// or when already begun; `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` for an
+/// output of another size or without a colour draw buffer;
+/// `DMSAA_STATUS_UNSUPPORTED`, `DMSAA_STATUS_GL`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn dmsaa_begin_forward(
+    retrofit: *mut DmsaaRetrofit,
+    output_fbo: u32,
+    out_fbo: *mut u32,
+) -> DmsaaStatus {
+    const F: &str = "dmsaa_begin_forward";
+    entry(F, || {
+        if out_fbo.is_null() {
+            return Err(Failure::null(F, "out_fbo"));
+        }
+        // SAFETY: checked non-null; the header requires a writable pointer.
+        unsafe { *out_fbo = 0 };
+        let target = with_handle(F, retrofit, |h| {
+            let out_of_order = matches!(h.phase, Phase::Lighting(_)) || h.forward.is_some();
+            let gl = &h.gl;
+            let r = &mut h.retrofit;
+            let output = NonZeroU32::new(output_fbo).map(deferred_msaa::glow::NativeFramebuffer);
+            match r.begin_forward(gl, output) {
+                Ok(target) => {
+                    h.forward = Some(output_fbo);
+                    Ok(target.0.get())
+                }
+                Err(e) if out_of_order => Err(Failure::new(DmsaaStatus::OutOfOrder, e.to_string())),
+                Err(e) => Err(e.into()),
+            }
+        })?;
+        // SAFETY: as above.
+        unsafe { *out_fbo = target };
+        Ok(())
+    })
+}
+
+/// After the host drew its forward objects into [`dmsaa_begin_forward`]'s
+/// framebuffer: average each pixel's samples into `output_fbo`'s lit image
+/// (the one given to begin), in the blend domain of the options'
+/// `layer_mix`; a pixel no forward object touched keeps its value bit for
+/// bit.
+///
+/// Threading: the host's context current on the calling thread. The host's
+/// GL state is as it was.
+/// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit`;
+/// `DMSAA_STATUS_OUT_OF_ORDER` without [`dmsaa_begin_forward`];
+/// `DMSAA_STATUS_INVALID_ARGUMENT` for another output than begin's;
+/// `DMSAA_STATUS_GL`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn dmsaa_finish_forward(
+    retrofit: *mut DmsaaRetrofit,
+    output_fbo: u32,
+) -> DmsaaStatus {
+    const F: &str = "dmsaa_finish_forward";
+    entry(F, || {
+        with_handle(F, retrofit, |h| {
+            let begun = h.forward.take();
+            let gl = &h.gl;
+            let r = &mut h.retrofit;
+            let output = NonZeroU32::new(output_fbo).map(deferred_msaa::glow::NativeFramebuffer);
+            match r.finish_forward(gl, output) {
+                Ok(()) => Ok(()),
+                Err(e) if begun.is_none() => {
+                    Err(Failure::new(DmsaaStatus::OutOfOrder, e.to_string()))
+                }
+                Err(e) => Err(e.into()),
+            }
+        })
     })
 }
 

@@ -133,6 +133,11 @@ pub enum Error {
     /// A size, count or option outside what is accepted.
     #[error("{0}")]
     InvalidArgument(String),
+
+    /// The host's second lighting (two layers) did not light the second
+    /// layer: what it drew, and how to set it up instead.
+    #[error("{0}")]
+    SecondLighting(String),
 }
 
 fn fmt_counts(counts: &[u32]) -> String {

@@ -96,10 +96,13 @@
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod forward;
 pub mod frame;
 pub mod gbuffer;
 pub mod gl;
 pub mod host;
+mod lighting_check;
+mod lit_output;
 pub mod profile;
 pub mod readback;
 pub mod resolve;

@@ -8,6 +8,7 @@
 //! The host's model and lighting shaders do not change: the twins have the
 //! same formats, attachment points and draw-buffer mapping as the host's FBO.
 
+use crate::forward::ForwardTarget;
 use crate::frame::Frame;
 use crate::gbuffer::{MemoryBudget, MultisampleTwin, TwinSpec, budget_twins};
 use crate::gl::Texture2d;
@@ -24,6 +25,7 @@ use crate::resolve::{
 };
 use crate::second_layer::{LayerMix, SecondLayer};
 use crate::{Error, Result};
+use glow::HasContext;
 
 /// How a host G-buffer is multisampled and resolved: everything that does
 /// not change from frame to frame, given once. The programs it needs are
@@ -170,6 +172,8 @@ pub struct MsaaRetrofit {
     second: Option<SecondLayer>,
     /// The last profiled frame's steps ([`MsaaRetrofit::set_profiling`]).
     profile: StepProfile,
+    /// The forward target, once asked for ([`MsaaRetrofit::begin_forward`]).
+    forward: Option<ForwardTarget>,
 }
 
 /// What [`MsaaRetrofit::build`] makes from the host's framebuffer.
@@ -410,6 +414,7 @@ impl MsaaRetrofit {
             normal: built.normal,
             second: built.second,
             profile: StepProfile::default(),
+            forward: None,
         };
         if let Err(e) = retrofit.prepare(gl) {
             retrofit.destroy(gl);
@@ -638,19 +643,22 @@ impl MsaaRetrofit {
     fn prepare(&mut self, gl: &glow::Context) -> Result<()> {
         let extra = self.extra_outputs();
         self.run_resolver(gl, None, None, extra)?;
-        self.run_second_layer(gl, None, &mut StepProfile::default())
+        self.run_second_layer(gl, None, &mut StepProfile::default())?
     }
 
     /// The second layer's resolve under `params` (or, without, only its
     /// compilation); nothing with one layer.
+    /// The second layer's resolve (or, without `params`, its programs);
+    /// inside, the last frame's check of the second lighting, when it was
+    /// left to this frame.
     fn run_second_layer(
         &mut self,
         gl: &glow::Context,
         params: Option<&ResolveParams>,
         profile: &mut StepProfile,
-    ) -> Result<()> {
+    ) -> Result<Result<()>> {
         let Some(second) = &self.second else {
-            return Ok(());
+            return Ok(Ok(()));
         };
         let (depth, colors, points) = self.inputs()?;
         let inputs = ResolveInputs {
@@ -663,13 +671,16 @@ impl MsaaRetrofit {
             normal: self.normal,
         };
         match params {
-            None => self.resolver.prepare_second_layer(
-                gl,
-                &inputs,
-                second.target(),
-                &self.options.resolve,
-                second.has_reference(),
-            ),
+            None => self
+                .resolver
+                .prepare_second_layer(
+                    gl,
+                    &inputs,
+                    second.target(),
+                    &self.options.resolve,
+                    second.has_reference(),
+                )
+                .map(Ok),
             Some(params) => {
                 let selected = profile.time(gl, "second layer: selection", || {
                     let state = SavedState::capture(gl, 1);
@@ -686,7 +697,18 @@ impl MsaaRetrofit {
                         second.has_reference(),
                         selected?,
                     )
-                })
+                })?;
+                // The last frame's check, if it was left pending, comes
+                // back here: returned once this frame is resolved whole.
+                match &mut self.second {
+                    Some(second) => profile.time(gl, "second layer: count", || {
+                        let state = SavedState::capture(gl, 1);
+                        let counted = second.count_selected(gl);
+                        state.restore(gl);
+                        Ok(counted)
+                    }),
+                    None => Ok(Ok(())),
+                }
             }
         }
     }
@@ -869,11 +891,11 @@ impl MsaaRetrofit {
                 "resolve was called between begin_second_layer and finish_second_layer",
             ));
         }
-        self.run_second_layer(gl, Some(params), profile)?;
+        let last_check = self.run_second_layer(gl, Some(params), profile)?;
         if let Some(second) = &mut self.second {
             second.resolved = true;
         }
-        Ok(())
+        last_check
     }
 
     /// Time each of the retrofit's steps from the next frame on (between
@@ -916,26 +938,85 @@ impl MsaaRetrofit {
         gl: &glow::Context,
         output: Option<glow::Framebuffer>,
     ) -> Result<bool> {
+        Ok(self.begin_second(gl, output, false)?.is_some())
+    }
+
+    /// [`MsaaRetrofit::begin_second_layer`], for a host that lights the
+    /// second layer into the crate's own target instead of `output`: the
+    /// framebuffer returned, of `output`'s format and the G-buffer's size,
+    /// whose colour is cleared to the host's clear colour
+    /// (`glClearColor`), whose depth is cleared to the host's clear depth
+    /// (`glClearDepth`), and whose stencil is
+    /// [`SECOND_LAYER_SELECTED`](crate::second_layer::SECOND_LAYER_SELECTED)
+    /// exactly where a pixel has a second layer (every pixel, where no
+    /// selection could be made). The host binds it in place of `output`
+    /// for its second lighting, changing nothing else; with
+    /// `glStencilFunc(GL_EQUAL, SECOND_LAYER_SELECTED, 0xFF)` and stencil
+    /// writes off it lights only the pixels the mix reads. It must not
+    /// clear the stencil. This is the route for a host lighting into the
+    /// default framebuffer, to which no stencil texture attaches; and its
+    /// depth test cannot reject the second lighting as the first lighting's
+    /// depth in `output` would. `None`, and nothing done, with one layer.
+    /// [`MsaaRetrofit::finish_second_layer`] takes the same `output`.
+    pub fn begin_second_layer_own_target(
+        &mut self,
+        gl: &glow::Context,
+        output: Option<glow::Framebuffer>,
+    ) -> Result<Option<glow::Framebuffer>> {
+        Ok(self.begin_second(gl, output, true)?.flatten())
+    }
+
+    /// Both begins: `Some` when the host is to light again, holding the
+    /// crate's own target with `own_target`.
+    fn begin_second(
+        &mut self,
+        gl: &glow::Context,
+        output: Option<glow::Framebuffer>,
+        own_target: bool,
+    ) -> Result<Option<Option<glow::Framebuffer>>> {
         let Some(second) = &mut self.second else {
-            return Ok(false);
+            return Ok(None);
         };
+        if self.forward.as_ref().is_some_and(|f| f.drawing) {
+            return Err(Error::invalid(
+                "begin_second_layer between begin_forward and finish_forward: light both layers before the forward pass",
+            ));
+        }
         let host = SetupState::capture(gl);
         let profile = &mut self.profile;
-        let mut result = second.begin(gl, output, self.options.restore_first_layer, profile);
+        let mut result = second.begin(
+            gl,
+            output,
+            self.options.restore_first_layer,
+            own_target,
+            profile,
+        );
         // The host's stencil, for its lighting's tests: the second
         // cluster's seed sample's (the first layer's comes back in finish).
-        if let (Ok(()), Some(s), Some(depth), Some(reference)) = (
+        if let (Ok(_), Some(s), Some(depth), Some(reference)) = (
             &result,
             &self.stencil,
             self.twin.depth(),
             second.reference(),
         ) {
-            result = profile.time(gl, "second layer: seed stencil", || {
+            if let Err(e) = profile.time(gl, "second layer: seed stencil", || {
                 s.pass.run(gl, depth, &self.twin.fbo, reference, &s.target)
-            });
+            }) {
+                result = Err(e);
+            }
         }
         host.restore(gl);
-        result.map(|()| true)
+        match result {
+            Ok(own) => {
+                // Counted from here to finish: the host's second lighting.
+                second.lighting_begins(gl);
+                Ok(Some(own))
+            }
+            Err(e) => {
+                second.abandon_check(gl);
+                Err(e)
+            }
+        }
     }
 
     /// After the host lit the second layer into `output` (the one given to
@@ -959,6 +1040,116 @@ impl MsaaRetrofit {
         let result = second.finish(gl, output, &mut self.profile);
         host.restore(gl);
         result
+    }
+
+    /// MSAA for what the host draws forward after lighting (light cubes,
+    /// transparent objects, particles): after the lighting (and, with two
+    /// layers, after [`MsaaRetrofit::finish_second_layer`]), copy the lit
+    /// image of `output` (the host's framebuffer, its first draw buffer's
+    /// image; `None` for the default framebuffer) into every sample of a
+    /// multisampled colour target, attached with the G-buffer twins'
+    /// multisampled depth (and stencil) as the geometry pass left them, and
+    /// return that framebuffer. The host binds it in place of `output`,
+    /// draws its forward objects unchanged (its own depth test, blending
+    /// and stencil state; the depth is its own depth convention, as drawn),
+    /// and calls [`MsaaRetrofit::finish_forward`]. The target is made on
+    /// the first call for an output and kept; a host that writes `output`
+    /// through `GL_FRAMEBUFFER_SRGB` should leave it on as it lit.
+    ///
+    /// What the forward objects write into depth and stencil goes into the
+    /// twins' depth, which the next geometry pass clears; `output`'s own
+    /// depth is not changed.
+    pub fn begin_forward(
+        &mut self,
+        gl: &glow::Context,
+        output: Option<glow::Framebuffer>,
+    ) -> Result<glow::Framebuffer> {
+        if self.second.as_ref().is_some_and(|s| s.lighting) {
+            return Err(Error::invalid(
+                "begin_forward between begin_second_layer and finish_second_layer: finish the second layer first",
+            ));
+        }
+        if self.forward.as_ref().is_some_and(|f| f.drawing) {
+            return Err(Error::invalid(
+                "begin_forward was called twice: call finish_forward after the forward objects",
+            ));
+        }
+        let host = SetupState::capture(gl);
+        let framebuffer_srgb = unsafe { gl.is_enabled(glow::FRAMEBUFFER_SRGB) };
+        let result = self
+            .forward_for(gl, output, framebuffer_srgb)
+            .and_then(|()| {
+                let forward = self
+                    .forward
+                    .as_mut()
+                    .ok_or_else(|| Error::invalid("the forward target was not made"))?;
+                self.profile.time(gl, "forward: fill", || forward.begin(gl))
+            });
+        host.restore(gl);
+        result
+    }
+
+    /// The forward target for `output`, made again when the output, the
+    /// way the host writes it or the layer mix changed.
+    fn forward_for(
+        &mut self,
+        gl: &glow::Context,
+        output: Option<glow::Framebuffer>,
+        framebuffer_srgb: bool,
+    ) -> Result<()> {
+        if self
+            .forward
+            .as_ref()
+            .is_some_and(|f| f.serves(output, framebuffer_srgb, &self.options.layer_mix))
+        {
+            return Ok(());
+        }
+        if let Some(old) = self.forward.take() {
+            destroy_object(gl, old);
+        }
+        let lit =
+            crate::lit_output::LitOutput::inspect(gl, output, framebuffer_srgb, self.host.size())?;
+        self.forward = Some(ForwardTarget::new(
+            gl,
+            lit,
+            &self.twin,
+            &self.options.layer_mix,
+        )?);
+        Ok(())
+    }
+
+    /// After the host drew its forward objects into
+    /// [`MsaaRetrofit::begin_forward`]'s framebuffer: average each pixel's
+    /// samples into `output`'s lit image (in the domain of
+    /// [`RetrofitOptions::layer_mix`]), leaving every pixel no forward
+    /// object touched bit for bit as it was. The host's GL state is as it
+    /// was.
+    pub fn finish_forward(
+        &mut self,
+        gl: &glow::Context,
+        output: Option<glow::Framebuffer>,
+    ) -> Result<()> {
+        let Some(forward) = self.forward.as_mut().filter(|f| f.drawing) else {
+            return Err(Error::invalid("finish_forward without begin_forward"));
+        };
+        if forward.output() != output {
+            forward.drawing = false;
+            return Err(Error::invalid(
+                "finish_forward was given another output than begin_forward",
+            ));
+        }
+        let host = SetupState::capture(gl);
+        let result = self
+            .profile
+            .time(gl, "forward: resolve", || forward.finish(gl));
+        host.restore(gl);
+        result
+    }
+
+    /// The bytes the forward target allocates (0 before the first
+    /// [`MsaaRetrofit::begin_forward`]).
+    pub fn forward_bytes(&self) -> u64 {
+        self.forward.as_ref().map_or(0, ForwardTarget::bytes)
     }
 
     /// The second layer's coverage `α = n2 / (n1 + n2)` per pixel (R16F, in
@@ -1106,6 +1297,10 @@ impl MsaaRetrofit {
         match self.prepare(gl) {
             Ok(()) => {
                 old.destroy(gl);
+                // The forward target attaches the old twins' depth.
+                if let Some(forward) = self.forward.take() {
+                    destroy_object(gl, forward);
+                }
                 Ok(())
             }
             Err(e) => {
@@ -1131,5 +1326,6 @@ impl GlObject for MsaaRetrofit {
         self.stencil.handles(out);
         self.second.handles(out);
         self.resolver.handles(out);
+        self.forward.handles(out);
     }
 }

@@ -12,10 +12,12 @@
 
 use crate::gl::format::ComponentType;
 use crate::gl::{
-    Attachment, Format, Framebuffer, FullscreenPass, GlObject, Handle, HostImage, Made,
-    ShaderSource, Texture2d, TextureRef, VertexArray, check_error, destroy_object,
+    Attachment, Format, Framebuffer, FullscreenPass, GlObject, Handle, Made, ShaderSource,
+    Texture2d, TextureRef, VertexArray, check_error, destroy_object,
 };
-use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect_point};
+use crate::host::{HostAttachment, HostFramebuffer, HostImageKind};
+use crate::lighting_check::LightingCheck;
+use crate::lit_output::{LitOutput, bind_for_reading};
 use crate::profile::StepProfile;
 use crate::retrofit::FirstLayerRestore;
 use crate::{Error, Result};
@@ -37,16 +39,31 @@ pub const SECOND_LAYER_DEPTH_FRAG: &str = include_str!("second_layer_depth.frag"
 pub const SECOND_LAYER_SELECTED: u8 = 1;
 const SELECTED: u8 = SECOND_LAYER_SELECTED;
 
-/// How the two lit layers are mixed by the second layer's coverage `α`.
+/// What the host's lit values mean, and so how the two lit layers are
+/// mixed by the second layer's coverage `α` (and the forward target's
+/// samples averaged): in the light a screen would emit for them, as far as
+/// the declaration says. GL state cannot tell what a host's values mean;
+/// declare it (docs/hosts.md says which to declare for the common engine
+/// styles).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub enum LayerMix {
-    /// [`LayerMix::Tonemapped`] for a floating-point (HDR) output,
-    /// [`LayerMix::Linear`] for any other (default).
+    /// Inferred (default): [`LayerMix::Tonemapped`] for a floating-point
+    /// (HDR) output; linear light for an sRGB output the host writes with
+    /// `GL_FRAMEBUFFER_SRGB` on (GL decodes and encodes); for any other
+    /// 8-bit unsigned normalised output [`LayerMix::SrgbEncoded`] (such an
+    /// output holds display values, which a screen decodes as sRGB); else
+    /// [`LayerMix::Linear`].
     #[default]
     Auto,
-    /// `mix(first, second, α)` as the output stores it (an LDR output,
-    /// already display-referred).
+    /// Linear values: `mix(first, second, α)` as the output stores them
+    /// (linear light, such as an output a later pass encodes, or values
+    /// to be mixed as they are).
     Linear,
+    /// sRGB-encoded display values (the host's shader encodes, or writes
+    /// display values with no encoding at all, as most LDR programs do;
+    /// or an sRGB image written with `GL_FRAMEBUFFER_SRGB` off): decoded,
+    /// mixed in linear light, encoded again.
+    SrgbEncoded,
     /// In the domain of `T(x) = x / (1 + max3(x))`, mapped back with
     /// `T⁻¹(y) = y / (1 − max3(y))`: a bright layer cannot swamp a dark one,
     /// as after a tonemap (the resolve's `BlendHdr` domain).
@@ -57,41 +74,80 @@ pub enum LayerMix {
     Curve(String),
 }
 
-/// The mix pass's program variants.
+/// The blend domain's GLSL, shared with the forward target's resolve:
+/// `mix_domain.glsl`.
+pub const MIX_DOMAIN_GLSL: &str = include_str!("mix_domain.glsl");
+
+/// The blend domains the mix and the forward resolve are compiled for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum MixKind {
+pub(crate) enum MixKind {
     Linear,
     Tonemapped,
     Curve,
+    SrgbEncoded,
 }
 
 impl MixKind {
-    fn define(self) -> &'static str {
+    pub(crate) fn define(self) -> &'static str {
         match self {
             MixKind::Linear => "MIX_LINEAR",
             MixKind::Tonemapped => "MIX_TONEMAPPED",
             MixKind::Curve => "MIX_CURVE",
+            MixKind::SrgbEncoded => "MIX_SRGB_ENCODED",
         }
     }
+
+    /// The domain `mix` blends `output`'s values in, as the crate reads
+    /// them (where the host's writes went through GL's sRGB encoding, the
+    /// crate's reads are decoded: linear light already).
+    pub(crate) fn of(mix: &LayerMix, output: &LitOutput) -> MixKind {
+        let properties = output.format.properties();
+        let float = matches!(properties.component, ComponentType::Float);
+        let display_bytes = matches!(properties.component, ComponentType::Unorm)
+            && properties.rgba_bits[..3].iter().all(|&b| b == 8);
+        match mix {
+            LayerMix::Curve(_) => MixKind::Curve,
+            LayerMix::Tonemapped => MixKind::Tonemapped,
+            LayerMix::Linear => MixKind::Linear,
+            LayerMix::SrgbEncoded | LayerMix::Auto if output.srgb_writes => MixKind::Linear,
+            LayerMix::SrgbEncoded => MixKind::SrgbEncoded,
+            LayerMix::Auto if float => MixKind::Tonemapped,
+            LayerMix::Auto if display_bytes => MixKind::SrgbEncoded,
+            LayerMix::Auto => MixKind::Linear,
+        }
+    }
+}
+
+/// The shader source up to the blend domain's functions: its define, the
+/// host's curve for [`MixKind::Curve`], `mix_domain.glsl`.
+pub(crate) fn mix_domain_source(kind: MixKind, curve: Option<&str>) -> ShaderSource {
+    let mut source = ShaderSource::new().define(kind.define(), "1");
+    if let (MixKind::Curve, Some(curve)) = (kind, curve) {
+        source = source.part("LayerMix::Curve", curve);
+    }
+    source.part("mix_domain.glsl", MIX_DOMAIN_GLSL)
 }
 
 /// The lit output's colour image, as the second layer reads and writes it.
 #[derive(Debug)]
 struct OutputTarget {
-    /// The host's framebuffer (`None`: the default framebuffer).
-    host: Option<glow::Framebuffer>,
+    /// The host's lit target and what its writes mean.
+    output: LitOutput,
     /// A framebuffer of that image alone, for the mix (the host's may have
     /// other draw buffers); `None` for the default framebuffer.
     target: Option<Framebuffer>,
     /// The same image with the second layer's selection stencil: the mix
     /// then draws only where the second resolve ran.
     masked: Option<Framebuffer>,
-    /// The lit first layer, and the lit second layer: copies of the output.
+    /// The lit first layer, and the lit second layer: copies of the output
+    /// (in [`LitOutput::copy_format`]).
     lit_first: Texture2d,
     lit_second: Texture2d,
     lit_first_fbo: Framebuffer,
+    /// The lit second layer's copy with the selection stencil: the
+    /// crate's own target for the second lighting
+    /// ([`MsaaRetrofit::begin_second_layer_own_target`](crate::MsaaRetrofit::begin_second_layer_own_target)).
     lit_second_fbo: Framebuffer,
-    format: Format,
 }
 
 impl GlObject for OutputTarget {
@@ -191,12 +247,19 @@ pub(crate) struct SecondLayer {
     write_depth: FullscreenPass,
     mix_linear: FullscreenPass,
     mix_tonemapped: FullscreenPass,
+    mix_srgb: FullscreenPass,
     mix_curve: Option<FullscreenPass>,
     mix: LayerMix,
+    /// Counts the pixels with a second layer (coverage above 0) for the
+    /// check of the second lighting.
+    count: FullscreenPass,
+    check: LightingCheck,
     vao: VertexArray,
     output: Option<OutputTarget>,
     /// `begin_second_layer` ran and `finish_second_layer` has not.
     pub(crate) lighting: bool,
+    /// The second lighting draws into the crate's own target.
+    own_target: bool,
     /// The last `select` marked the selection stencil.
     selected: std::cell::Cell<bool>,
     /// The second layer was resolved since the last `finish_second_layer`.
@@ -223,18 +286,17 @@ impl GlObject for SecondLayer {
         self.host_target.handles(out);
         self.mix_linear.handles(out);
         self.mix_tonemapped.handles(out);
+        self.mix_srgb.handles(out);
         self.mix_curve.handles(out);
+        self.count.handles(out);
+        self.check.handles(out);
         self.vao.handles(out);
         self.output.handles(out);
     }
 }
 
 fn mix_pass(gl: &glow::Context, kind: MixKind, curve: Option<&str>) -> Result<FullscreenPass> {
-    let mut fragment = ShaderSource::new().define(kind.define(), "1");
-    if let Some(curve) = curve {
-        fragment = fragment.part("LayerMix::Curve", curve);
-    }
-    let fragment = fragment.part("second_layer.frag", SECOND_LAYER_FRAG);
+    let fragment = mix_domain_source(kind, curve).part("second_layer.frag", SECOND_LAYER_FRAG);
     let pass = FullscreenPass::new(
         gl,
         &format!("second layer mix ({})", kind.define()),
@@ -259,16 +321,20 @@ fn set_units(gl: &glow::Context, pass: &FullscreenPass, units: &[(&str, i32)]) {
 }
 
 /// A full-screen pass of `body` reading `sampler` from unit 0, with
-/// `outputs` bound as given.
+/// `outputs` bound as given and `defines`.
 fn single_input_pass(
     gl: &glow::Context,
     label: &str,
-    name: &str,
-    body: &str,
+    (name, body): (&str, &str),
+    defines: &[(&str, &str)],
     sampler: &str,
     outputs: &[(&str, u32)],
 ) -> Result<FullscreenPass> {
-    let pass = FullscreenPass::new(gl, label, &ShaderSource::new().part(name, body), outputs)?;
+    let mut source = ShaderSource::new();
+    for (define, value) in defines {
+        source = source.define(define, value);
+    }
+    let pass = FullscreenPass::new(gl, label, &source.part(name, body), outputs)?;
     set_units(gl, &pass, &[(sampler, 0)]);
     Ok(pass)
 }
@@ -419,24 +485,35 @@ impl SecondLayer {
                     })
                     .collect()
             });
+            let select_frag = ("second_layer_select.frag", SECOND_LAYER_SELECT_FRAG);
             let select = made.keep(single_input_pass(
                 gl,
                 "second layer selection",
-                "second_layer_select.frag",
-                SECOND_LAYER_SELECT_FRAG,
-                "u_outside",
+                select_frag,
+                &[("SELECT_ABOVE", "0.5")],
+                "u_value",
                 &[("o_unused", 0)],
             )?);
+            let count = made.keep(single_input_pass(
+                gl,
+                "second layer count",
+                select_frag,
+                &[("SELECT_ABOVE", "0.0")],
+                "u_value",
+                &[("o_unused", 0)],
+            )?);
+            let check = made.keep(LightingCheck::new(gl)?);
             let write_depth = made.keep(single_input_pass(
                 gl,
                 "second layer depth",
-                "second_layer_depth.frag",
-                SECOND_LAYER_DEPTH_FRAG,
+                ("second_layer_depth.frag", SECOND_LAYER_DEPTH_FRAG),
+                &[],
                 "u_layer_depth",
                 &[],
             )?);
             let mix_linear = made.keep(mix_pass(gl, MixKind::Linear, None)?);
             let mix_tonemapped = made.keep(mix_pass(gl, MixKind::Tonemapped, None)?);
+            let mix_srgb = made.keep(mix_pass(gl, MixKind::SrgbEncoded, None)?);
             let mix_curve = match mix {
                 LayerMix::Curve(source) => {
                     Some(made.keep(mix_pass(gl, MixKind::Curve, Some(source))?))
@@ -466,11 +543,15 @@ impl SecondLayer {
                 write_depth,
                 mix_linear,
                 mix_tonemapped,
+                mix_srgb,
                 mix_curve,
                 mix: mix.clone(),
+                count,
+                check,
                 vao,
                 output: None,
                 lighting: false,
+                own_target: false,
                 host_saved: FirstLayerRestore::Nothing,
                 selected: std::cell::Cell::new(false),
                 resolved: false,
@@ -582,7 +663,7 @@ impl SecondLayer {
         let lit = self
             .output
             .as_ref()
-            .map_or(0, |o| 2 * u64::from(o.format.bytes_per_texel()));
+            .map_or(0, |o| 2 * u64::from(o.lit_first.format.bytes_per_texel()));
         texels * (2 * colours + ours + lit)
     }
 
@@ -717,88 +798,76 @@ impl SecondLayer {
     }
 
     /// The output's colour image and the lit copies, made again when the
-    /// output changed.
-    fn output_for(&mut self, gl: &glow::Context, host: Option<glow::Framebuffer>) -> Result<()> {
-        if self.output.as_ref().is_some_and(|o| o.host == host) {
+    /// output, or the way the host writes it, changed.
+    fn output_for(
+        &mut self,
+        gl: &glow::Context,
+        host: Option<glow::Framebuffer>,
+        framebuffer_srgb: bool,
+    ) -> Result<()> {
+        if self
+            .output
+            .as_ref()
+            .is_some_and(|o| o.output.same(host, framebuffer_srgb))
+        {
             return Ok(());
         }
         if let Some(old) = self.output.take() {
             destroy_object(gl, old);
         }
-        let (image, format) = match host {
-            Some(fbo) => {
-                let image = output_image(gl, fbo)?;
-                let format = image.format;
-                (Some(image), format)
-            }
-            None => (None, default_framebuffer_format(gl)),
-        };
-        if let Some(image) = &image {
-            if (image.width, image.height) != (self.width, self.height) {
-                return Err(Error::Retrofit {
-                    attachment: image.point.name(),
-                    reason: format!(
-                        "the lit output is {}x{}, the G-buffer {}x{}: the second layer mixes them pixel for pixel",
-                        image.width, image.height, self.width, self.height
-                    ),
-                });
-            }
-        }
+        let output = LitOutput::inspect(gl, host, framebuffer_srgb, (self.width, self.height))?;
         let (w, h) = (self.width, self.height);
-        let output = Made::build(gl, |made| {
+        let format = output.copy_format();
+        let stencil = (Attachment::DepthStencil, TextureRef::from(&self.stencil));
+        let made = Made::build(gl, |made| {
             // The host's output image, alone and with the selection stencil
             // that masks the mix.
-            let (target, masked) = match &image {
-                Some(image) => {
-                    let images: Vec<(Attachment, HostImage)> = image
-                        .host_image()
-                        .map(|i| (Attachment::Color(0), i))
-                        .into_iter()
-                        .collect();
-                    let colour = (Attachment::Color(0), image.texture_ref());
-                    let stencil = (Attachment::DepthStencil, TextureRef::from(&self.stencil));
-                    let target = made.keep(Framebuffer::with_host_images(
-                        gl,
-                        "second layer mix target (host output)",
-                        &[colour],
-                        &images,
-                        &[Some(0)],
-                    )?);
-                    let masked = made.keep(Framebuffer::with_host_images(
-                        gl,
-                        "second layer mix target (host output, selection stencil)",
-                        &[colour, stencil],
-                        &images,
-                        &[Some(0)],
-                    )?);
-                    (Some(target), Some(masked))
-                }
-                None => (None, None),
-            };
+            let target = output
+                .framebuffer(gl, "second layer mix target (host output)", &[])?
+                .map(|f| made.keep(f));
+            let masked = output
+                .framebuffer(
+                    gl,
+                    "second layer mix target (host output, selection stencil)",
+                    &[stencil],
+                )?
+                .map(|f| made.keep(f));
             let lit_first = made.keep(Texture2d::new(gl, "lit first layer", format, w, h)?);
             let lit_second = made.keep(Texture2d::new(gl, "lit second layer", format, w, h)?);
-            let fbo = |t: &Texture2d, label: &str| {
-                Framebuffer::new(
-                    gl,
-                    label,
-                    &[(Attachment::Color(0), TextureRef::from(t))],
-                    &[Some(0)],
-                )
-            };
-            let lit_first_fbo = made.keep(fbo(&lit_first, "lit first layer")?);
-            let lit_second_fbo = made.keep(fbo(&lit_second, "lit second layer")?);
-            Ok::<_, Error>(OutputTarget {
-                host,
+            let lit_first_fbo = made.keep(Framebuffer::new(
+                gl,
+                "lit first layer",
+                &[(Attachment::Color(0), TextureRef::from(&lit_first))],
+                &[Some(0)],
+            )?);
+            let lit_second_fbo = made.keep(Framebuffer::new(
+                gl,
+                "lit second layer (the second lighting's own target)",
+                &[
+                    (Attachment::Color(0), TextureRef::from(&lit_second)),
+                    stencil,
+                ],
+                &[Some(0)],
+            )?);
+            Ok::<_, Error>((
                 target,
                 masked,
                 lit_first,
                 lit_second,
                 lit_first_fbo,
                 lit_second_fbo,
-                format,
-            })
+            ))
         })?;
-        self.output = Some(output);
+        let (target, masked, lit_first, lit_second, lit_first_fbo, lit_second_fbo) = made;
+        self.output = Some(OutputTarget {
+            output,
+            target,
+            masked,
+            lit_first,
+            lit_second,
+            lit_first_fbo,
+            lit_second_fbo,
+        });
         Ok(())
     }
 
@@ -814,16 +883,12 @@ impl SecondLayer {
             &o.lit_second_fbo
         };
         unsafe {
+            // Bits as stored (the copies have the image's encoding only
+            // where the host's writes were encoded).
             gl.disable(glow::FRAMEBUFFER_SRGB);
             gl.disable(glow::SCISSOR_TEST);
             gl.color_mask(true, true, true, true);
-            gl.bind_framebuffer(
-                glow::READ_FRAMEBUFFER,
-                o.target.as_ref().map(Framebuffer::raw),
-            );
-            if o.target.is_some() {
-                gl.read_buffer(glow::COLOR_ATTACHMENT0);
-            }
+            bind_for_reading(gl, o.target.as_ref());
             gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(to.raw()));
             gl.blit_framebuffer(
                 0,
@@ -840,6 +905,47 @@ impl SecondLayer {
         }
     }
 
+    /// Count the pixels with a second layer, for the check of the second
+    /// lighting (after the second resolve; the caller keeps the host's
+    /// state). A failed check of the last frame's lighting is returned.
+    pub(crate) fn count_selected(&mut self, gl: &glow::Context) -> Result<()> {
+        let (count, vao, coverage, target) = (&self.count, &self.vao, &self.coverage, &self.target);
+        self.check.count_selected(gl, || unsafe {
+            count.begin(gl, target);
+            gl.disable(glow::STENCIL_TEST);
+            gl.color_mask(false, false, false, false);
+            TextureRef::from(coverage).bind(gl, 0);
+            count.draw(gl, vao);
+            gl.color_mask(true, true, true, true);
+        })
+    }
+
+    /// The crate's own target for the second lighting, prepared: the
+    /// lit second layer's copy (cleared to the host's clear colour) with
+    /// the selection stencil (its depth cleared to the host's clear depth;
+    /// its stencil [`SECOND_LAYER_SELECTED`] on every pixel where no
+    /// selection was made). The caller keeps the host's state.
+    fn prepare_own_target(&self, gl: &glow::Context) -> Option<glow::Framebuffer> {
+        let o = self.output.as_ref()?;
+        unsafe {
+            let mut colour = [0.0f32; 4];
+            gl.get_parameter_f32_slice(glow::COLOR_CLEAR_VALUE, &mut colour);
+            let depth = gl.get_parameter_f32(glow::DEPTH_CLEAR_VALUE);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(o.lit_second_fbo.raw()));
+            gl.disable(glow::SCISSOR_TEST);
+            gl.disable(glow::FRAMEBUFFER_SRGB);
+            gl.color_mask(true, true, true, true);
+            gl.depth_mask(true);
+            gl.clear_buffer_f32_slice(glow::COLOR, 0, &colour);
+            gl.clear_buffer_f32_slice(glow::DEPTH, 0, &[depth]);
+            if !self.selected.get() {
+                gl.stencil_mask(0xFF);
+                gl.clear_buffer_i32_slice(glow::STENCIL, 0, &[i32::from(SELECTED)]);
+            }
+        }
+        Some(o.lit_second_fbo.raw())
+    }
+
     /// Keep the lit first layer from `output` and put the second layer into
     /// the host's textures (the caller saves the host's state); first copy
     /// aside what `restore` says of the host's G-buffer, for `finish` to
@@ -849,8 +955,9 @@ impl SecondLayer {
         gl: &glow::Context,
         output: Option<glow::Framebuffer>,
         restore: FirstLayerRestore,
+        own_target: bool,
         profile: &mut StepProfile,
-    ) -> Result<()> {
+    ) -> Result<Option<glow::Framebuffer>> {
         if self.lighting {
             return Err(Error::invalid(
                 "begin_second_layer was called twice: call finish_second_layer after the second lighting",
@@ -861,7 +968,10 @@ impl SecondLayer {
                 "begin_second_layer needs this frame's resolve first (MsaaRetrofit::resolve)",
             ));
         }
-        self.output_for(gl, output)?;
+        // Whether the host's lighting wrote through the sRGB encoding, as
+        // it left GL_FRAMEBUFFER_SRGB (read before the crate touches it).
+        let framebuffer_srgb = unsafe { gl.is_enabled(glow::FRAMEBUFFER_SRGB) };
+        self.output_for(gl, output, framebuffer_srgb)?;
         profile.time(gl, "second layer: keep lit first layer", || {
             self.keep_lit(gl, true)
         });
@@ -886,9 +996,25 @@ impl SecondLayer {
         profile.time(gl, "second layer: depth into host", || {
             self.depth_into_host(gl)
         });
+        let own = if own_target {
+            self.prepare_own_target(gl)
+        } else {
+            None
+        };
         check_error(gl, "keeping the first layer and copying in the second")?;
         self.lighting = true;
-        Ok(())
+        self.own_target = own.is_some();
+        Ok(own)
+    }
+
+    /// The host's second lighting starts: the check counts what it draws.
+    pub(crate) fn lighting_begins(&mut self, gl: &glow::Context) {
+        self.check.lighting_begins(gl);
+    }
+
+    /// A `begin` that failed after the count began: no lighting follows.
+    pub(crate) fn abandon_check(&mut self, gl: &glow::Context) {
+        self.check.abandon(gl);
     }
 
     /// Mix the two lit layers into the output and, where `begin` saved it,
@@ -905,16 +1031,19 @@ impl SecondLayer {
                 "finish_second_layer without begin_second_layer",
             ));
         }
-        if self.output.as_ref().map(|o| o.host) != Some(output) {
+        if self.output.as_ref().map(|o| o.output.host) != Some(output) {
             return Err(Error::invalid(
                 "finish_second_layer was given another output than begin_second_layer",
             ));
         }
         self.lighting = false;
         self.resolved = false;
-        profile.time(gl, "second layer: keep lit second layer", || {
-            self.keep_lit(gl, false)
-        });
+        let checked = self.check.lighting_ends(gl);
+        if !self.own_target {
+            profile.time(gl, "second layer: keep lit second layer", || {
+                self.keep_lit(gl, false)
+            });
+        }
         profile.time(gl, "second layer: mix", || self.draw_mix(gl))?;
         // Depth and stencil as they were before the second lighting.
         match self.host_saved {
@@ -930,7 +1059,8 @@ impl SecondLayer {
             }
             FirstLayerRestore::Nothing => {}
         }
-        check_error(gl, "mixing the two lit layers")
+        check_error(gl, "mixing the two lit layers")?;
+        checked
     }
 
     /// The second layer's depth into the host's depth attachment (its
@@ -957,13 +1087,15 @@ impl SecondLayer {
         let Some(o) = &self.output else {
             return Ok(());
         };
-        let float = matches!(o.format.properties().component, ComponentType::Float);
-        let pass = match (&self.mix, &self.mix_curve) {
-            (LayerMix::Curve(_), Some(curve)) => curve,
-            (LayerMix::Tonemapped, _) => &self.mix_tonemapped,
-            (LayerMix::Auto, _) if float => &self.mix_tonemapped,
+        let pass = match (MixKind::of(&self.mix, &o.output), &self.mix_curve) {
+            (MixKind::Curve, Some(curve)) => curve,
+            (MixKind::Tonemapped, _) => &self.mix_tonemapped,
+            (MixKind::SrgbEncoded, _) => &self.mix_srgb,
             _ => &self.mix_linear,
         };
+        // sRGB outputs the host wrote through the encoding: read decoded,
+        // mixed in linear light, encoded again; any other: as stored.
+        let srgb = o.output.srgb_writes;
         // With the selection stencil and an image of the host's: the first
         // layer back everywhere by a copy, then the mix only where the second
         // resolve ran (a superset of the pixels with coverage above 0).
@@ -993,7 +1125,7 @@ impl SecondLayer {
                 gl.stencil_func(glow::EQUAL, i32::from(SELECTED), 0xFF);
                 gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
                 gl.stencil_mask(0);
-                gl.enable(glow::FRAMEBUFFER_SRGB);
+                set_srgb(gl, srgb);
                 TextureRef::from(&o.lit_first).bind(gl, 0);
                 TextureRef::from(&o.lit_second).bind(gl, 1);
                 TextureRef::from(&self.coverage).bind(gl, 2);
@@ -1015,8 +1147,7 @@ impl SecondLayer {
                 }
             }
             gl.disable(glow::STENCIL_TEST);
-            // sRGB outputs: read decoded, mixed in linear light, encoded again.
-            gl.enable(glow::FRAMEBUFFER_SRGB);
+            set_srgb(gl, srgb);
             TextureRef::from(&o.lit_first).bind(gl, 0);
             TextureRef::from(&o.lit_second).bind(gl, 1);
             TextureRef::from(&self.coverage).bind(gl, 2);
@@ -1026,48 +1157,13 @@ impl SecondLayer {
     }
 }
 
-/// The image a host framebuffer lights into: its first draw buffer's.
-fn output_image(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostAttachment> {
+/// `GL_FRAMEBUFFER_SRGB` on or off.
+pub(crate) fn set_srgb(gl: &glow::Context, on: bool) {
     unsafe {
-        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-        let draw = gl.get_parameter_i32(glow::DRAW_BUFFER0) as u32;
-        let point = match draw.checked_sub(glow::COLOR_ATTACHMENT0) {
-            Some(k) if k < 32 => Attachment::Color(k),
-            _ => {
-                return Err(Error::Retrofit {
-                    attachment: "GL_DRAW_BUFFER0".into(),
-                    reason: "the lit output's first draw buffer is GL_NONE; the second layer mixes into it".into(),
-                });
-            }
-        };
-        introspect_point(gl, point)?.ok_or_else(|| Error::Retrofit {
-            attachment: point.name(),
-            reason: "the lit output's first draw buffer has nothing attached".into(),
-        })
-    }
-}
-
-/// The default framebuffer's colour format, as far as the driver says.
-fn default_framebuffer_format(gl: &glow::Context) -> Format {
-    unsafe {
-        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
-        let draw = gl.get_parameter_i32(glow::DRAW_BUFFER) as u32;
-        let point = if draw == glow::FRONT || draw == glow::FRONT_LEFT {
-            glow::FRONT_LEFT
+        if on {
+            gl.enable(glow::FRAMEBUFFER_SRGB);
         } else {
-            glow::BACK_LEFT
-        };
-        let p = |pname| {
-            gl.get_framebuffer_attachment_parameter_i32(glow::FRAMEBUFFER, point, pname)
-                .max(0) as u32
-        };
-        let srgb = p(glow::FRAMEBUFFER_ATTACHMENT_COLOR_ENCODING) == glow::SRGB;
-        let float = p(glow::FRAMEBUFFER_ATTACHMENT_COMPONENT_TYPE) == glow::FLOAT;
-        let _ = gl.get_error();
-        match (float, srgb) {
-            (true, _) => Format::Rgba16f,
-            (false, true) => Format::Srgb8Alpha8,
-            (false, false) => Format::Rgba8,
+            gl.disable(glow::FRAMEBUFFER_SRGB);
         }
     }
 }

@@ -429,6 +429,17 @@ impl Format {
         self.properties().srgb
     }
 
+    /// The same bits without the sRGB encoding (`SRGB8_ALPHA8` as
+    /// `RGBA8`): a copy that reads and writes them as stored. Any other
+    /// format is itself.
+    pub const fn without_srgb(self) -> Format {
+        match self {
+            Format::Srgb8 => Format::Rgb8,
+            Format::Srgb8Alpha8 => Format::Rgba8,
+            other => other,
+        }
+    }
+
     /// How shaders read it.
     pub const fn sample_kind(self) -> SampleKind {
         match self.properties().component {

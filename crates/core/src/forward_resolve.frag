@@ -1,0 +1,28 @@
+// The forward target's resolve (src/forward.rs): the mean of a pixel's
+// samples, in the blend domain of mix_domain.glsl (compiled in front of
+// this file), into the host's lit image. A pixel whose every sample still
+// holds the lit value the fill put there is one no forward object touched:
+// it is left as the host's image has it.
+
+uniform sampler2DMS u_forward;
+uniform sampler2D u_lit;
+uniform int u_samples;
+
+out vec4 o_color;
+
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    vec4 lit = texelFetch(u_lit, p, 0);
+    bool untouched = true;
+    vec3 sum = vec3(0.0);
+    float alpha = 0.0;
+    for (int s = 0; s < u_samples; s++) {
+        vec4 c = texelFetch(u_forward, p, s);
+        untouched = untouched && c == lit;
+        sum += to_mix_domain(c.rgb);
+        alpha += c.a;
+    }
+    if (untouched) discard;
+    float n = float(u_samples);
+    o_color = vec4(from_mix_domain(sum / n), alpha / n);
+}
