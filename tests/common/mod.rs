@@ -9,6 +9,7 @@ pub mod gl_state;
 pub mod golden;
 pub mod property;
 pub mod srgb;
+pub mod xvfb;
 
 use deferred_msaa_lab::context::{Backend, HeadlessContext};
 

@@ -833,12 +833,20 @@ fn the_lit_layers_mix_by_coverage_in_the_chosen_domain() {
         |x| x.map(|c| c / (1.0 + c)),
         |y| y.map(|c| c / (1.0 - c).max(1e-6)),
     );
-    let cases: [(Format, LayerMix, (Domain, Domain)); 5] = [
+    // sRGB-encoded display values: decoded to linear light and back.
+    let srgb: (Domain, Domain) = (
+        |x| x.map(|c| common::srgb::decode((c.clamp(0.0, 1.0) * 255.0).round() as u8)),
+        |y| y.map(|l| common::srgb::encode(l) / 255.0),
+    );
+    let cases: [(Format, LayerMix, (Domain, Domain)); 7] = [
         (Format::Rgba16f, LayerMix::Auto, tonemap),
         (Format::Rgba16f, LayerMix::Tonemapped, tonemap),
         (Format::Rgba16f, LayerMix::Linear, (identity, identity)),
         (Format::Rgba16f, LayerMix::Curve(curve.into()), reinhard),
-        (Format::Rgba8, LayerMix::Auto, (identity, identity)),
+        // An 8-bit output holds display values: sRGB-encoded unless declared.
+        (Format::Rgba8, LayerMix::Auto, srgb),
+        (Format::Rgba8, LayerMix::SrgbEncoded, srgb),
+        (Format::Rgba8, LayerMix::Linear, (identity, identity)),
     ];
     for (format, layer_mix, (to, from)) in cases {
         let label = format!("{} {layer_mix:?}", format.name());

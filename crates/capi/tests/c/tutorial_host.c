@@ -16,11 +16,12 @@
  *
  * It renders the frame four ways and writes each lit image, raw RGBA8
  * rows bottom-up, into the folder given as its argument: without MSAA
- * (none.rgba), with the retrofit (msaa.rgba: the two calls), with two
- * layers (layers.rgba: and the three second-layer calls), and its own 16x
- * supersampled image (reference.rgba: the frame at 4x the width and
- * height, box-downsampled). It checks that the GL state around every
- * library call is unchanged, that the host's objects survive, and that
+ * (none.rgba), with the retrofit (msaa.rgba: the two calls, and the light
+ * cubes through the forward target's two), with two layers (layers.rgba:
+ * and the three second-layer calls), and its own 16x supersampled image
+ * (reference.rgba: the frame at 4x the width and height, averaged 4x4 in
+ * the light a screen emits: sRGB decoded, averaged, encoded). It checks
+ * that the GL state around every library call is unchanged, that the host's objects survive, and that
  * nothing of the library's is left after dmsaa_destroy. It exits non-zero,
  * with a line saying why, on any failure.
  *
@@ -510,14 +511,15 @@ static void lighting_pass(Engine *e)
 }
 
 /* 2.5. copy content of geometry's depth buffer to default framebuffer's
- * depth buffer, then 3. render lights on top of scene. */
-static void forward_pass(Engine *e)
+ * depth buffer, then 3. render lights on top of scene (into `target`: the
+ * screen, or the library's forward target in its place). */
+static void forward_pass_into(Engine *e, GLuint target)
 {
     glBindFramebuffer(GL_READ_FRAMEBUFFER, e->gBuffer);
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, e->screen);
     glBlitFramebuffer(0, 0, e->width, e->height, 0, 0, e->width, e->height, GL_DEPTH_BUFFER_BIT,
                       GL_NEAREST);
-    glBindFramebuffer(GL_FRAMEBUFFER, e->screen);
+    glBindFramebuffer(GL_FRAMEBUFFER, target);
     glUseProgram(e->shaderLightBox);
     set_mat4(e->shaderLightBox, "projection", e->projection);
     set_mat4(e->shaderLightBox, "view", e->view);
@@ -533,6 +535,11 @@ static void forward_pass(Engine *e)
     }
     glBindVertexArray(0);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+static void forward_pass(Engine *e)
+{
+    forward_pass_into(e, e->screen);
 }
 
 static void engine_free(Engine *e)
@@ -660,6 +667,20 @@ static void write_screen(const Engine *e, const char *dir, const char *name)
 
 /* The 16x supersampled reference: the same frame at 4x the width and
  * height, each 4x4 block of the lit image averaged. */
+/* An 8-bit sRGB value as linear light, and back (rounded). */
+static double srgb_decode(unsigned char v)
+{
+    double c = v / 255.0;
+    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
+}
+
+static unsigned char srgb_encode(double l)
+{
+    double c = l <= 0.0031308 ? l * 12.92 : 1.055 * pow(l, 1.0 / 2.4) - 0.055;
+    c = c < 0.0 ? 0.0 : c > 1.0 ? 1.0 : c;
+    return (unsigned char)lround(c * 255.0);
+}
+
 static void write_reference(const char *dir)
 {
     Engine big;
@@ -675,17 +696,22 @@ static void write_reference(const char *dir)
     glReadPixels(0, 0, big.width, big.height, GL_RGBA, GL_UNSIGNED_BYTE, pixels);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
     glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    /* Averaged in the light a screen emits for the stored display values
+     * (sRGB decoded, averaged, encoded again); alpha as stored. */
     unsigned char *small = malloc((size_t)SCR_WIDTH * SCR_HEIGHT * 4);
     for (int y = 0; y < SCR_HEIGHT; y++)
         for (int x = 0; x < SCR_WIDTH; x++)
             for (int c = 0; c < 4; c++) {
-                unsigned sum = 0;
+                double sum = 0.0;
                 for (int dy = 0; dy < SUPERSAMPLE; dy++)
-                    for (int dx = 0; dx < SUPERSAMPLE; dx++)
-                        sum += pixels[(((size_t)(y * SUPERSAMPLE + dy) * big.width) +
-                                       (size_t)(x * SUPERSAMPLE + dx)) * 4 + c];
+                    for (int dx = 0; dx < SUPERSAMPLE; dx++) {
+                        unsigned char v = pixels[(((size_t)(y * SUPERSAMPLE + dy) * big.width) +
+                                                  (size_t)(x * SUPERSAMPLE + dx)) * 4 + c];
+                        sum += c == 3 ? v / 255.0 : srgb_decode(v);
+                    }
+                double mean = sum / (SUPERSAMPLE * SUPERSAMPLE);
                 small[((size_t)y * SCR_WIDTH + x) * 4 + c] =
-                    (unsigned char)((sum + SUPERSAMPLE * SUPERSAMPLE / 2) / (SUPERSAMPLE * SUPERSAMPLE));
+                    c == 3 ? (unsigned char)lround(mean * 255.0) : srgb_encode(mean);
             }
     char path[4096];
     snprintf(path, sizeof path, "%s/reference.rgba", dir);
@@ -829,7 +855,17 @@ static void retrofitted_frame(Engine *e, uint32_t layers, bool masked, const cha
             check_state(e, &state, "dmsaa_finish_second_layer");
         }
     }
-    forward_pass(e);
+    /* 3. the light cubes through the forward target */
+    GLuint forward = 0;
+    capture(e, &state);
+    check_status(dmsaa_begin_forward(msaa, e->screen, &forward), "dmsaa_begin_forward");
+    check_state(e, &state, "dmsaa_begin_forward");
+    CHECK(forward != 0 && glIsFramebuffer(forward), "dmsaa_begin_forward gave no framebuffer (%u)",
+          forward);
+    forward_pass_into(e, forward);
+    capture(e, &state);
+    check_status(dmsaa_finish_forward(msaa, e->screen), "dmsaa_finish_forward");
+    check_state(e, &state, "dmsaa_finish_forward");
     check_gl_errors(name);
     write_screen(e, dir, name);
 
