@@ -30,6 +30,11 @@
 //! method renders with every attachment of the layout instead of the
 //! scene-adaptive plan (see [`crate::renderer::plan`]): `median` against
 //! `median:full` shows what the plan saves (its `gbuffer_bytes`) and costs.
+//! `:forward` after a method that keeps the multisampled G-buffer
+//! (`average`, `front`, `median`, `back`, `per-sample`, `complex`) draws
+//! the transparent objects into the retrofit's multisampled forward target
+//! instead of single-sampled into the lit image:
+//! `median:layers=2:forward`.
 //!
 //! A run's `method` field in the report is the entry exactly as written.
 
@@ -70,7 +75,7 @@ fn accepted() -> String {
         .filter_map(|k| k.options_help())
         .collect();
     format!(
-        "accepted: {}, smaa; options after colons ({}; {}); :full (the full G-buffer layout) and +fxaa or +smaa after any entry",
+        "accepted: {}, smaa; options after colons ({}; {}); :full (the full G-buffer layout), :forward (forward MSAA for transparent objects) and +fxaa or +smaa after any entry",
         AaMode::method_names().join(", "),
         options.join("; "),
         SmaaOptions::HELP
@@ -106,8 +111,19 @@ impl MethodEntry {
     /// Whether the entry carries `:full`: every attachment of the layout,
     /// not the scene-adaptive plan's.
     pub fn full_layout(&self) -> bool {
+        self.has_option("full")
+    }
+
+    /// Whether the entry carries `:forward`: the forward passes
+    /// (transparent objects) drawn into the retrofit's multisampled
+    /// forward target ([`RenderOptions::forward_msaa`](crate::renderer::RenderOptions::forward_msaa)).
+    pub fn forward(&self) -> bool {
+        self.has_option("forward")
+    }
+
+    fn has_option(&self, option: &str) -> bool {
         let body = self.label.split('+').next().unwrap_or("");
-        body.split(':').skip(1).any(|o| o == "full")
+        body.split(':').skip(1).any(|o| o == option)
     }
 }
 
@@ -150,8 +166,10 @@ impl FromStr for MethodEntry {
         };
         let mut parts = body.split(':');
         let name = parts.next().unwrap_or("");
-        // `:full` is about the layout, not the method: any entry takes it.
-        let options: Vec<&str> = parts.filter(|o| *o != "full").collect();
+        // `:full` is about the layout and `:forward` about the forward
+        // passes, not the method: any entry takes them (the renderer
+        // refuses `:forward` where the method keeps no multisampled depth).
+        let options: Vec<&str> = parts.filter(|o| *o != "full" && *o != "forward").collect();
         let method = if name == "smaa" {
             // `smaa` is `none` with SMAA after the tonemap.
             if smaa.is_some() || fxaa {

@@ -543,11 +543,11 @@ struct Pool {
     renderers: Vec<(PoolKey, Renderer)>,
 }
 
-/// A pool slot's method class, FXAA, SMAA, requested samples and adaptive layout.
+/// A pool slot's method class, FXAA, SMAA, requested samples, adaptive layout and forward MSAA.
 /// For a method whose frames build on the ones before (`taa`), its entry
 /// too: it gets a renderer of its own, whose history no other entry's
 /// `set_options` resets between its frames.
-type PoolKey = (&'static str, bool, bool, u32, bool, Option<String>);
+type PoolKey = (&'static str, bool, bool, u32, (bool, bool), Option<String>);
 
 impl Pool {
     fn slot(
@@ -819,12 +819,14 @@ fn time_scene(
             options.smaa = entry.smaa;
             // `:full`: every attachment of the layout, not the plan's.
             options.adaptive = !entry.full_layout();
+            options.forward_msaa = entry.forward();
+            options.validate()?;
             let key = (
                 entry.method.technique_name(),
                 entry.fxaa,
                 entry.smaa.is_some(),
                 requested,
-                options.adaptive,
+                (options.adaptive, options.forward_msaa),
                 (entry.method.warmup_frames() > 0).then(|| entry.label.clone()),
             );
             let slot = pool.slot(ctx, scene, key, &options)?;

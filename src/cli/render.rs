@@ -72,6 +72,11 @@ pub struct RenderArgs {
     /// scene does not need (the scene-adaptive plan, see --explain).
     #[arg(long)]
     full_layout: bool,
+    /// Draw the transparent objects into the retrofit's multisampled
+    /// forward target (forward MSAA; resolve, per-sample and complex
+    /// methods), instead of single-sampled into the lit image.
+    #[arg(long)]
+    forward_msaa: bool,
     /// Memory budget for the G-buffer, e.g. 512MiB or 2GiB (default: half
     /// the free video memory the driver reports, else 1GiB); over it the
     /// sample count steps down with a warning.
@@ -252,6 +257,7 @@ impl RenderArgs {
             },
             depth_mode: DepthMode::Auto,
             adaptive: !self.full_layout,
+            forward_msaa: self.forward_msaa,
             memory_budget: MemoryBudget {
                 bytes: self.memory_budget,
                 strict: self.strict_memory,

@@ -850,16 +850,33 @@ impl Renderer {
         let step = lighting_step!(None);
         t.second_layer_ms = technique.second_lighting(gl, retrofit.as_mut(), &step, timer)?;
         if runs_transparent {
+            let forward_msaa = self.options.forward_msaa;
             t.transparent_ms = timed(gl, timer, || {
+                let lit = targets.hdr.fbo.raw();
+                // With forward MSAA, into the retrofit's multisampled
+                // forward target, resolved back into the HDR image.
+                let target = match (forward_msaa, retrofit.as_mut()) {
+                    (true, Some(r)) => r.begin_forward(gl, Some(lit))?,
+                    (true, None) => {
+                        return Err(Error::invalid(
+                            "forward MSAA needs the retrofit's multisampled G-buffer, and this method has none",
+                        ));
+                    }
+                    (false, _) => targets.hdr_with_depth.raw(),
+                };
                 transparent.draw(
                     gl,
-                    &targets.hdr_with_depth,
+                    (target, width, height),
                     &self.scene,
                     &view,
                     &projection,
                     &batches,
                     depth_mode.nearer_func(),
-                )
+                )?;
+                match (forward_msaa, retrofit.as_mut()) {
+                    (true, Some(r)) => Ok(r.finish_forward(gl, Some(lit))?),
+                    _ => Ok(()),
+                }
             })?;
         }
         let tonemapped = technique.tonemap_target(targets);

@@ -213,6 +213,16 @@ pub struct RenderOptions {
     /// where the context and the layout's depth format allow it); see
     /// [`Renderer::depth_mode`](super::Renderer::depth_mode) for what it became.
     pub depth_mode: DepthMode,
+    /// Draw the forward passes (transparent objects) into the retrofit's
+    /// multisampled forward target
+    /// ([`MsaaRetrofit::begin_forward`](deferred_msaa::MsaaRetrofit::begin_forward)),
+    /// tested against the G-buffer's multisampled depth, and resolve them
+    /// back into the lit image, so their silhouettes get MSAA too (the
+    /// bench's `:forward`). Only with the methods that keep a retrofit
+    /// (`average`, `front`, `median`, `back`, `per-sample`, `complex`).
+    /// Default: `false`: forward objects are drawn single-sampled against
+    /// the resolved depth.
+    pub forward_msaa: bool,
 }
 
 impl Default for RenderOptions {
@@ -232,6 +242,7 @@ impl Default for RenderOptions {
             adaptive: true,
             memory_budget: MemoryBudget::default(),
             depth_mode: DepthMode::Auto,
+            forward_msaa: false,
         }
     }
 }
@@ -263,6 +274,17 @@ impl RenderOptions {
         }
         if let AaMode::Taa(taa) = &self.aa {
             taa.validate()?;
+        }
+        if self.forward_msaa
+            && !matches!(
+                self.aa,
+                AaMode::Resolve(_) | AaMode::PerSample | AaMode::Complex
+            )
+        {
+            return Err(Error::invalid(format!(
+                "forward MSAA draws into the multisampled G-buffer's depth, which `{}` does not keep; use it with average, front, median, back, per-sample or complex",
+                self.aa.technique_name()
+            )));
         }
         if let Some(smaa) = &self.smaa {
             if self.fxaa {

@@ -11,7 +11,7 @@ use super::mesh::{
 };
 use super::pass::bind_target;
 use crate::Result;
-use crate::gl::{Framebuffer, GlObject, Handle, Program, ShaderSource, ShaderStage, check_error};
+use crate::gl::{GlObject, Handle, Program, ShaderSource, ShaderStage, check_error};
 use glam::{DMat4, Mat4};
 use glow::HasContext;
 
@@ -49,13 +49,14 @@ impl TransparentPass {
     }
 
     /// Draw the scene's transparent objects into `target` (the HDR colour
-    /// with the resolved depth attached), farthest first, depth-tested with
-    /// `depth_func` (LESS, or GREATER for reversed-Z).
+    /// with the resolved depth attached, or the retrofit's multisampled
+    /// forward target, each at the frame's size), farthest first,
+    /// depth-tested with `depth_func` (LESS, or GREATER for reversed-Z).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn draw(
         &self,
         gl: &glow::Context,
-        target: &Framebuffer,
+        target: (glow::Framebuffer, u32, u32),
         scene: &GpuScene,
         view: &DMat4,
         projection: &Mat4,
@@ -74,7 +75,7 @@ impl TransparentPass {
         // View space looks down -z: the most negative z is the farthest.
         order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
 
-        bind_target(gl, target.raw(), target.width, target.height);
+        bind_target(gl, target.0, target.1, target.2);
         unsafe {
             gl.enable(glow::DEPTH_TEST);
             gl.depth_func(depth_func);

@@ -13,6 +13,7 @@
 //! | `transparent` | opaque models behind alpha-blended panes, and an alpha-tested grille |
 //! | `hull`        | FreeSpace Open's case: a hull filling the view, covered in detail close to it in depth (plates and seams, painted strips, pipes, low greebles), coloured point lights, dark space |
 //! | `halo`        | the paper's Figure 4: point lights just behind a box's edges, a far wall out of their range; averaging positions across the edge lights it |
+//! | `lamps`       | the deferred tutorial's picture: boxes lit by a dozen coloured point lights, each light shown as a small bright cube drawn forward after lighting (a blended material), over a dark floor and black sky: forward silhouettes the G-buffer never sees |
 //! | `bars`        | thin silhouettes: bright slanted bars 1.3 to 3.4 pixels wide at 640x360 in front of a dark far wall, beside a plate of shallow ridges (creases: close in depth, different normals); the scene declares the bars, so the bench measures how wide each method draws them |
 
 use glam::{Mat4, Quat, Vec3};
@@ -36,6 +37,7 @@ pub(crate) const NAMES: &[&str] = &[
     "halo",
     "bars",
     "ridges",
+    "lamps",
 ];
 
 /// Builds the built-in scene `name`, or `None` when there is none so named.
@@ -52,6 +54,7 @@ pub(crate) fn build(name: &str) -> Option<Scene> {
         "halo" => halo(),
         "bars" => bars(),
         "ridges" => ridges(),
+        "lamps" => lamps(),
         _ => return None,
     };
     Some(scene)
@@ -1057,6 +1060,71 @@ fn far() -> Scene {
             near: 0.01,
             far: None,
         }
+    })
+}
+
+/// The deferred tutorial's picture: a 3x3 grid of turned boxes on a dark
+/// floor, twelve coloured point lights among them, and each light drawn as
+/// a small bright cube after lighting. The cubes are a blended material at
+/// alpha 1 with an emissive colour, so the renderer draws them in its
+/// forward (transparent) pass, as the tutorial draws its light cubes.
+fn lamps() -> Scene {
+    let mut sb = SceneBuilder::new("lamps");
+    let floor_mat = sb.material(Material::solid("floor", [0.08, 0.08, 0.09], 0.0, 0.8));
+    let mut floor = MeshBuilder::default();
+    floor.quad([
+        Vec3::new(-7.0, -0.6, 6.0),
+        Vec3::new(7.0, -0.6, 6.0),
+        Vec3::new(7.0, -0.6, -7.0),
+        Vec3::new(-7.0, -0.6, -7.0),
+    ]);
+    sb.object("floor", floor, floor_mat, Mat4::IDENTITY);
+    for i in 0..9 {
+        let (x, z) = ((i % 3) as f32 * 3.0 - 3.0, (i / 3) as f32 * 3.0 - 3.0);
+        let fi = i as f32;
+        let colour = [
+            0.45 + 0.05 * fi,
+            0.8 - 0.06 * fi,
+            0.5 + 0.1 * (i % 3) as f32,
+        ];
+        let mat = sb.material(Material::solid(&format!("box {i}"), colour, 0.0, 0.45));
+        let mut block = MeshBuilder::default();
+        block.cuboid(
+            Vec3::new(x, 0.0, z),
+            Vec3::splat(0.6),
+            Quat::from_axis_angle(Vec3::new(1.0, 0.8, 0.3).normalize(), 0.35 + 0.6 * fi),
+        );
+        sb.object(&format!("box {i}"), block, mat, Mat4::IDENTITY);
+    }
+    // Twelve lights between and above the boxes, each with its cube.
+    for i in 0..12u32 {
+        // The golden angle: spread without a grid.
+        let a = i as f32 * 2.39996;
+        let r = 1.2 + 0.35 * i as f32;
+        let at = Vec3::new(r * a.cos(), 0.4 + 0.25 * (i % 4) as f32, r * a.sin() - 0.5);
+        let c = rgb(
+            0.5 + 0.5 * ((i * 7) % 10) as f32 / 10.0,
+            0.5 + 0.5 * ((i * 3) % 10) as f32 / 10.0,
+            0.5 + 0.5 * ((i * 9) % 10) as f32 / 10.0,
+        );
+        sb.lights.push(Light::point(at, c, 6.0, Some(5.0)));
+        let lamp = sb.material(Material {
+            alpha_mode: AlphaMode::Blend,
+            emissive: [c.x * 4.0, c.y * 4.0, c.z * 4.0],
+            ..Material::solid(&format!("lamp {i}"), [0.0, 0.0, 0.0], 0.0, 1.0)
+        });
+        let mut cube = MeshBuilder::default();
+        cube.cuboid(at, Vec3::splat(0.12), Quat::from_rotation_y(0.4 * i as f32));
+        sb.object(&format!("lamp {i}"), cube, lamp, Mat4::IDENTITY);
+    }
+    sb.finish(Background::Black, |_| {
+        Camera::look_at(
+            Vec3::new(0.0, 5.5, 7.5),
+            Vec3::new(0.0, -0.3, -0.6),
+            40f32.to_radians(),
+            0.1,
+            Some(60.0),
+        )
     })
 }
 
