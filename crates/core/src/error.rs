@@ -134,6 +134,19 @@ pub enum Error {
     #[error("{0}")]
     InvalidArgument(String),
 
+    /// The host's own GL calls before a call of the crate left an error
+    /// pending: the crate did nothing with the frame, which may not be the
+    /// one the host meant to draw.
+    #[error(
+        "the host's GL calls before the resolve left {code_name} (0x{code:04X}) pending, so the multisampled twins may not hold the frame it drew (a geometry pass that failed to bind its framebuffer, say): nothing was resolved; find the failing call with glGetError or KHR_debug"
+    )]
+    HostGl {
+        /// The raw error code.
+        code: u32,
+        /// Its name, e.g. `GL_INVALID_OPERATION`.
+        code_name: &'static str,
+    },
+
     /// The host's second lighting (two layers) did not light the second
     /// layer: what it drew, and how to set it up instead.
     #[error("{0}")]

@@ -344,8 +344,12 @@ fn introspect_bound(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFr
     });
     let depth = depth.ok_or_else(|| Error::Retrofit {
         attachment: "GL_DEPTH_ATTACHMENT".into(),
-        reason: "the host framebuffer has no depth attachment; the resolve needs per-sample depth"
-            .into(),
+        reason: if colors.is_empty() {
+            // Engines that attach their textures on first bind: nothing yet.
+            "the host framebuffer has nothing attached at all (no colour, no depth); make the retrofit once the engine has attached its G-buffer's images (some engines attach them on the framebuffer's first bind)".into()
+        } else {
+            "the host framebuffer has no depth attachment; the resolve needs per-sample depth".into()
+        },
     })?;
     if !depth.format.is_depth() {
         return Err(Error::UnsupportedFormat {

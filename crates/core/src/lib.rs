@@ -115,6 +115,6 @@ pub use gl::ColorAttachment;
 /// The GL bindings the crate is written against; hosts use the same version.
 pub use glow;
 pub use retrofit::{
-    FirstLayerRestore, MsaaRetrofit, NormalAttachment, PositionSpace, RetrofitOptions,
+    FirstLayerRestore, MsaaRetrofit, NormalAttachment, PositionSpace, RetrofitOptions, TwinClear,
 };
 pub use second_layer::LayerMix;

@@ -71,6 +71,52 @@ pub struct RetrofitOptions {
     /// layer in the host's G-buffer ([`FirstLayerRestore`]; by default
     /// everything). The lit image is the same whichever is chosen.
     pub restore_first_layer: FirstLayerRestore,
+    /// With two layers: count, with `GL_SAMPLES_PASSED` occlusion queries,
+    /// what the host's first and second lighting draw, and return
+    /// [`Error::SecondLighting`] where the first drew and the second drew
+    /// nothing (its own depth or stencil test rejected it) though pixels
+    /// have a second layer (default `true`). The queries are active from
+    /// the end of `resolve` to the start of `begin_second_layer` and from
+    /// its end to the start of `finish_second_layer`; a host that runs
+    /// occlusion queries of its own there, or whose second lighting draws
+    /// no fragments while something between `resolve` and its first
+    /// lighting does (a compute-shader lighting after a fragment SSAO
+    /// pass), turns it off.
+    pub check_second_lighting: bool,
+    /// What [`MsaaRetrofit::begin_frame`] clears the multisampled twins to
+    /// (`None`, the default: it clears nothing, and the host clears its
+    /// G-buffer through [`MsaaRetrofit::framebuffer`] as it cleared its own
+    /// framebuffer). A host that clears its G-buffer's textures through
+    /// another framebuffer, or per attachment with values of its own,
+    /// never clears the twins: it declares its clear values here and calls
+    /// `begin_frame` each frame.
+    pub twin_clear: Option<TwinClear>,
+}
+
+/// The values a host clears its G-buffer to, for
+/// [`MsaaRetrofit::begin_frame`] to clear the multisampled twins to
+/// ([`RetrofitOptions::twin_clear`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TwinClear {
+    /// Per colour attachment, its clear value (`glClearBufferfv`'s; an
+    /// integer attachment takes the values as integers); an attachment not
+    /// listed is cleared to 0.
+    pub colors: Vec<(ColorAttachment, [f32; 4])>,
+    /// The depth clear value (1 for standard depth, 0 for reversed-Z).
+    pub depth: f32,
+    /// The stencil clear value, for a depth-stencil host.
+    pub stencil: i32,
+}
+
+impl Default for TwinClear {
+    /// Colours 0, depth 1, stencil 0.
+    fn default() -> Self {
+        TwinClear {
+            colors: Vec::new(),
+            depth: 1.0,
+            stencil: 0,
+        }
+    }
 }
 
 /// What of the host's G-buffer [`MsaaRetrofit::finish_second_layer`] puts
@@ -136,6 +182,8 @@ impl Default for RetrofitOptions {
             normal_attachment: None,
             layer_mix: LayerMix::Auto,
             restore_first_layer: FirstLayerRestore::Everything,
+            check_second_lighting: true,
+            twin_clear: None,
         }
     }
 }
@@ -210,7 +258,9 @@ impl GlObject for Built {
 /// and the pass.
 #[derive(Debug)]
 struct StencilCopyTargets {
-    reference: Texture2d,
+    /// The resolve's reference-sample index, for a copy that reads it
+    /// (`None` for [`StencilCopy::Blit`], which needs none).
+    reference: Option<Texture2d>,
     target: Framebuffer,
     pass: StencilPass,
 }
@@ -228,13 +278,17 @@ impl StencilCopyTargets {
         let method = method.on(gl)?;
         let (w, h) = host.size();
         Made::build(gl, |made| {
-            let reference = made.keep(Texture2d::new(
-                gl,
-                "resolve reference sample",
-                Format::R8ui,
-                w,
-                h,
-            )?);
+            let reference = if method == StencilCopy::Blit {
+                None
+            } else {
+                Some(made.keep(Texture2d::new(
+                    gl,
+                    "resolve reference sample",
+                    Format::R8ui,
+                    w,
+                    h,
+                )?))
+            };
             let depth = &host.depth;
             let images: Vec<(Attachment, HostImage)> = depth
                 .host_image()
@@ -351,6 +405,68 @@ pub(crate) fn output_points(gl: &glow::Context) -> u32 {
     attachments.min(draw).max(1) as u32
 }
 
+/// Clear `twin`'s images to `clear`'s values: each colour attachment of
+/// `host` at the draw buffer the host maps to it, by its sample kind, then
+/// depth and stencil. The caller keeps the host's state.
+fn clear_twins(
+    gl: &glow::Context,
+    host: &HostFramebuffer,
+    twin: &MultisampleTwin,
+    clear: &TwinClear,
+) {
+    use crate::gl::format::SampleKind;
+    unsafe {
+        twin.fbo.bind(gl);
+        gl.disable(glow::SCISSOR_TEST);
+        gl.disable(glow::RASTERIZER_DISCARD);
+        gl.color_mask(true, true, true, true);
+        gl.depth_mask(true);
+        gl.stencil_mask(0xFF);
+        for a in &host.colors {
+            let Attachment::Color(n) = a.point else {
+                continue;
+            };
+            let Some(buffer) = host.draw_buffers.iter().position(|b| *b == Some(n)) else {
+                continue;
+            };
+            let value = clear
+                .colors
+                .iter()
+                .find(|(c, _)| Attachment::from(*c) == a.point)
+                .map_or([0.0; 4], |(_, v)| *v);
+            let buffer = buffer as u32;
+            match a.format.sample_kind() {
+                SampleKind::Float => gl.clear_buffer_f32_slice(glow::COLOR, buffer, &value),
+                SampleKind::Uint => gl.clear_buffer_u32_slice(
+                    glow::COLOR,
+                    buffer,
+                    &value.map(|v| v.max(0.0) as u32),
+                ),
+                SampleKind::Int => {
+                    gl.clear_buffer_i32_slice(glow::COLOR, buffer, &value.map(|v| v as i32))
+                }
+            }
+        }
+        if host.depth.format.has_stencil() {
+            gl.clear_buffer_depth_stencil(glow::DEPTH_STENCIL, 0, clear.depth, clear.stencil);
+        } else {
+            gl.clear_buffer_f32_slice(glow::DEPTH, 0, &[clear.depth]);
+        }
+    }
+}
+
+/// Why an attachment an option names is not one the retrofit resolves:
+/// attached but in none of the draw buffers, or nothing attached at all.
+fn not_resolved(host: &HostFramebuffer, point: Attachment, what: &str) -> String {
+    if host.undrawn.contains(&point) {
+        format!(
+            "{what}, but it is in none of the host framebuffer's draw buffers (glDrawBuffers): the geometry pass cannot write it, so the retrofit neither twins nor resolves it; add it to the draw buffers, or give the option no attachment there"
+        )
+    } else {
+        format!("{what}, but nothing is attached there")
+    }
+}
+
 /// The resolve writes a depth-stencil host's reference-sample index as one
 /// more colour output after the host's drawn colours: a host that uses
 /// every point leaves none for it, which must be refused here, in one line,
@@ -366,7 +482,7 @@ fn check_stencil_copy_point(gl: &glow::Context, host: &HostFramebuffer) -> Resul
         reason: format!(
             "the stencil copy's reference sample needs a colour output after the {} drawn colour \
              attachments, and this context has {points} (GL_MAX_COLOR_ATTACHMENTS, \
-             GL_MAX_DRAW_BUFFERS); draw one colour attachment fewer, or attach {} without its stencil",
+             GL_MAX_DRAW_BUFFERS); copy the stencil by blit (StencilCopy::Blit, DMSAA_STENCIL_BLIT: the sample the driver picks, no index needed), draw one colour attachment fewer, or attach {} without its stencil",
             host.colors.len(),
             host.depth.requested_format
         ),
@@ -487,9 +603,7 @@ impl MsaaRetrofit {
             if !host.colors.iter().any(|a| a.point == Attachment::from(*n)) {
                 return Err(Error::Retrofit {
                     attachment: n.name(),
-                    reason:
-                        "a rule is given for it but the host framebuffer has nothing attached there"
-                            .into(),
+                    reason: not_resolved(&host, Attachment::from(*n), "a rule is given for it"),
                 });
             }
         }
@@ -502,8 +616,11 @@ impl MsaaRetrofit {
                     .position(|a| a.point == Attachment::from(n))
                     .ok_or_else(|| Error::Retrofit {
                         attachment: n.name(),
-                        reason: "named as the position attachment but nothing is attached there"
-                            .into(),
+                        reason: not_resolved(
+                            &host,
+                            Attachment::from(n),
+                            "named as the position attachment",
+                        ),
                     })?;
                 if ResolveRule::default_for(host.colors[k].format) == ResolveRule::Select {
                     return Err(Error::UnsupportedFormat {
@@ -527,8 +644,11 @@ impl MsaaRetrofit {
                     .position(|a| a.point == Attachment::from(n.attachment))
                     .ok_or_else(|| Error::Retrofit {
                         attachment: n.attachment.name(),
-                        reason: "named as the normal attachment but nothing is attached there"
-                            .into(),
+                        reason: not_resolved(
+                            &host,
+                            Attachment::from(n.attachment),
+                            "named as the normal attachment",
+                        ),
                     })?;
                 if ResolveRule::default_for(host.colors[k].format) == ResolveRule::Select {
                     return Err(Error::UnsupportedFormat {
@@ -552,7 +672,8 @@ impl MsaaRetrofit {
                 Some((ResolveSlot(k), n.encoding))
             }
         };
-        if host.depth.format.has_stencil() {
+        // A copy by blit reads no reference index: it needs no output.
+        if host.depth.format.has_stencil() && options.stencil.on(gl)? != StencilCopy::Blit {
             check_stencil_copy_point(gl, &host)?;
         }
         let mut samples = options.samples;
@@ -594,12 +715,14 @@ impl MsaaRetrofit {
                 None
             };
             let second = if options.resolve.layers == 2 {
-                let with_stencil = stencil.is_some();
+                // The seed sample, where the stencil copy reads indices.
+                let with_reference = stencil.as_ref().is_some_and(|s| s.reference.is_some());
                 Some(made.keep(SecondLayer::new(
                     gl,
                     &host,
                     &options.layer_mix,
-                    with_stencil,
+                    with_reference,
+                    options.check_second_lighting,
                 )?))
             } else {
                 None
@@ -613,8 +736,8 @@ impl MsaaRetrofit {
                 draw.push(Some(next));
                 next += 1;
             }
-            if let Some(s) = &stencil {
-                attachments.push((Attachment::Color(next), TextureRef::from(&s.reference)));
+            if let Some(reference) = stencil.as_ref().and_then(|s| s.reference.as_ref()) {
+                attachments.push((Attachment::Color(next), TextureRef::from(reference)));
                 draw.push(Some(next));
             }
             let target = made.keep(Framebuffer::with_host_images(
@@ -671,16 +794,19 @@ impl MsaaRetrofit {
             normal: self.normal,
         };
         match params {
-            None => self
-                .resolver
-                .prepare_second_layer(
-                    gl,
-                    &inputs,
-                    second.target(),
-                    &self.options.resolve,
-                    second.has_reference(),
-                )
-                .map(Ok),
+            None => {
+                for (pass, target) in second.passes() {
+                    self.resolver.prepare_second_layer(
+                        gl,
+                        &inputs,
+                        target,
+                        &self.options.resolve,
+                        second.has_reference(),
+                        pass,
+                    )?;
+                }
+                Ok(Ok(()))
+            }
             Some(params) => {
                 let selected = profile.time(gl, "second layer: selection", || {
                     let state = SavedState::capture(gl, 1);
@@ -689,14 +815,21 @@ impl MsaaRetrofit {
                     selected
                 });
                 profile.time(gl, "second layer: resolve", || {
-                    self.resolver.run_second_layer(
-                        gl,
-                        &inputs,
-                        second.target(),
-                        params,
-                        second.has_reference(),
-                        selected?,
-                    )
+                    let selected = selected?;
+                    // One draw, or several where the context's draw buffers
+                    // cannot take every colour and the extras at once.
+                    for (pass, target) in second.passes() {
+                        self.resolver.run_second_layer(
+                            gl,
+                            &inputs,
+                            target,
+                            params,
+                            second.has_reference(),
+                            selected,
+                            pass,
+                        )?;
+                    }
+                    Ok::<_, Error>(())
                 })?;
                 // The last frame's check, if it was left pending, comes
                 // back here: returned once this frame is resolved whole.
@@ -749,7 +882,7 @@ impl MsaaRetrofit {
             complex: false,
             // The second layer's resolve runs where the first left a sample out.
             outside: self.second.as_ref().is_some_and(|s| s.flag().is_some()),
-            reference: self.stencil.is_some(),
+            reference: self.stencil.as_ref().is_some_and(|s| s.reference.is_some()),
         }
     }
 
@@ -761,6 +894,54 @@ impl MsaaRetrofit {
     /// The multisampled framebuffer: bind it instead of the host's for the geometry pass.
     pub fn framebuffer(&self) -> glow::Framebuffer {
         self.twin.fbo.raw()
+    }
+
+    /// The start of a frame: check that the multisampled framebuffer and
+    /// its twins still exist (a render-target wrapper that deletes what it
+    /// wraps when dropped deletes them, and the frame after would resolve
+    /// stale samples), clear the twins to
+    /// [`RetrofitOptions::twin_clear`]'s values where the host declared
+    /// them, and return [`MsaaRetrofit::framebuffer`] to bind for the
+    /// geometry pass. The host's GL state is as it was.
+    ///
+    /// Errors: [`Error::Retrofit`] naming the deleted object (then
+    /// [`MsaaRetrofit::refresh`] makes new twins), and the GL layer's.
+    pub fn begin_frame(&mut self, gl: &glow::Context) -> Result<glow::Framebuffer> {
+        self.check_twins(gl)?;
+        if let Some(clear) = &self.options.twin_clear {
+            let host = SetupState::capture(gl);
+            clear_twins(gl, &self.host, &self.twin, clear);
+            host.restore(gl);
+            check_error(gl, "clearing the multisampled twins")?;
+        }
+        Ok(self.twin.fbo.raw())
+    }
+
+    /// The multisampled framebuffer and textures exist: nobody else deleted
+    /// them.
+    fn check_twins(&self, gl: &glow::Context) -> Result<()> {
+        let deleted = |what: String| Error::Retrofit {
+            attachment: "the multisampled twins".into(),
+            reason: format!(
+                "{what} was deleted by someone other than the retrofit, which owns it (a render-target wrapper that deletes what it wraps when dropped?); wrap it without taking ownership, and call refresh to make new twins"
+            ),
+        };
+        if !unsafe { gl.is_framebuffer(self.twin.fbo.raw()) } {
+            return Err(deleted(format!(
+                "the multisampled framebuffer {} (MsaaRetrofit::framebuffer)",
+                self.twin.fbo.raw().0
+            )));
+        }
+        for (t, spec) in self.twin.textures.iter().zip(&self.twin.specs) {
+            if !unsafe { gl.is_texture(t.raw()) } {
+                return Err(deleted(format!(
+                    "the multisampled twin texture {} of {}",
+                    t.raw().0,
+                    spec.point.name()
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// The real sample count.
@@ -861,7 +1042,20 @@ impl MsaaRetrofit {
     /// geometry pass, before the host's lighting reads its G-buffer.
     pub fn resolve(&mut self, gl: &glow::Context, frame: &Frame) -> Result<()> {
         let params = self.params(frame)?;
+        self.check_twins(gl)?;
+        // An error the host's calls left pending (a geometry pass that
+        // failed to bind its framebuffer, say) means the twins may not hold
+        // the frame it drew: returned, with nothing resolved.
+        if let Err(Error::Gl {
+            code, code_name, ..
+        }) = check_error(gl, "the host's GL calls")
+        {
+            return Err(Error::HostGl { code, code_name });
+        }
         let extra = self.extra_outputs();
+        if let Some(second) = &mut self.second {
+            second.end_first_lighting(gl);
+        }
         // A frame begins: its profile replaces the last one's.
         let mut profile = std::mem::take(&mut self.profile);
         profile.clear();
@@ -883,7 +1077,7 @@ impl MsaaRetrofit {
         if let (Some(s), Some(depth)) = (&self.stencil, self.twin.depth()) {
             profile.time(gl, "stencil copy", || {
                 s.pass
-                    .run(gl, depth, &self.twin.fbo, &s.reference, &s.target)
+                    .run(gl, depth, &self.twin.fbo, s.reference.as_ref(), &s.target)
             })?;
         }
         if self.second.as_ref().is_some_and(|s| s.lighting) {
@@ -977,6 +1171,7 @@ impl MsaaRetrofit {
         let Some(second) = &mut self.second else {
             return Ok(None);
         };
+        second.end_first_lighting(gl);
         if self.forward.as_ref().is_some_and(|f| f.drawing) {
             return Err(Error::invalid(
                 "begin_second_layer between begin_forward and finish_forward: light both layers before the forward pass",
@@ -1000,7 +1195,8 @@ impl MsaaRetrofit {
             second.reference(),
         ) {
             if let Err(e) = profile.time(gl, "second layer: seed stencil", || {
-                s.pass.run(gl, depth, &self.twin.fbo, reference, &s.target)
+                s.pass
+                    .run(gl, depth, &self.twin.fbo, Some(reference), &s.target)
             }) {
                 result = Err(e);
             }
@@ -1073,6 +1269,9 @@ impl MsaaRetrofit {
             return Err(Error::invalid(
                 "begin_forward was called twice: call finish_forward after the forward objects",
             ));
+        }
+        if let Some(second) = &mut self.second {
+            second.end_first_lighting(gl);
         }
         let host = SetupState::capture(gl);
         let framebuffer_srgb = unsafe { gl.is_enabled(glow::FRAMEBUFFER_SRGB) };
@@ -1235,6 +1434,7 @@ impl MsaaRetrofit {
             || options.stencil != self.options.stencil
             || options.normal_attachment != self.options.normal_attachment
             || options.layer_mix != self.options.layer_mix
+            || options.check_second_lighting != self.options.check_second_lighting
             || options.resolve.layers != self.options.resolve.layers;
         if twins_change {
             return self.rebuild(gl, options);

@@ -19,6 +19,7 @@ use crate::host::{HostAttachment, HostFramebuffer, HostImageKind};
 use crate::lighting_check::LightingCheck;
 use crate::lit_output::{LitOutput, bind_for_reading};
 use crate::profile::StepProfile;
+use crate::resolve::LayerPass;
 use crate::retrofit::FirstLayerRestore;
 use crate::{Error, Result};
 use glow::HasContext;
@@ -49,10 +50,11 @@ const SELECTED: u8 = SECOND_LAYER_SELECTED;
 pub enum LayerMix {
     /// Inferred (default): [`LayerMix::Tonemapped`] for a floating-point
     /// (HDR) output; linear light for an sRGB output the host writes with
-    /// `GL_FRAMEBUFFER_SRGB` on (GL decodes and encodes); for any other
-    /// 8-bit unsigned normalised output [`LayerMix::SrgbEncoded`] (such an
-    /// output holds display values, which a screen decodes as sRGB); else
-    /// [`LayerMix::Linear`].
+    /// `GL_FRAMEBUFFER_SRGB` on (GL decodes and encodes); else
+    /// [`LayerMix::Linear`], the values as stored. A host whose 8-bit
+    /// output holds display values (no tonemap after it, or its shader
+    /// encodes) declares [`LayerMix::SrgbEncoded`]: on every host of the
+    /// zoo that mixes closer to the 16x image (docs/hosts.md).
     #[default]
     Auto,
     /// Linear values: `mix(first, second, α)` as the output stores them
@@ -101,10 +103,7 @@ impl MixKind {
     /// them (where the host's writes went through GL's sRGB encoding, the
     /// crate's reads are decoded: linear light already).
     pub(crate) fn of(mix: &LayerMix, output: &LitOutput) -> MixKind {
-        let properties = output.format.properties();
-        let float = matches!(properties.component, ComponentType::Float);
-        let display_bytes = matches!(properties.component, ComponentType::Unorm)
-            && properties.rgba_bits[..3].iter().all(|&b| b == 8);
+        let float = matches!(output.format.properties().component, ComponentType::Float);
         match mix {
             LayerMix::Curve(_) => MixKind::Curve,
             LayerMix::Tonemapped => MixKind::Tonemapped,
@@ -112,7 +111,6 @@ impl MixKind {
             LayerMix::SrgbEncoded | LayerMix::Auto if output.srgb_writes => MixKind::Linear,
             LayerMix::SrgbEncoded => MixKind::SrgbEncoded,
             LayerMix::Auto if float => MixKind::Tonemapped,
-            LayerMix::Auto if display_bytes => MixKind::SrgbEncoded,
             LayerMix::Auto => MixKind::Linear,
         }
     }
@@ -126,6 +124,46 @@ pub(crate) fn mix_domain_source(kind: MixKind, curve: Option<&str>) -> ShaderSou
         source = source.part("LayerMix::Curve", curve);
     }
     source.part("mix_domain.glsl", MIX_DOMAIN_GLSL)
+}
+
+/// One draw of the second layer's resolve: what it writes and where.
+#[derive(Debug)]
+struct ResolvePass {
+    pass: LayerPass,
+    /// How many colours it writes (the extras' draw buffers follow).
+    colours: u32,
+    fbo: Framebuffer,
+}
+
+impl GlObject for ResolvePass {
+    fn handles(&self, out: &mut Vec<Handle>) {
+        self.fbo.handles(out);
+    }
+}
+
+/// The host colours each draw of the second layer's resolve writes: the
+/// first draw also writes the coverage, the depth and (`with_reference`)
+/// the seed sample, so it takes as many colours as leave room for them in
+/// `draw_buffers`; each further draw takes up to `draw_buffers` colours.
+/// `None` where not even the first draw fits one colour.
+fn split_passes(
+    colours: usize,
+    draw_buffers: u32,
+    with_reference: bool,
+) -> Option<Vec<Vec<usize>>> {
+    let extras = 2 + usize::from(with_reference);
+    let buffers = draw_buffers as usize;
+    let first = buffers
+        .checked_sub(extras)
+        .filter(|&f| f >= 1 || colours == 0)?;
+    let mut passes = vec![(0..colours.min(first)).collect::<Vec<usize>>()];
+    let mut next = colours.min(first);
+    while next < colours {
+        let end = colours.min(next + buffers);
+        passes.push((next..end).collect());
+        next = end;
+    }
+    Some(passes)
 }
 
 /// The lit output's colour image, as the second layer reads and writes it.
@@ -219,8 +257,12 @@ pub(crate) struct SecondLayer {
     reference: Option<Texture2d>,
     /// The pixels its resolve runs on, in a stencil (`DEPTH24_STENCIL8`).
     stencil: Texture2d,
-    /// All of the above: the second layer's resolve target.
-    target: Framebuffer,
+    /// The second layer's resolve, in as many draws as the context's draw
+    /// buffers need: each with its colours, the first with the coverage,
+    /// depth and seed sample, all with the selection stencil.
+    passes: Vec<ResolvePass>,
+    /// Layer 2's colours at `Color(k)`, for the copies by blit.
+    colours_fbo: Framebuffer,
     /// The first layer's outside flag (R8: a sample lies outside its
     /// cluster), which the first resolve writes where the host's colours
     /// leave it a draw buffer: with it the second resolve runs on those
@@ -253,7 +295,9 @@ pub(crate) struct SecondLayer {
     /// Counts the pixels with a second layer (coverage above 0) for the
     /// check of the second lighting.
     count: FullscreenPass,
-    check: LightingCheck,
+    /// `None` where the host turned the check off
+    /// ([`RetrofitOptions::check_second_lighting`](crate::RetrofitOptions::check_second_lighting)).
+    check: Option<LightingCheck>,
     vao: VertexArray,
     output: Option<OutputTarget>,
     /// `begin_second_layer` ran and `finish_second_layer` has not.
@@ -276,7 +320,8 @@ impl GlObject for SecondLayer {
         self.depth.handles(out);
         self.reference.handles(out);
         self.stencil.handles(out);
-        self.target.handles(out);
+        self.passes.handles(out);
+        self.colours_fbo.handles(out);
         self.flag.handles(out);
         self.select.handles(out);
         self.write_depth.handles(out);
@@ -401,31 +446,25 @@ impl SecondLayer {
         host: &HostFramebuffer,
         mix: &LayerMix,
         with_reference: bool,
+        check_lighting: bool,
     ) -> Result<Self> {
         let (w, h) = host.size();
         let n = host.colors.len() as u32;
-        // Its target attaches colour points up to the last draw buffer, so
-        // both limits bound it.
+        // Its targets attach colour points up to the last draw buffer, so
+        // both limits bound them.
         let max_draw_buffers = crate::retrofit::output_points(gl);
         // The second resolve writes the host's colours, the coverage, the
-        // depth and perhaps the seed sample.
-        let needed = n + 2 + u32::from(with_reference);
-        if needed > max_draw_buffers {
-            return Err(Error::Retrofit {
-                attachment: host
-                    .colors
-                    .last()
-                    .map_or_else(|| "the colour attachments".into(), |a| a.point.name()),
+        // depth and perhaps the seed sample: in as many draws as the draw
+        // buffers need.
+        let split = split_passes(host.colors.len(), max_draw_buffers, with_reference).ok_or_else(
+            || Error::Retrofit {
+                attachment: "GL_MAX_DRAW_BUFFERS".into(),
                 reason: format!(
-                    "two layers need {needed} draw buffers for the second layer ({n} colours, the coverage, the depth{}), the context has {max_draw_buffers}",
-                    if with_reference {
-                        ", the seed sample"
-                    } else {
-                        ""
-                    }
+                    "two layers need at least {} draw buffers for the second layer's coverage, depth and one colour, the context has {max_draw_buffers}",
+                    3 + u32::from(with_reference)
                 ),
-            });
-        }
+            },
+        )?;
         // The first resolve's outside flag takes the draw buffer after the
         // host's colours (and before the reference index) where one is left.
         let flag_fits = n + 1 + u32::from(with_reference) <= max_draw_buffers;
@@ -449,19 +488,52 @@ impl SecondLayer {
                     a.format,
                 )?);
             }
-            let mut attachments: Vec<(Attachment, TextureRef)> = gbuffer
+            let mut passes = Vec::with_capacity(split.len());
+            for (i, colours) in split.iter().enumerate() {
+                // The colours this draw writes, then (the first draw) the
+                // extras; every draw's target has the selection stencil.
+                let mut attachments: Vec<(Attachment, TextureRef)> = colours
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &k)| (Attachment::Color(j as u32), TextureRef::from(&gbuffer[k])))
+                    .collect();
+                if i == 0 {
+                    let c = colours.len() as u32;
+                    attachments.push((Attachment::Color(c), TextureRef::from(&coverage)));
+                    attachments.push((Attachment::Color(c + 1), TextureRef::from(&depth)));
+                    if let Some(r) = &reference {
+                        attachments.push((Attachment::Color(c + 2), TextureRef::from(r)));
+                    }
+                }
+                let outputs = attachments.len() as u32;
+                attachments.push((Attachment::DepthStencil, TextureRef::from(&stencil)));
+                let draw: Vec<Option<u32>> = (0..outputs).map(Some).collect();
+                let label = if split.len() == 1 {
+                    "second layer".to_string()
+                } else {
+                    format!("second layer, draw {} of {}", i + 1, split.len())
+                };
+                let fbo = made.keep(Framebuffer::new(gl, &label, &attachments, &draw)?);
+                passes.push(ResolvePass {
+                    pass: LayerPass {
+                        colors: colours.iter().fold(0u8, |m, &k| m | (1 << k)),
+                        extras: i == 0,
+                    },
+                    colours: colours.len() as u32,
+                    fbo,
+                });
+            }
+            let colour_points: Vec<(Attachment, TextureRef)> = gbuffer
                 .iter()
                 .enumerate()
                 .map(|(k, t)| (Attachment::Color(k as u32), TextureRef::from(t)))
                 .collect();
-            attachments.push((Attachment::Color(n), TextureRef::from(&coverage)));
-            attachments.push((Attachment::Color(n + 1), TextureRef::from(&depth)));
-            if let Some(r) = &reference {
-                attachments.push((Attachment::Color(n + 2), TextureRef::from(r)));
-            }
-            attachments.push((Attachment::DepthStencil, TextureRef::from(&stencil)));
-            let draw: Vec<Option<u32>> = (0..needed).map(Some).collect();
-            let target = made.keep(Framebuffer::new(gl, "second layer", &attachments, &draw)?);
+            let colours_fbo = made.keep(Framebuffer::new(
+                gl,
+                "second layer colours",
+                &colour_points,
+                &(0..n).map(Some).collect::<Vec<_>>(),
+            )?);
             let flag = if flag_fits {
                 Some(texture(made, "first layer outside flag", Format::R8)?)
             } else {
@@ -502,7 +574,11 @@ impl SecondLayer {
                 "u_value",
                 &[("o_unused", 0)],
             )?);
-            let check = made.keep(LightingCheck::new(gl)?);
+            let check = if check_lighting {
+                Some(made.keep(LightingCheck::new(gl)?))
+            } else {
+                None
+            };
             let write_depth = made.keep(single_input_pass(
                 gl,
                 "second layer depth",
@@ -527,7 +603,8 @@ impl SecondLayer {
                 depth,
                 reference,
                 stencil,
-                target,
+                passes,
+                colours_fbo,
                 flag,
                 saved,
                 saved_depth,
@@ -576,9 +653,10 @@ impl SecondLayer {
         let Some(flag) = &self.flag else {
             return Ok(None);
         };
-        let n = self.colors as u32;
+        // The extras' draw buffers follow the first draw's colours.
+        let n = self.passes[0].colours;
         unsafe {
-            self.target.bind(gl);
+            self.passes[0].fbo.bind(gl);
             crate::gl::SavedState::prepare_fullscreen_pass(gl);
             gl.disable(glow::DEPTH_TEST);
             gl.disable(glow::FRAMEBUFFER_SRGB);
@@ -612,10 +690,11 @@ impl SecondLayer {
         self.selected.get().then_some(&self.stencil)
     }
 
-    /// The second layer's resolve target: layer 2's colours at `Color(k)`,
-    /// the coverage after them, its depth.
-    pub(crate) fn target(&self) -> &Framebuffer {
-        &self.target
+    /// The second layer's resolve draws: each one's outputs and target
+    /// (the first's has the coverage, depth and seed sample, and every
+    /// one the selection stencil).
+    pub(crate) fn passes(&self) -> impl Iterator<Item = (LayerPass, &Framebuffer)> {
+        self.passes.iter().map(|p| (p.pass, &p.fbo))
     }
 
     /// The coverage texture (R16F, `α` in red).
@@ -738,7 +817,7 @@ impl SecondLayer {
         match set {
             Set::Host => &self.host_target,
             Set::Saved => &self.saved_target,
-            Set::Second => &self.target,
+            Set::Second => &self.colours_fbo,
         }
     }
 
@@ -909,8 +988,12 @@ impl SecondLayer {
     /// lighting (after the second resolve; the caller keeps the host's
     /// state). A failed check of the last frame's lighting is returned.
     pub(crate) fn count_selected(&mut self, gl: &glow::Context) -> Result<()> {
-        let (count, vao, coverage, target) = (&self.count, &self.vao, &self.coverage, &self.target);
-        self.check.count_selected(gl, || unsafe {
+        let (count, vao, coverage) = (&self.count, &self.vao, &self.coverage);
+        let target = &self.passes[0].fbo;
+        let Some(check) = &mut self.check else {
+            return Ok(());
+        };
+        check.count_selected(gl, || unsafe {
             count.begin(gl, target);
             gl.disable(glow::STENCIL_TEST);
             gl.color_mask(false, false, false, false);
@@ -1007,14 +1090,26 @@ impl SecondLayer {
         Ok(own)
     }
 
+    /// The host's first lighting is over (or the frame went on without
+    /// it): the crate's own drawing is not counted as the host's.
+    pub(crate) fn end_first_lighting(&mut self, gl: &glow::Context) {
+        if let Some(check) = &mut self.check {
+            check.end_first(gl);
+        }
+    }
+
     /// The host's second lighting starts: the check counts what it draws.
     pub(crate) fn lighting_begins(&mut self, gl: &glow::Context) {
-        self.check.lighting_begins(gl);
+        if let Some(check) = &mut self.check {
+            check.lighting_begins(gl);
+        }
     }
 
     /// A `begin` that failed after the count began: no lighting follows.
     pub(crate) fn abandon_check(&mut self, gl: &glow::Context) {
-        self.check.abandon(gl);
+        if let Some(check) = &mut self.check {
+            check.abandon(gl);
+        }
     }
 
     /// Mix the two lit layers into the output and, where `begin` saved it,
@@ -1038,7 +1133,10 @@ impl SecondLayer {
         }
         self.lighting = false;
         self.resolved = false;
-        let checked = self.check.lighting_ends(gl);
+        let checked = match &mut self.check {
+            Some(check) => check.lighting_ends(gl),
+            None => Ok(()),
+        };
         if !self.own_target {
             profile.time(gl, "second layer: keep lit second layer", || {
                 self.keep_lit(gl, false)

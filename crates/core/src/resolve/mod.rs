@@ -123,6 +123,43 @@ pub(crate) struct ResolveProgramKey {
     pub normal: Option<(ResolveSlot, NormalEncoding)>,
     /// Write the second layer and its coverage instead of the first.
     pub second_layer_output: bool,
+    /// The colour attachments written (bit k: attachment k), to
+    /// consecutive outputs in attachment order; the others are resolved
+    /// for nothing but the compiler drops them.
+    pub written: u8,
+    /// With `second_layer_output`: the coverage, depth (and reference)
+    /// outputs are written after the colours.
+    pub layer_extras: bool,
+}
+
+/// Which outputs one draw of the second layer's resolve writes. A host
+/// whose colours and the second layer's own outputs (coverage, depth, the
+/// seed sample) together need more draw buffers than the context has gets
+/// its second layer in several draws: the first writes the extras and as
+/// many colours as fit, the others the remaining colours.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LayerPass {
+    /// The colour inputs written (bit k: input k), to consecutive draw
+    /// buffers in input order.
+    pub colors: u8,
+    /// The coverage, the depth and, with a reference output, the seed
+    /// sample, to the draw buffers after the colours.
+    pub extras: bool,
+}
+
+impl LayerPass {
+    /// Every one of `n` colours and the extras: one draw.
+    pub fn all(n: usize) -> LayerPass {
+        LayerPass {
+            colors: all_bits(n),
+            extras: true,
+        }
+    }
+}
+
+/// The mask of attachments `0..n`.
+fn all_bits(n: usize) -> u8 {
+    if n >= 8 { u8::MAX } else { (1u8 << n) - 1 }
 }
 
 /// The compiled-in shape of a [`Selection`] (its numbers are uniforms).
@@ -221,8 +258,14 @@ impl ResolveProgramKey {
         );
         for (k, (rule, _)) in self.attachments.iter().enumerate() {
             let args = format!("s0_{k}, ref_{k}, acc_{k}, ATT{k}_RULE");
+            // An attachment another draw writes is a plain variable here.
+            let storage = if self.written & (1 << k) != 0 {
+                "out "
+            } else {
+                ""
+            };
             declarations.push_str(&format!(
-                "uniform ATT{k}_SAMPLER u_att{k}; out ATT{k}_VEC o_att{k}; "
+                "uniform ATT{k}_SAMPLER u_att{k}; {storage}ATT{k}_VEC o_att{k}; "
             ));
             zeros.push_str(&format!(
                 "o_att{k} = has_second ? o_att{k} : ATT{k}_VEC(0); "
@@ -317,6 +360,9 @@ impl ResolveProgramKey {
         }
         if self.second_layer_output {
             def("SECOND_LAYER_OUTPUT", "1".into());
+            if !self.layer_extras {
+                def("SECOND_LAYER_COLOURS_ONLY", "1".into());
+            }
         }
         d
     }
@@ -481,6 +527,7 @@ impl Resolver {
                 inputs.colors.len()
             )));
         }
+        let written = all_bits(inputs.colors.len());
         let mut attachments = Vec::with_capacity(inputs.colors.len());
         for ((tex, &rule), point) in inputs
             .colors
@@ -566,6 +613,8 @@ impl Resolver {
             selection: SelectionKey::of(&s.selection, inputs)?,
             normal,
             second_layer_output,
+            written,
+            layer_extras: second_layer_output,
         })
     }
 
@@ -593,8 +642,9 @@ impl Resolver {
         target: &Framebuffer,
         settings: &ResolveSettings,
         reference_output: bool,
+        pass: LayerPass,
     ) -> Result<()> {
-        let key = Self::second_layer_key(inputs, target, settings, reference_output)?;
+        let key = Self::second_layer_key(inputs, target, settings, reference_output, pass)?;
         self.program(gl, &key)?;
         Ok(())
     }
@@ -604,6 +654,7 @@ impl Resolver {
         target: &Framebuffer,
         settings: &ResolveSettings,
         reference_output: bool,
+        pass: LayerPass,
     ) -> Result<ResolveProgramKey> {
         if settings.layers != 2 {
             return Err(Error::invalid(format!(
@@ -612,10 +663,13 @@ impl Resolver {
             )));
         }
         let extra = ExtraOutputs {
-            reference: reference_output,
+            reference: reference_output && pass.extras,
             ..ExtraOutputs::default()
         };
-        Self::base_key(inputs, target, settings, extra, true)
+        let mut key = Self::base_key(inputs, target, settings, extra, true)?;
+        key.written &= pass.colors;
+        key.layer_extras = pass.extras;
+        Ok(key)
     }
 
     /// Resolve the second layer of `inputs` (the largest cluster of samples
@@ -629,9 +683,13 @@ impl Resolver {
     /// cluster's seed sample (0 where there is none; an unsigned-integer
     /// target, as [`ExtraOutputs::reference`]). With `stencil`, only pixels
     /// whose stencil value in `target` equals it are resolved (an early
-    /// test: the others keep what the target held). Needs
+    /// test: the others keep what the target held). `pass` says which of
+    /// these outputs this draw writes ([`LayerPass::all`]: every one, at
+    /// the draw buffers above; otherwise the chosen colours at draw buffers
+    /// `0..` in input order, then the extras). Needs
     /// `params.settings.layers == 2`. The host's GL state is kept, as
     /// [`Resolver::run`] keeps it.
+    #[allow(clippy::too_many_arguments)]
     pub fn run_second_layer(
         &mut self,
         gl: &glow::Context,
@@ -640,8 +698,9 @@ impl Resolver {
         params: &ResolveParams,
         reference_output: bool,
         stencil: Option<u8>,
+        pass: LayerPass,
     ) -> Result<()> {
-        let key = Self::second_layer_key(inputs, target, &params.settings, reference_output)?;
+        let key = Self::second_layer_key(inputs, target, &params.settings, reference_output, pass)?;
         let run = DrawRun {
             stage: "the second layer's resolve pass",
             stencil,
@@ -787,10 +846,11 @@ impl crate::gl::GlObject for Resolver {
 
 fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program> {
     let mut frag_outputs: Vec<(String, u32)> = Vec::new();
-    for k in 0..key.attachments.len() {
-        frag_outputs.push((format!("o_att{k}"), k as u32));
+    for k in (0..key.attachments.len()).filter(|&k| key.written & (1 << k) != 0) {
+        let location = frag_outputs.len() as u32;
+        frag_outputs.push((format!("o_att{k}"), location));
     }
-    let mut next = key.attachments.len() as u32;
+    let mut next = frag_outputs.len() as u32;
     if key.complex_output {
         frag_outputs.push(("o_complex".into(), next));
         next += 1;
@@ -799,7 +859,7 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
         frag_outputs.push(("o_outside".into(), next));
         next += 1;
     }
-    if key.second_layer_output {
+    if key.second_layer_output && key.layer_extras {
         frag_outputs.push(("o_coverage".into(), next));
         frag_outputs.push(("o_layer_depth".into(), next + 1));
         next += 2;

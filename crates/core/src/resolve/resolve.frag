@@ -45,6 +45,10 @@
 //                          o_coverage and its depth to o_layer_depth, instead
 //                          of the first; ATTACHMENT_ZEROS zeroes the
 //                          attachments where there is no second cluster
+//   SECOND_LAYER_COLOURS_ONLY  with SECOND_LAYER_OUTPUT: this draw writes
+//                          colours only (another writes the coverage and
+//                          depth); an attachment not written by this draw
+//                          is declared without `out`
 
 #define RULE_BLEND 0
 #define RULE_BLEND_NORMAL 1
@@ -97,9 +101,13 @@ out float o_outside;
 #ifdef REFERENCE_OUTPUT
 out uint o_reference;
 #endif
-#ifdef SECOND_LAYER_OUTPUT
+#if defined(SECOND_LAYER_OUTPUT) && !defined(SECOND_LAYER_COLOURS_ONLY)
 out float o_coverage;
 out float o_layer_depth;
+#elif defined(SECOND_LAYER_OUTPUT)
+// Another draw writes these (a host with more colours than draw buffers).
+float o_coverage;
+float o_layer_depth;
 #endif
 
 // Per-pixel state shared by the attachment blocks below.

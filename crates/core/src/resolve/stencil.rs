@@ -132,9 +132,14 @@ impl StencilPass {
         gl: &glow::Context,
         twin: &Texture2dMultisample,
         twin_fbo: &Framebuffer,
-        reference: &Texture2d,
+        reference: Option<&Texture2d>,
         target: &Framebuffer,
     ) -> Result<()> {
+        if self.program.is_some() && reference.is_none() {
+            return Err(crate::Error::invalid(
+                "the stencil copy by shader needs the resolve's reference index",
+            ));
+        }
         let state = SavedState::capture(gl, 2);
         let clear = unsafe { gl.get_parameter_i32(glow::STENCIL_CLEAR_VALUE) };
         let result = match &self.program {
@@ -173,7 +178,9 @@ impl StencilPass {
                     glow::STENCIL_INDEX as i32,
                 );
                 program.set_i32(gl, "u_stencil", 0);
-                TextureRef::from(reference).bind(gl, 1);
+                if let Some(reference) = reference {
+                    TextureRef::from(reference).bind(gl, 1);
+                }
                 program.set_i32(gl, "u_reference", 1);
                 if self.method == StencilCopy::Export {
                     gl.stencil_mask(0xFF);
