@@ -58,6 +58,7 @@ pub const REFUSALS: &[(&str, &str)] = &[
     ("unexpected object type", "unexpected object type"),
     ("format without a twin", "no multisampled twin can hold it"),
     ("no depth attachment", "has no depth attachment"),
+    ("nothing attached", "has nothing attached at all"),
     ("not a depth format", "not a depth format"),
     ("no colour attachments", "has no colour attachments"),
     (
@@ -96,7 +97,7 @@ pub const REFUSALS: &[(&str, &str)] = &[
         "no draw buffer for the stencil copy",
         "the stencil copy's reference sample",
     ),
-    ("two layers: draw buffers", "two layers need"),
+    ("two layers: draw buffers", "two layers need at least"),
     ("sample count", "MSAA is not supported for"),
     ("memory budget", "over the memory budget"),
     ("stencil copy unsupported", "copying the host's stencil by"),
@@ -133,6 +134,10 @@ pub const UNREACHABLE: &[(&str, &str)] = &[
         "twin missing",
         "an internal invariant: the twins are made from the same list the check walks",
     ),
+    (
+        "nothing attached",
+        "a framebuffer with nothing attached is incomplete, which the generator counts as the host's bug",
+    ),
 ];
 
 /// Why a refusal cannot be reached on this context, where that depends on
@@ -160,6 +165,15 @@ pub fn driver_dependent(gl: &glow::Context, name: &str, limits: Limits) -> Optio
                 "the driver multisamples every colour format the crate knows, or its stand-in"
                     .to_string()
             })
+        }
+        // The second layer's resolve splits into as many draws as the draw
+        // buffers need; it refuses only below its coverage, depth, seed
+        // sample and one colour.
+        "two layers: draw buffers" if limits.draw_buffers.min(limits.color_attachments) >= 4 => {
+            Some(format!(
+                "GL_MAX_DRAW_BUFFERS is {}: the second layer's resolve takes as many draws as its outputs need",
+                limits.draw_buffers
+            ))
         }
         "stencil copy unsupported" => (StencilCopy::Export.on(gl).is_ok()
             && StencilCopy::BitPasses.on(gl).is_ok())

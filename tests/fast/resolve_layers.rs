@@ -21,8 +21,8 @@ use deferred_msaa_lab::resolve::cpu::{
     standard_sample_positions,
 };
 use deferred_msaa_lab::resolve::{
-    DepthProjection, KeySource, NormalEncoding, ResolveInputs, ResolveMethod, ResolveParams,
-    ResolveRule, ResolveSettings, ResolveSlot, Resolver, Window,
+    DepthProjection, KeySource, LayerPass, NormalEncoding, ResolveInputs, ResolveMethod,
+    ResolveParams, ResolveRule, ResolveSettings, ResolveSlot, Resolver, Window,
 };
 use deferred_msaa_testkit::Rng;
 
@@ -446,7 +446,15 @@ impl Harness {
             normal: self.normal.map(|(k, e)| (ResolveSlot(k), e)),
         };
         resolver
-            .run_second_layer(gl, &inputs, &target, &params, false, None)
+            .run_second_layer(
+                gl,
+                &inputs,
+                &target,
+                &params,
+                false,
+                None,
+                LayerPass::all(inputs.colors.len()),
+            )
             .unwrap();
         let gpu: Vec<_> = outputs
             .iter()

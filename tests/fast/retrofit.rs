@@ -751,11 +751,11 @@ fn second_layer_calls_out_of_order_are_errors() {
 }
 
 /// A host with as many colours as the context has draw buffers, less one,
-/// cannot have two layers (the second resolve writes every colour, the
-/// coverage and the depth): refused in one line that names the count, at
-/// construction and by `set_options`, which keeps the working retrofit.
+/// has two layers at construction and by `set_options` (the second
+/// resolve, which writes every colour, the coverage and the depth, takes
+/// two draws there), where it was once refused.
 #[test]
-fn two_layers_refuse_a_host_without_draw_buffers_to_spare() {
+fn two_layers_take_a_host_without_draw_buffers_to_spare() {
     let Some(ctx) = common::egl_context() else {
         return;
     };
@@ -781,19 +781,15 @@ fn two_layers_refuse_a_host_without_draw_buffers_to_spare() {
         },
         ..RetrofitOptions::default()
     };
-    let expect_refusal = |e: Error| {
-        let text = e.to_string();
-        assert_eq!(text.lines().count(), 1, "{text}");
-        assert!(
-            text.contains(&format!("need {} draw buffers", max + 1))
-                && text.contains(&format!("the context has {max}")),
-            "{text}"
-        );
-    };
-    expect_refusal(MsaaRetrofit::new(gl, fbo.raw(), &two).unwrap_err());
+    // Once refused for want of draw buffers: the second layer's resolve
+    // now takes as many draws as its outputs need.
+    MsaaRetrofit::new(gl, fbo.raw(), &two)
+        .expect("two layers where one is accepted")
+        .destroy(gl);
     let mut msaa = MsaaRetrofit::new(gl, fbo.raw(), &RetrofitOptions::default()).unwrap();
-    expect_refusal(msaa.set_options(gl, &two).unwrap_err());
-    assert_eq!(msaa.options(), &RetrofitOptions::default());
+    msaa.set_options(gl, &two)
+        .expect("two layers where one is accepted");
+    assert_eq!(msaa.options(), &two);
     assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
     msaa.destroy(gl);
     fbo.destroy(gl);
@@ -843,8 +839,7 @@ fn the_lit_layers_mix_by_coverage_in_the_chosen_domain() {
         (Format::Rgba16f, LayerMix::Tonemapped, tonemap),
         (Format::Rgba16f, LayerMix::Linear, (identity, identity)),
         (Format::Rgba16f, LayerMix::Curve(curve.into()), reinhard),
-        // An 8-bit output holds display values: sRGB-encoded unless declared.
-        (Format::Rgba8, LayerMix::Auto, srgb),
+        (Format::Rgba8, LayerMix::Auto, (identity, identity)),
         (Format::Rgba8, LayerMix::SrgbEncoded, srgb),
         (Format::Rgba8, LayerMix::Linear, (identity, identity)),
     ];
@@ -1137,7 +1132,7 @@ fn profiling_times_each_step_and_changes_nothing() {
     assert!(times_ok);
     assert_eq!(
         steps,
-        "resolve, second layer: selection, second layer: resolve, \
+        "resolve, second layer: selection, second layer: resolve, second layer: count, \
          second layer: keep lit first layer, second layer: save host G-buffer, \
          second layer: copy in, second layer: depth into host, the host's second lighting, \
          second layer: keep lit second layer, second layer: mix, \
@@ -1277,4 +1272,258 @@ fn the_second_layer_selection_marks_exactly_the_covered_pixels() {
     readback.destroy(gl);
     host.destroy(gl);
     assert_eq!(live_objects(), before);
+}
+
+/// Two layers wherever one layer is accepted: hosts with 5, 6, 7 and 8
+/// colour attachments and a `DEPTH24_STENCIL8` texture (the last copying
+/// its stencil by blit, which needs no reference index, as one layer then
+/// needs), at the context's own draw-buffer limit (8 on llvmpipe). Where
+/// the host's colours and the second layer's coverage, depth and seed
+/// sample need more draw buffers than that, the second resolve takes
+/// several draws; every attachment of the second layer, its coverage and
+/// its depth still equal the CPU reference's, and the lit layers mix.
+#[test]
+fn two_layers_on_wide_gbuffers_at_the_contexts_draw_buffers() {
+    use deferred_msaa_lab::resolve::StencilCopy;
+    use deferred_msaa_testkit::host::Output;
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let draw_buffers = unsafe { gl.get_parameter_i32(glow::MAX_DRAW_BUFFERS) };
+    let outputs: Vec<(Output, Format)> = vec![
+        (Output::Color, Format::Rgba16f),
+        (Output::Position, Format::Rgba32f),
+        (Output::Normal, Format::Rgba16f),
+        (Output::Specular, Format::Rgba8),
+        (Output::Emissive, Format::Rgba16f),
+        (Output::Material, Format::Rgba8),
+        (Output::LinearDepth, Format::R16f),
+        (Output::Tint, Format::Rgba8),
+    ];
+    let mut readback = Readback::new(gl).unwrap();
+    for colours in 5..=8usize {
+        let label = format!(
+            "{colours} colour attachments and DEPTH24_STENCIL8, {draw_buffers} draw buffers"
+        );
+        let mut host = Host::with_outputs(gl, W, H, &outputs[..colours], Format::Depth24Stencil8)
+            .expect("the wide host");
+        host.set_triangles(gl, &triangles()).unwrap();
+        // Every colour point used and a stencil: the copy by index needs
+        // one more output than the context has, so that host copies by blit.
+        let stencil = if colours as i32 >= draw_buffers {
+            StencilCopy::Blit
+        } else {
+            StencilCopy::Auto
+        };
+        let one_layer = RetrofitOptions {
+            position_attachment: Some(ColorAttachment(1)),
+            normal_attachment: Some(NormalAttachment {
+                attachment: ColorAttachment(2),
+                encoding: NormalEncoding::Xyz,
+            }),
+            stencil,
+            ..RetrofitOptions::default()
+        };
+        MsaaRetrofit::new(gl, host.fbo.raw(), &one_layer)
+            .unwrap_or_else(|e| panic!("{label}: one layer refused: {e}"))
+            .destroy(gl);
+        let options = RetrofitOptions {
+            resolve: ResolveSettings {
+                layers: 2,
+                ..ResolveSettings::default()
+            },
+            ..one_layer
+        };
+        let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options)
+            .unwrap_or_else(|e| panic!("{label}: two layers refused where one is accepted: {e}"));
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        host.draw(gl, &projection(), false);
+        msaa.resolve(gl, &frame()).unwrap();
+        let n = msaa.samples();
+        let (depth_ref, color_refs, _) = msaa.inputs().unwrap();
+        let samples: Vec<_> = color_refs
+            .iter()
+            .map(|t| readback.read(gl, *t, 1).unwrap())
+            .collect();
+        let depth_samples = readback.read(gl, depth_ref, 1).unwrap();
+        let (layer_refs, layer_depth_ref) = msaa.second_layer_gbuffer().unwrap();
+        let layer: Vec<_> = layer_refs
+            .iter()
+            .map(|t| readback.read(gl, *t, 1).unwrap())
+            .collect();
+        let layer_depth = readback.read(gl, layer_depth_ref, 1).unwrap();
+        let coverage = readback
+            .read(gl, msaa.second_layer_coverage().unwrap(), 1)
+            .unwrap();
+        let cpu = msaa.cpu_reference(&frame()).unwrap();
+        let (mut bad, mut covered) = (Vec::new(), 0);
+        for y in 0..H {
+            for x in 0..W {
+                let px = PixelSamples {
+                    depth: (0..n)
+                        .map(|s| f64::from(depth_samples.get(s, x, y)[0]))
+                        .collect(),
+                    attachments: samples
+                        .iter()
+                        .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
+                        .collect(),
+                };
+                let want = cpu.resolve_second_layer_at(&px, None);
+                if want.ambiguous {
+                    continue;
+                }
+                let a = f64::from(coverage.get(0, x, y)[0]);
+                if (a - want.coverage).abs() > 1e-3 {
+                    bad.push(format!("({x},{y}) coverage: gpu {a} cpu {}", want.coverage));
+                }
+                if want.coverage == 0.0 {
+                    continue;
+                }
+                covered += 1;
+                for (k, plane) in layer.iter().enumerate() {
+                    let got = plane.get(0, x, y);
+                    let expected = want.attachments[k];
+                    let format = outputs[k].1;
+                    let channels = format
+                        .properties()
+                        .rgba_bits
+                        .iter()
+                        .filter(|&&b| b > 0)
+                        .count();
+                    let close = |c: usize| {
+                        let e = expected[c];
+                        let g = f64::from(got[c]);
+                        match format {
+                            Format::Rgba32f => (g - e).abs() <= 1e-4 * (1.0 + e.abs()),
+                            Format::Rgba8 => (g - e).abs() <= 1.0 / 255.0,
+                            _ => half_close(got[c], e),
+                        }
+                    };
+                    if !(0..channels).all(close) {
+                        bad.push(format!(
+                            "({x},{y}) second layer attachment {k} ({}): gpu {got:?} cpu {expected:?}",
+                            format.name()
+                        ));
+                    }
+                }
+                let d = f64::from(layer_depth.get(0, x, y)[0]);
+                if (d - want.depth).abs() > 1e-6 {
+                    bad.push(format!("({x},{y}) depth: gpu {d} cpu {}", want.depth));
+                }
+            }
+        }
+        eprintln!("{label}: {covered} pixels with a second layer, every attachment checked");
+        assert!(
+            covered >= 20,
+            "{label}: only {covered} pixels with a second layer"
+        );
+        assert!(
+            bad.is_empty(),
+            "{label}: {} mismatches: {:#?}",
+            bad.len(),
+            &bad[..bad.len().min(8)]
+        );
+        // The three calls around the host's lighting, as any host makes them.
+        let (output, fbo) = lit_output(gl, Format::Rgba16f);
+        host.light(gl, fbo.raw(), 1.0);
+        assert!(msaa.begin_second_layer(gl, Some(fbo.raw())).unwrap());
+        host.light(gl, fbo.raw(), 1.0);
+        msaa.finish_second_layer(gl, Some(fbo.raw())).unwrap();
+        assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR, "{label}");
+        msaa.destroy(gl);
+        fbo.destroy(gl);
+        output.destroy(gl);
+        host.destroy(gl);
+    }
+    readback.destroy(gl);
+    assert_eq!(live_objects(), before, "GL objects leaked");
+}
+
+/// Messages true to what GL shows: a rule, position or normal attachment
+/// named at a point that is attached but in none of the draw buffers says
+/// so (not "nothing attached"); a framebuffer with nothing attached yet
+/// (an engine that attaches its textures on first bind) says that, not
+/// "no depth attachment".
+#[test]
+fn refusals_say_what_gl_shows_of_the_host_framebuffer() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let colour = Texture2d::new(gl, "drawn", Format::Rgba16f, 16, 16).unwrap();
+    let undrawn = Texture2d::new(gl, "not drawn", Format::Rgba16f, 16, 16).unwrap();
+    let depth = Texture2d::new(gl, "depth", Format::Depth32f, 16, 16).unwrap();
+    let fbo = Framebuffer::new(
+        gl,
+        "a host with a hole",
+        &[
+            (Attachment::Color(0), TextureRef::from(&colour)),
+            (Attachment::Color(1), TextureRef::from(&undrawn)),
+            (Attachment::Depth, TextureRef::from(&depth)),
+        ],
+        &[Some(0), None],
+    )
+    .unwrap();
+    let cases = [
+        RetrofitOptions {
+            rules: vec![(ColorAttachment(1), ResolveRule::Select)],
+            ..RetrofitOptions::default()
+        },
+        RetrofitOptions {
+            position_attachment: Some(ColorAttachment(1)),
+            ..RetrofitOptions::default()
+        },
+        RetrofitOptions {
+            normal_attachment: Some(NormalAttachment {
+                attachment: ColorAttachment(1),
+                encoding: NormalEncoding::Xyz,
+            }),
+            ..RetrofitOptions::default()
+        },
+    ];
+    for options in &cases {
+        let text = MsaaRetrofit::new(gl, fbo.raw(), options)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(text.lines().count(), 1, "{text}");
+        assert!(
+            text.contains("GL_COLOR_ATTACHMENT1")
+                && text.contains("none of the host framebuffer's draw buffers")
+                && !text.contains("nothing is attached"),
+            "{text}"
+        );
+    }
+    // Nothing attached at a point: that is what the message says.
+    let text = MsaaRetrofit::new(
+        gl,
+        fbo.raw(),
+        &RetrofitOptions {
+            position_attachment: Some(ColorAttachment(3)),
+            ..RetrofitOptions::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(text.contains("nothing is attached there"), "{text}");
+    // A framebuffer whose engine attaches its images on first bind: empty.
+    let empty = unsafe { gl.create_framebuffer().unwrap() };
+    let text = MsaaRetrofit::new(gl, empty, &RetrofitOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        text.contains("nothing attached at all") && !text.contains("has no depth attachment"),
+        "{text}"
+    );
+    unsafe {
+        gl.delete_framebuffer(empty);
+        while gl.get_error() != glow::NO_ERROR {}
+    }
+    fbo.destroy(gl);
+    for t in [colour, undrawn, depth] {
+        t.destroy(gl);
+    }
+    assert_eq!(live_objects(), before, "GL objects leaked");
 }

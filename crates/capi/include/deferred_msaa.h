@@ -193,6 +193,28 @@ typedef struct {
   // `dmsaa_finish_second_layer` puts back of the first layer in the
   // host's G-buffer. The lit image is the same whichever is chosen.
   DmsaaRestore restore_first_layer;
+  // 1 (default): with two layers, count what the first and second
+  // lighting draw (occlusion queries between `dmsaa_resolve` and
+  // `dmsaa_begin_second_layer`, and between it and
+  // `dmsaa_finish_second_layer`) and return
+  // `DMSAA_STATUS_SECOND_LIGHTING` where the second drew nothing. 0 for a
+  // host that runs occlusion queries of its own there, or whose second
+  // lighting draws no fragments while something before its first
+  // lighting does.
+  uint8_t check_second_lighting;
+  // 1: [`dmsaa_begin_frame`] clears the multisampled twins to
+  // `clear_colors` (per colour attachment number, `glClearBufferfv`'s
+  // values; integer attachments take them as integers), `clear_depth` and
+  // `clear_stencil`, for a host that clears its G-buffer through another
+  // framebuffer or per attachment with its own values. 0 (default): the
+  // host clears through [`dmsaa_framebuffer`]'s framebuffer.
+  uint8_t clear_twins;
+  // With `clear_twins`: each colour attachment's clear value (default 0).
+  float clear_colors[DMSAA_MAX_RULES][4];
+  // With `clear_twins`: the depth clear value (default 1).
+  float clear_depth;
+  // With `clear_twins`: the stencil clear value (default 0).
+  int32_t clear_stencil;
   // A limit on the twins' memory in bytes: `DMSAA_MEMORY_BUDGET_NONE`
   // (default), `DMSAA_MEMORY_BUDGET_DRIVER`, or a number of bytes. Over
   // it, the sample count steps down (or, strict, the call fails).
@@ -270,8 +292,8 @@ typedef const void *(*DmsaaGetProcAddress)(const char *name, void *user_data);
 
 // Inferred (the default): tonemapped for a floating-point output; in
 // linear light for an sRGB output the host writes with
-// `GL_FRAMEBUFFER_SRGB` on, and for any other 8-bit output (display
-// values, taken as sRGB-encoded); as stored otherwise.
+// `GL_FRAMEBUFFER_SRGB` on; as stored otherwise (a host whose 8-bit
+// output holds display values declares `DMSAA_LAYER_MIX_SRGB_ENCODED`).
 #define DMSAA_LAYER_MIX_AUTO 0
 
 // Linear values (linear light, or any values to be mixed as they are):
@@ -361,6 +383,20 @@ DmsaaStatus dmsaa_retrofit_new(DmsaaGetProcAddress get_proc_address,
 // Threading: the calling thread's context need not be current.
 // Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `out_fbo`.
 DmsaaStatus dmsaa_framebuffer(DmsaaRetrofit *retrofit, uint32_t *out_fbo);
+
+// The start of a frame: check that the multisampled framebuffer and its
+// textures still exist (something that deletes them, such as a
+// render-target wrapper deleting what it wraps, makes every later frame
+// stale), clear the twins to the options' `clear_*` values where
+// `clear_twins` is 1, and give [`dmsaa_framebuffer`]'s framebuffer in
+// `*out_fbo`, to bind for the geometry pass.
+//
+// Threading: the host's context current on the calling thread. The host's
+// GL state is as it was.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `out_fbo`;
+// `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` naming a deleted object (then
+// [`dmsaa_refresh`] makes new twins); `DMSAA_STATUS_GL`.
+DmsaaStatus dmsaa_begin_frame(DmsaaRetrofit *retrofit, uint32_t *out_fbo);
 
 // The real sample count of the twins (the driver may round the requested
 // count up, or the memory budget step it down).

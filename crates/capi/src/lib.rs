@@ -35,7 +35,7 @@ use deferred_msaa::gbuffer::MemoryBudget;
 use deferred_msaa::resolve::{NormalEncoding, ResolveMethod, ResolveRule, StencilCopy, Window};
 use deferred_msaa::{
     ColorAttachment, DepthMode, Error, FirstLayerRestore, Frame, LayerMix, MsaaRetrofit,
-    NormalAttachment, PositionSpace, RetrofitOptions,
+    NormalAttachment, PositionSpace, RetrofitOptions, TwinClear,
 };
 use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char, c_void};
@@ -151,8 +151,8 @@ pub const DMSAA_STENCIL_BLIT: DmsaaStencilCopy = 3;
 pub type DmsaaLayerMix = u32;
 /// Inferred (the default): tonemapped for a floating-point output; in
 /// linear light for an sRGB output the host writes with
-/// `GL_FRAMEBUFFER_SRGB` on, and for any other 8-bit output (display
-/// values, taken as sRGB-encoded); as stored otherwise.
+/// `GL_FRAMEBUFFER_SRGB` on; as stored otherwise (a host whose 8-bit
+/// output holds display values declares `DMSAA_LAYER_MIX_SRGB_ENCODED`).
 pub const DMSAA_LAYER_MIX_AUTO: DmsaaLayerMix = 0;
 /// Linear values (linear light, or any values to be mixed as they are):
 /// `mix(first, second, a)` as the output stores them.
@@ -267,6 +267,28 @@ pub struct DmsaaOptions {
     /// `dmsaa_finish_second_layer` puts back of the first layer in the
     /// host's G-buffer. The lit image is the same whichever is chosen.
     pub restore_first_layer: DmsaaRestore,
+    /// 1 (default): with two layers, count what the first and second
+    /// lighting draw (occlusion queries between `dmsaa_resolve` and
+    /// `dmsaa_begin_second_layer`, and between it and
+    /// `dmsaa_finish_second_layer`) and return
+    /// `DMSAA_STATUS_SECOND_LIGHTING` where the second drew nothing. 0 for a
+    /// host that runs occlusion queries of its own there, or whose second
+    /// lighting draws no fragments while something before its first
+    /// lighting does.
+    pub check_second_lighting: u8,
+    /// 1: [`dmsaa_begin_frame`] clears the multisampled twins to
+    /// `clear_colors` (per colour attachment number, `glClearBufferfv`'s
+    /// values; integer attachments take them as integers), `clear_depth` and
+    /// `clear_stencil`, for a host that clears its G-buffer through another
+    /// framebuffer or per attachment with its own values. 0 (default): the
+    /// host clears through [`dmsaa_framebuffer`]'s framebuffer.
+    pub clear_twins: u8,
+    /// With `clear_twins`: each colour attachment's clear value (default 0).
+    pub clear_colors: [[f32; 4]; DMSAA_MAX_RULES],
+    /// With `clear_twins`: the depth clear value (default 1).
+    pub clear_depth: f32,
+    /// With `clear_twins`: the stencil clear value (default 0).
+    pub clear_stencil: i32,
     /// A limit on the twins' memory in bytes: `DMSAA_MEMORY_BUDGET_NONE`
     /// (default), `DMSAA_MEMORY_BUDGET_DRIVER`, or a number of bytes. Over
     /// it, the sample count steps down (or, strict, the call fails).
@@ -575,9 +597,9 @@ fn convert(o: &DmsaaOptions) -> Result<Converted, Failure> {
                 ("DMSAA_LAYER_MIX_AUTO", LayerMix::Auto),
                 ("DMSAA_LAYER_MIX_LINEAR", LayerMix::Linear),
                 ("DMSAA_LAYER_MIX_TONEMAPPED", LayerMix::Tonemapped),
-                ("DMSAA_LAYER_MIX_SRGB_ENCODED", LayerMix::SrgbEncoded),
                 // Taken above, with its text; listed for the message.
                 ("DMSAA_LAYER_MIX_CURVE", LayerMix::Auto),
+                ("DMSAA_LAYER_MIX_SRGB_ENCODED", LayerMix::SrgbEncoded),
             ],
         )?,
     };
@@ -593,6 +615,17 @@ fn convert(o: &DmsaaOptions) -> Result<Converted, Failure> {
             ),
         ],
     )?;
+    options.check_second_lighting = flag("check_second_lighting", o.check_second_lighting)?;
+    options.twin_clear = flag("clear_twins", o.clear_twins)?.then(|| TwinClear {
+        colors: o
+            .clear_colors
+            .iter()
+            .enumerate()
+            .map(|(n, v)| (ColorAttachment(n as u32), *v))
+            .collect(),
+        depth: o.clear_depth,
+        stencil: o.clear_stencil,
+    });
     let strict = flag("memory_budget_strict", o.memory_budget_strict)?;
     options.memory_budget = match o.memory_budget_bytes {
         DMSAA_MEMORY_BUDGET_NONE => None,
@@ -663,6 +696,11 @@ pub extern "C" fn dmsaa_options_default() -> DmsaaOptions {
             FirstLayerRestore::Everything => DMSAA_RESTORE_EVERYTHING,
             FirstLayerRestore::DepthAndStencil => DMSAA_RESTORE_DEPTH_AND_STENCIL,
         },
+        check_second_lighting: u8::from(rust.check_second_lighting),
+        clear_twins: 0,
+        clear_colors: [[0.0; 4]; DMSAA_MAX_RULES],
+        clear_depth: 1.0,
+        clear_stencil: 0,
         memory_budget_bytes: DMSAA_MEMORY_BUDGET_NONE,
         memory_budget_strict: 0,
         depth_mode: DMSAA_DEPTH_STANDARD,
@@ -761,6 +799,40 @@ pub unsafe extern "C" fn dmsaa_framebuffer(
         }
         let fbo = with_handle(F, retrofit, |h| Ok(h.retrofit.framebuffer().0.get()))?;
         // SAFETY: checked non-null; the header requires a writable pointer.
+        unsafe { *out_fbo = fbo };
+        Ok(())
+    })
+}
+
+/// The start of a frame: check that the multisampled framebuffer and its
+/// textures still exist (something that deletes them, such as a
+/// render-target wrapper deleting what it wraps, makes every later frame
+/// stale), clear the twins to the options' `clear_*` values where
+/// `clear_twins` is 1, and give [`dmsaa_framebuffer`]'s framebuffer in
+/// `*out_fbo`, to bind for the geometry pass.
+///
+/// Threading: the host's context current on the calling thread. The host's
+/// GL state is as it was.
+/// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `out_fbo`;
+/// `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` naming a deleted object (then
+/// [`dmsaa_refresh`] makes new twins); `DMSAA_STATUS_GL`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn dmsaa_begin_frame(
+    retrofit: *mut DmsaaRetrofit,
+    out_fbo: *mut u32,
+) -> DmsaaStatus {
+    const F: &str = "dmsaa_begin_frame";
+    entry(F, || {
+        if out_fbo.is_null() {
+            return Err(Failure::null(F, "out_fbo"));
+        }
+        // SAFETY: checked non-null; the header requires a writable pointer.
+        unsafe { *out_fbo = 0 };
+        let fbo = with_handle(F, retrofit, |h| {
+            let gl = &h.gl;
+            Ok(h.retrofit.begin_frame(gl)?.0.get())
+        })?;
+        // SAFETY: as above.
         unsafe { *out_fbo = fbo };
         Ok(())
     })
@@ -1266,6 +1338,18 @@ mod tests {
     fn the_defaults_are_the_rust_defaults() {
         let converted = convert(&dmsaa_options_default()).expect("the defaults are valid");
         assert_eq!(converted.options, RetrofitOptions::default());
+        // Each layer mix constant is its own declaration (the list is
+        // indexed by the constants' values).
+        for (constant, want) in [
+            (DMSAA_LAYER_MIX_AUTO, LayerMix::Auto),
+            (DMSAA_LAYER_MIX_LINEAR, LayerMix::Linear),
+            (DMSAA_LAYER_MIX_TONEMAPPED, LayerMix::Tonemapped),
+            (DMSAA_LAYER_MIX_SRGB_ENCODED, LayerMix::SrgbEncoded),
+        ] {
+            let mut o = dmsaa_options_default();
+            o.layer_mix = constant;
+            assert_eq!(convert(&o).expect("valid").options.layer_mix, want);
+        }
         assert_eq!(converted.depth_mode, DepthMode::Standard);
         assert!(!converted.world_space);
     }

@@ -45,6 +45,15 @@ out vec4 o_specular;
 #ifdef OUT_EMISSIVE
 out vec4 o_emissive;
 #endif
+#ifdef OUT_MATERIAL
+out vec4 o_material;
+#endif
+#ifdef OUT_LINEAR_DEPTH
+out vec4 o_linear_depth;
+#endif
+#ifdef OUT_TINT
+out vec4 o_tint;
+#endif
 void main() {
 #ifdef OUT_COLOR
     o_color = vec4(v_color, 1.0);
@@ -60,6 +69,15 @@ void main() {
 #endif
 #ifdef OUT_EMISSIVE
     o_emissive = vec4(v_color * (40.0 * v_color.r * v_color.r), 1.0);
+#endif
+#ifdef OUT_MATERIAL
+    o_material = vec4(v_color.gbr * 0.5, 0.75);
+#endif
+#ifdef OUT_LINEAR_DEPTH
+    o_linear_depth = vec4(-v_view.z, 0.0, 0.0, 1.0);
+#endif
+#ifdef OUT_TINT
+    o_tint = vec4(v_color.rrg, 0.125);
 #endif
 }
 ";
@@ -90,6 +108,12 @@ pub enum Output {
     Specular,
     /// Emission up to 40× the colour.
     Emissive,
+    /// The colour's `gbr` halved, w 0.75 (an engine's material bytes).
+    Material,
+    /// The view-space distance `-z` in red (an engine's linear depth).
+    LinearDepth,
+    /// The colour's `rrg`, w 0.125.
+    Tint,
 }
 
 impl Output {
@@ -102,6 +126,10 @@ impl Output {
         Output::Emissive,
     ];
 
+    /// Three more, for wide G-buffers (engines with six to eight colour
+    /// attachments).
+    pub const WIDE: [Output; 3] = [Output::Material, Output::LinearDepth, Output::Tint];
+
     /// The name a G-buffer layout gives the attachment (`color`, ...).
     pub fn name(self) -> &'static str {
         match self {
@@ -110,12 +138,18 @@ impl Output {
             Output::Normal => "normal",
             Output::Specular => "specular",
             Output::Emissive => "emissive",
+            Output::Material => "material",
+            Output::LinearDepth => "linear_depth",
+            Output::Tint => "tint",
         }
     }
 
     /// The output named `name`, if the shader has it.
     pub fn from_name(name: &str) -> Option<Output> {
-        Output::ALL.into_iter().find(|o| o.name() == name)
+        Output::ALL
+            .into_iter()
+            .chain(Output::WIDE)
+            .find(|o| o.name() == name)
     }
 }
 
@@ -298,15 +332,26 @@ impl Host {
     /// then the triangles with `projection`. `reversed`: clear depth to 0
     /// and keep the greater depth.
     pub fn draw(&self, gl: &glow::Context, projection: &[f64; 16], reversed: bool) {
+        unsafe {
+            gl.viewport(0, 0, self.width as i32, self.height as i32);
+            gl.depth_mask(true);
+            gl.clear_color(0.0, 0.0, 0.0, 0.0);
+            gl.clear_depth_f64(if reversed { 0.0 } else { 1.0 });
+            gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
+        }
+        self.draw_without_clear(gl, projection, reversed);
+    }
+
+    /// [`Host::draw`] without its clear, for an engine that clears its
+    /// G-buffer elsewhere (through another framebuffer sharing its
+    /// textures, or per attachment with values of its own).
+    pub fn draw_without_clear(&self, gl: &glow::Context, projection: &[f64; 16], reversed: bool) {
         let m = crate::projection::to_f32(projection);
         unsafe {
             gl.viewport(0, 0, self.width as i32, self.height as i32);
             gl.enable(glow::DEPTH_TEST);
             gl.depth_func(if reversed { glow::GREATER } else { glow::LESS });
             gl.depth_mask(true);
-            gl.clear_color(0.0, 0.0, 0.0, 0.0);
-            gl.clear_depth_f64(if reversed { 0.0 } else { 1.0 });
-            gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
             self.program.bind(gl);
             self.program.set_mat4(gl, "u_projection", &m);
             self.vao.bind(gl);

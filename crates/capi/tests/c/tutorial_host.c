@@ -742,6 +742,8 @@ static DmsaaOptions tutorial_options(uint32_t layers)
     options.normal_attachment = 1;
     options.normal_encoding = DMSAA_NORMAL_XYZ;
     options.rules[1] = DMSAA_RULE_SELECT;
+    /* its lighting writes display values (no tonemap): mixed in linear light */
+    options.layer_mix = DMSAA_LAYER_MIX_SRGB_ENCODED;
     return options;
 }
 
