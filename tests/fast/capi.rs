@@ -423,3 +423,84 @@ fn the_glfw_tutorial_program_retrofitted_from_the_docs() {
         );
     }
 }
+
+/// A C engine written with the habits of a maintained GL 3.3 engine
+/// (`engine_host.c`): six colour attachments (octahedral `RG16` normals, a
+/// packed byte, a linear-depth `R16F` cleared to 65504) and a
+/// `DEPTH24_STENCIL8` texture, the G-buffer cleared through another
+/// framebuffer with its own values, lighting into `RGBA16F` with a linear
+/// tonemap. Set up as docs/hosts.md says for that style (two layers with
+/// every attachment kept at 8 draw buffers, the clear values declared and
+/// `dmsaa_begin_frame`, the radiance declared linear), two layers come to
+/// at most 0.7x its no-MSAA FLIP against its own 16x image, and 0.6x over
+/// the edge pixels of its frame.
+#[test]
+fn a_c_engine_with_six_attachments_retrofitted_from_the_docs() {
+    if Command::new("cc").arg("--version").output().is_err() {
+        common::skip("no C compiler: `cc` is not on PATH (scripts/setup installs gcc)");
+        return;
+    }
+    if let Err(e) = Backend::Egl.check_library() {
+        common::skip(&e.to_string());
+        return;
+    }
+    let (build, prefix) = install("capi-engine-build");
+    let src = build.join("src");
+    std::fs::create_dir_all(&src).expect("making the source folder");
+    for f in ["engine_host.c", "egl_gl.h"] {
+        std::fs::copy(sources().join(f), src.join(f)).expect("copying a C source");
+    }
+    let exe = build.join("engine_host");
+    run(
+        cc().arg("-I")
+            .arg(prefix.join("include"))
+            .arg(src.join("engine_host.c"))
+            .arg("-o")
+            .arg(&exe)
+            .arg(prefix.join("lib/libdeferred_msaa_capi.a"))
+            .arg("-lEGL")
+            .args(NATIVE_LIBS),
+        "compiling engine_host.c",
+    );
+    let images = build.join("images");
+    std::fs::create_dir_all(&images).expect("making the image folder");
+    let out = run(Command::new(&exe).arg(&images), "engine_host");
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    eprint!("{stdout}");
+    assert!(stdout.ends_with("ok\n"), "{stdout}");
+    let (w, h) = (320, 180);
+    let img = |name: &str| image(&images, name, w, h);
+    let reference = img("reference.rgba");
+    let edges = image::GrayImage::from_raw(
+        w,
+        h,
+        std::fs::read(images.join("edges.mask")).expect("edges.mask"),
+    )
+    .expect("a 320x180 mask");
+    let measure = |name: &str| {
+        let test = img(name);
+        let by_mask = deferred_msaa_lab::compare::flip_by_mask(&reference, &test, &edges)
+            .expect("same sizes");
+        (
+            error(&reference, &test),
+            by_mask.marked.expect("edge pixels"),
+        )
+    };
+    let (none, none_edges) = measure("none.rgba");
+    let (one, one_edges) = measure("msaa.rgba");
+    let (two, two_edges) = measure("layers.rgba");
+    eprintln!(
+        "C engine, FLIP mean against its 16x image (over its edge pixels): none {none:.4} ({none_edges:.4}), \
+         one layer {one:.4} ({one_edges:.4}), two layers {two:.4} ({two_edges:.4}): {:.2}x ({:.2}x)",
+        two / none,
+        two_edges / none_edges
+    );
+    assert!(
+        two <= 0.7 * none,
+        "two layers {two:.4} above 0.7x none {none:.4}"
+    );
+    assert!(
+        two_edges <= 0.6 * none_edges,
+        "two layers over edges {two_edges:.4} above 0.6x none {none_edges:.4}"
+    );
+}

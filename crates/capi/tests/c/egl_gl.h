@@ -23,6 +23,10 @@
  * GL_GLCOREARB_PROTOTYPES, so the names are free). */
 #define GL_FUNCTIONS(X)                                                        \
     X(PFNGLGETERRORPROC, glGetError)                                           \
+    X(PFNGLCLEARBUFFERFVPROC, glClearBufferfv)                                 \
+    X(PFNGLCLEARBUFFERFIPROC, glClearBufferfi)                                 \
+    X(PFNGLUNIFORM2FPROC, glUniform2f)                                         \
+    X(PFNGLSTENCILOPPROC, glStencilOp)                                         \
     X(PFNGLGETSTRINGPROC, glGetString)                                         \
     X(PFNGLGETINTEGERVPROC, glGetIntegerv)                                     \
     X(PFNGLGETINTEGERI_VPROC, glGetIntegeri_v)                                 \
