@@ -30,6 +30,11 @@
 //! method renders with every attachment of the layout instead of the
 //! scene-adaptive plan (see [`crate::renderer::plan`]): `median` against
 //! `median:full` shows what the plan saves (its `gbuffer_bytes`) and costs.
+//! `:mix=linear`, `:mix=tonemapped`, `:mix=srgb` or `:mix=curve` after a
+//! two-layer method declares what the renderer's lit values are for the
+//! second layer's mix (the renderer's own tonemap curve, `curve`, is what
+//! it does; the others measure a wrong declaration against the same
+//! reference): `median:layers=2:mix=linear`.
 //! `:forward` after a method that keeps the multisampled G-buffer
 //! (`average`, `front`, `median`, `back`, `per-sample`, `complex`) draws
 //! the transparent objects into the retrofit's multisampled forward target
@@ -122,8 +127,21 @@ impl MethodEntry {
     }
 
     fn has_option(&self, option: &str) -> bool {
+        self.options().any(|o| o == option)
+    }
+
+    fn options(&self) -> impl Iterator<Item = &str> {
         let body = self.label.split('+').next().unwrap_or("");
-        body.split(':').skip(1).any(|o| o == option)
+        body.split(':').skip(1)
+    }
+
+    /// The entry's `:mix=` declaration of the lit values for the second
+    /// layer's mix ([`RenderOptions::layer_mix`](crate::renderer::RenderOptions::layer_mix)),
+    /// `None` without one.
+    pub fn layer_mix(&self) -> Option<deferred_msaa::LayerMix> {
+        self.options()
+            .find_map(|o| o.strip_prefix("mix="))
+            .and_then(parse_mix)
     }
 }
 
@@ -166,10 +184,24 @@ impl FromStr for MethodEntry {
         };
         let mut parts = body.split(':');
         let name = parts.next().unwrap_or("");
-        // `:full` is about the layout and `:forward` about the forward
-        // passes, not the method: any entry takes them (the renderer
-        // refuses `:forward` where the method keeps no multisampled depth).
-        let options: Vec<&str> = parts.filter(|o| *o != "full" && *o != "forward").collect();
+        // `:full` is about the layout, `:forward` about the forward passes
+        // and `:mix=` about the lit values, not the method: any entry takes
+        // them (the renderer refuses `:forward` where the method keeps no
+        // multisampled depth).
+        let mut options: Vec<&str> = Vec::new();
+        for o in parts {
+            match o.strip_prefix("mix=") {
+                Some(v) => {
+                    if parse_mix(v).is_none() {
+                        return Err(Error::invalid(format!(
+                            "method `{label}`: unknown `mix={v}` (linear, tonemapped, srgb or curve: what the lit values are, for the second layer's mix)"
+                        )));
+                    }
+                }
+                None if o == "full" || o == "forward" => {}
+                None => options.push(o),
+            }
+        }
         let method = if name == "smaa" {
             // `smaa` is `none` with SMAA after the tonemap.
             if smaa.is_some() || fxaa {
@@ -192,6 +224,19 @@ impl FromStr for MethodEntry {
             smaa,
         })
     }
+}
+
+/// A `:mix=` value: `linear`, `tonemapped`, `srgb` ([`LayerMix::SrgbEncoded`](deferred_msaa::LayerMix::SrgbEncoded))
+/// or `curve` (the renderer's own tonemap, its default).
+fn parse_mix(v: &str) -> Option<deferred_msaa::LayerMix> {
+    use deferred_msaa::LayerMix;
+    Some(match v {
+        "linear" => LayerMix::Linear,
+        "tonemapped" => LayerMix::Tonemapped,
+        "srgb" => LayerMix::SrgbEncoded,
+        "curve" => LayerMix::Curve(crate::renderer::tonemap_curve()),
+        _ => return None,
+    })
 }
 
 /// Parse a comma-separated method list. Every entry must parse and appear
@@ -231,6 +276,23 @@ mod tests {
             AaMode::Resolve(s) => s,
             other => panic!("{other:?} is not a resolve"),
         }
+    }
+
+    #[test]
+    fn forward_and_mix_options_parse_beside_any_method() {
+        let e: MethodEntry = "median:layers=2:mix=linear:forward".parse().unwrap();
+        assert_eq!(e.layer_mix(), Some(deferred_msaa::LayerMix::Linear));
+        assert!(e.forward());
+        let e: MethodEntry = "median:layers=2:mix=srgb".parse().unwrap();
+        assert_eq!(e.layer_mix(), Some(deferred_msaa::LayerMix::SrgbEncoded));
+        assert!(!e.forward());
+        let e: MethodEntry = "median:layers=2".parse().unwrap();
+        assert_eq!(e.layer_mix(), None);
+        let err = "median:layers=2:mix=gamma"
+            .parse::<MethodEntry>()
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("mix=gamma") && !err.contains('\n'), "{err}");
     }
 
     #[test]

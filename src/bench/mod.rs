@@ -547,7 +547,14 @@ struct Pool {
 /// For a method whose frames build on the ones before (`taa`), its entry
 /// too: it gets a renderer of its own, whose history no other entry's
 /// `set_options` resets between its frames.
-type PoolKey = (&'static str, bool, bool, u32, (bool, bool), Option<String>);
+type PoolKey = (
+    &'static str,
+    bool,
+    bool,
+    u32,
+    (bool, bool, Option<String>),
+    Option<String>,
+);
 
 impl Pool {
     fn slot(
@@ -820,13 +827,18 @@ fn time_scene(
             // `:full`: every attachment of the layout, not the plan's.
             options.adaptive = !entry.full_layout();
             options.forward_msaa = entry.forward();
+            options.layer_mix = entry.layer_mix();
             options.validate()?;
             let key = (
                 entry.method.technique_name(),
                 entry.fxaa,
                 entry.smaa.is_some(),
                 requested,
-                (options.adaptive, options.forward_msaa),
+                (
+                    options.adaptive,
+                    options.forward_msaa,
+                    options.layer_mix.as_ref().map(|m| format!("{m:?}")),
+                ),
                 (entry.method.warmup_frames() > 0).then(|| entry.label.clone()),
             );
             let slot = pool.slot(ctx, scene, key, &options)?;

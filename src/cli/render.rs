@@ -258,6 +258,7 @@ impl RenderArgs {
             depth_mode: DepthMode::Auto,
             adaptive: !self.full_layout,
             forward_msaa: self.forward_msaa,
+            layer_mix: None,
             memory_budget: MemoryBudget {
                 bytes: self.memory_budget,
                 strict: self.strict_memory,

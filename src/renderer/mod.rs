@@ -96,6 +96,13 @@ mod taa;
 mod targets;
 pub mod technique;
 mod tonemap;
+
+/// The demo renderer's tonemap curve and its inverse as GLSL, for
+/// [`LayerMix::Curve`](deferred_msaa::LayerMix::Curve): the declaration of
+/// its lit values it makes by default ([`RenderOptions::layer_mix`]).
+pub fn tonemap_curve() -> String {
+    tonemap::layer_mix_curve()
+}
 mod transparent;
 
 use crate::frame::{DepthMode as ResolveDepthMode, Frame as ResolveFrame};

@@ -223,6 +223,12 @@ pub struct RenderOptions {
     /// Default: `false`: forward objects are drawn single-sampled against
     /// the resolved depth.
     pub forward_msaa: bool,
+    /// With two layers: what the renderer declares its lit values to be
+    /// for the mix ([`LayerMix`]). `None` (the default): its own tonemap
+    /// curve ([`LayerMix::Curve`]), the declaration that matches what it
+    /// does; the bench's `:mix=linear`, `:mix=tonemapped` and `:mix=srgb`
+    /// measure the others against the same reference.
+    pub layer_mix: Option<LayerMix>,
 }
 
 impl Default for RenderOptions {
@@ -243,6 +249,7 @@ impl Default for RenderOptions {
             memory_budget: MemoryBudget::default(),
             depth_mode: DepthMode::Auto,
             forward_msaa: false,
+            layer_mix: None,
         }
     }
 }
@@ -345,7 +352,10 @@ impl RenderOptions {
                     attachment: ColorAttachment(slots.normal),
                     encoding: NormalEncoding::Xyz,
                 }),
-            layer_mix: LayerMix::Curve(super::tonemap::layer_mix_curve()),
+            layer_mix: self
+                .layer_mix
+                .clone()
+                .unwrap_or_else(|| LayerMix::Curve(super::tonemap::layer_mix_curve())),
             ..RetrofitOptions::default()
         }
     }
