@@ -9,15 +9,21 @@
 //  2. The history there, Catmull-Rom filtered from 4x4 texels (a bilinear
 //     tap would blur the history a little more on every frame the camera
 //     moves; at a texel centre the filter returns the texel itself).
-//  3. Variance clipping: in YCoCg, the box of mean +- u_gamma standard
-//     deviations of this frame's 3x3 neighbourhood, within its min-max
-//     box; the history is pulled towards the box's centre until it lies
-//     inside it, so a colour this frame does not show near the pixel
-//     (a surface that was disoccluded) cannot linger. It applies in
-//     proportion to the pixel's motion, whole from u_rectify_px pixels a
-//     frame: with static geometry and lights, a pixel that has not moved
-//     has nothing to reject.
-//  4. An exponential blend: u_alpha of this frame, the rest history.
+//  3. Variance clipping, of every pixel: in YCoCg, the box of mean +-
+//     u_gamma standard deviations of this frame's 3x3 neighbourhood,
+//     within its min-max box; the history is pulled towards the box's
+//     centre until it lies inside it, so a colour this frame does not show
+//     near the pixel cannot linger. That holds where the pixel itself
+//     barely moves too: a far background a thin bar has just left holds
+//     the bar in its history, a disocclusion no shipped TAA keeps.
+//  4. A blend by confidence: the history's alpha counts the frames it
+//     accumulated; this frame weighs 1 / count (a running mean), but at
+//     least u_alpha where the pixel moves and u_alpha_still where it does
+//     not, so a still camera converges on many phases while a moving one
+//     keeps up.
+//  The motion comes from the nearest surface of the 3x3 neighbourhood
+//  (velocity dilation): an edge pixel whose own sample is the background
+//  reprojects with the object in front of it, as the history there does.
 //  Where the reprojected point leaves the screen or lies behind the
 //  previous camera, and on the first frame, the history is reset to this
 //  frame.
@@ -38,7 +44,7 @@ uniform int u_has_history;     // 0 on the first frame after a reset
 uniform int u_zero_to_one;     // 1: NDC z is the depth value (reversed-Z); 0: z = 2 depth - 1
 uniform float u_alpha;         // weight of this frame
 uniform float u_gamma;         // half-size of the clip box in standard deviations
-uniform float u_rectify_px;    // motion (pixels per frame) from which the clip is whole
+uniform float u_alpha_still;   // the least weight of this frame where the pixel does not move
 
 out vec4 o_color;
 #ifndef TAA_REPROJECTED
@@ -92,20 +98,39 @@ vec3 clip_to_box(vec3 h, vec3 lo, vec3 hi) {
     return outside > 1.0 ? centre + d / outside : h;
 }
 
+// This frame's unjittered NDC z of pixel `q`'s depth.
+float ndc_z(ivec2 q) {
+    float depth = texelFetch(u_depth, q, 0).r;
+    return u_zero_to_one != 0 ? depth : 2.0 * depth - 1.0;
+}
+
 void main() {
     ivec2 size = textureSize(u_current, 0);
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec3 current = current_at(p, size);
 
-    // 1. Where this pixel's surface was in the previous frame.
-    vec2 ndc = (vec2(p) + 0.5) / vec2(size) * 2.0 - 1.0;
-    float depth = texelFetch(u_depth, p, 0).r;
-    float z = u_zero_to_one != 0 ? depth : 2.0 * depth - 1.0;
-    vec4 previous = u_reproject * vec4(ndc, z, 1.0);
+    // 1. Where this pixel's surface was in the previous frame, moved as
+    // the nearest surface of its neighbourhood moved.
+    ivec2 nearest = p;
+    float nearest_z = ndc_z(p);
+    for (int j = -1; j <= 1; ++j) {
+        for (int i = -1; i <= 1; ++i) {
+            ivec2 q = clamp(p + ivec2(i, j), ivec2(0), size - 1);
+            float z = ndc_z(q);
+            // Reversed-Z (zero-to-one) keeps the nearest at the largest value.
+            bool nearer = u_zero_to_one != 0 ? z > nearest_z : z < nearest_z;
+            nearest = nearer ? q : nearest;
+            nearest_z = nearer ? z : nearest_z;
+        }
+    }
+    vec2 nearest_ndc = (vec2(nearest) + 0.5) / vec2(size) * 2.0 - 1.0;
+    vec4 previous = u_reproject * vec4(nearest_ndc, nearest_z, 1.0);
     bool found = u_has_history != 0 && previous.w > 0.0;
     vec2 previous_px = vec2(-1.0);
+    vec2 motion = vec2(0.0);
     if (found) {
-        previous_px = (previous.xy / previous.w * 0.5 + 0.5) * vec2(size);
+        motion = (previous.xy / previous.w * 0.5 + 0.5) * vec2(size) - (vec2(nearest) + 0.5);
+        previous_px = vec2(p) + 0.5 + motion;
         found = all(greaterThanEqual(previous_px, vec2(0.0)))
             && all(lessThanEqual(previous_px, vec2(size)));
     }
@@ -115,9 +140,11 @@ void main() {
     o_color = vec4(srgb_encode(clamp(shown, 0.0, 1.0)), found ? 1.0 : 0.0);
 #else
     vec3 result = current;
+    float count = 1.0;
     if (found) {
-        // 2. The history.
+        // 2. The history, and how many frames it holds.
         vec3 history = to_ycocg(history_at(previous_px, size));
+        float held = texelFetch(u_history, clamp(ivec2(previous_px), ivec2(0), size - 1), 0).a;
         // 3. The neighbourhood's box in YCoCg.
         vec3 m1 = vec3(0.0);
         vec3 m2 = vec3(0.0);
@@ -136,18 +163,14 @@ void main() {
         vec3 sigma = sqrt(max(m2 / 9.0 - m1 * m1, vec3(0.0)));
         vec3 box_lo = max(m1 - u_gamma * sigma, lo);
         vec3 box_hi = min(m1 + u_gamma * sigma, hi);
-        vec3 clipped = clip_to_box(history, box_lo, box_hi);
-        // In a static scene a pixel whose surface has not moved holds a
-        // history that is right by construction: the clip would only
-        // throw away the sub-pixel detail the jitter gathered (a wire one
-        // phase misses would flicker). Rectification fades in with the
-        // pixel's motion and is whole from u_rectify_px on.
-        float motion = length(previous_px - (vec2(p) + 0.5));
-        history = from_ycocg(mix(history, clipped, clamp(motion / u_rectify_px, 0.0, 1.0)));
-        // 4. The blend.
-        result = mix(max(history, vec3(0.0)), current, u_alpha);
+        history = from_ycocg(clip_to_box(history, box_lo, box_hi));
+        // 4. The blend: a running mean, floored by the pixel's motion.
+        count = clamp(held, 1.0, 1024.0) + 1.0;
+        float least = length(motion) < 0.01 ? u_alpha_still : u_alpha;
+        float weight = max(1.0 / count, least);
+        result = mix(max(history, vec3(0.0)), current, weight);
     }
-    o_history = vec4(result, 1.0);
+    o_history = vec4(result, count);
     o_color = vec4(srgb_encode(clamp(result, 0.0, 1.0)), 1.0);
 #endif
 }

@@ -28,10 +28,10 @@ pub(crate) const CURRENT_FORMAT: Format = Format::Srgb8Alpha8;
 /// the neighbourhood (Salvi's variance clipping; 1 is the usual choice).
 pub(crate) const GAMMA: f32 = 1.0;
 
-/// The motion, in pixels per frame, from which a pixel's history is
-/// clipped whole; below it the clip fades out towards a still pixel,
-/// whose history (static geometry and lights) has nothing to reject.
-pub(crate) const RECTIFY_PX: f32 = 0.5;
+/// The least weight of this frame where a pixel does not move, as a share
+/// of `alpha` (0.015 at the default 0.1): a still camera averages many
+/// jitter phases, a running mean until it holds that many.
+pub(crate) const STILL_ALPHA_SHARE: f32 = 0.15;
 
 /// The options of [`AaMode::Taa`](super::AaMode::Taa), as `taa:alpha=F:phases=N` spells them.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -210,7 +210,7 @@ impl TaaPasses {
         p.set_i32(gl, "u_zero_to_one", i32::from(inputs.zero_to_one));
         p.set_f32(gl, "u_alpha", inputs.alpha);
         p.set_f32(gl, "u_gamma", GAMMA);
-        p.set_f32(gl, "u_rectify_px", RECTIFY_PX);
+        p.set_f32(gl, "u_alpha_still", inputs.alpha * STILL_ALPHA_SHARE);
         draw_fullscreen(gl, vao);
         unsafe { gl.active_texture(glow::TEXTURE0) };
         Ok(check_error(gl, "the taa resolve")?)

@@ -416,6 +416,86 @@ fn the_neighbourhood_clip_keeps_a_disoccluded_surface_from_ghosting() {
     assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
 }
 
+/// A thin bright bar in front of a far dark wall moves away over it (the
+/// camera pans: the bar moves 3 pixels a frame, the wall, 40 times as far,
+/// a fifteenth of a pixel). The wall's pixels barely move, so the history
+/// the resolve finds there is the bar's; the neighbourhood clip of every
+/// pixel, whatever its own motion, leaves no trail after one frame: every
+/// pixel the bar uncovered and no longer touches is the wall's colour, as
+/// the frame rendered without history shows it.
+#[test]
+fn a_bar_moving_away_over_a_far_wall_leaves_no_trail() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let far = 40.0 * DEPTH;
+    let wall = quad(
+        "far wall".into(),
+        (-60.0, -60.0, W as f32 + 60.0, H as f32 + 60.0),
+        -far,
+        0,
+    );
+    let bar = quad(
+        "bar".into(),
+        (20.0, -4.0, 23.0, H as f32 + 4.0),
+        -DEPTH / 2.0,
+        1,
+    );
+    let mut two = scene(
+        "taa trail",
+        vec![wall, bar],
+        vec![emissive([0.03, 0.03, 0.05]), emissive([1.0, 0.95, 0.8])],
+    );
+    two.camera = Camera::look_at(Vec3::ZERO, Vec3::NEG_Z, FOV_Y, 0.5, Some(2.0 * far));
+    let mut renderer = Renderer::new(
+        gl,
+        |name| ctx.get_proc_address(name),
+        &two,
+        &taa_options(DepthMode::Auto),
+    )
+    .expect("renderer");
+    for _ in 0..8 {
+        renderer.render(gl).expect("still frames");
+    }
+    let before = renderer.read_final(gl).expect("before");
+    // 1.5 pixels of the plane at DEPTH: the bar, at half that depth, moves 3.
+    renderer.set_camera(moved(&two, 1.5, 0.0));
+    renderer.render(gl).expect("moved frame");
+    let after = renderer.read_final(gl).expect("after");
+    let wall_colour = *before.get_pixel(2, 2);
+    let bright = |p: &image::Rgba<u8>| p[0] > 60;
+    let (mut uncovered, mut trail) = (0, Vec::new());
+    for (x, y, p) in after.enumerate_pixels() {
+        let (xi, yi) = (i64::from(x), i64::from(y));
+        let was_bar = bright(before.get_pixel(x, y));
+        // Now at least two pixels from any bright pixel of this frame's
+        // own bar (its edges blend with the wall).
+        let near_bar = (-2..=2).any(|dx: i64| {
+            let nx = xi + dx;
+            nx >= 0 && nx < i64::from(W) && yi >= 0 && bright(after.get_pixel(nx as u32, y))
+        });
+        if was_bar && !near_bar {
+            uncovered += 1;
+            if (0..3).any(|c| p[c].abs_diff(wall_colour[c]) > 2) {
+                trail.push(format!("({x}, {y}): {p:?}, the wall is {wall_colour:?}"));
+            }
+        }
+    }
+    eprintln!(
+        "{uncovered} pixels the bar uncovered, {} with a trail",
+        trail.len()
+    );
+    assert!(uncovered >= 20, "only {uncovered} pixels uncovered");
+    assert!(
+        trail.is_empty(),
+        "a trail behind the bar: {:#?}",
+        &trail[..trail.len().min(6)]
+    );
+    renderer.destroy(gl);
+    assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
+}
+
 /// Blend factors outside (0, 1], phase counts outside 2..=256 and unknown
 /// options are one-line errors naming the entry, from the method parser,
 /// the bench's list and the renderer's options alike.
