@@ -18,6 +18,7 @@ mod gl_layer;
 mod gltf_sources;
 mod goldens;
 mod host_equivalence;
+mod misuse;
 mod plan;
 mod property;
 mod reliability;

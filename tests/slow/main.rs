@@ -11,4 +11,5 @@ mod common;
 mod bench;
 mod examples;
 mod first_run;
+mod misuse;
 mod property;

@@ -695,6 +695,26 @@ pub unsafe extern "C" fn dmsaa_retrofit_new(
                  resolve into; pass the G-buffer framebuffer the geometry pass draws into"
             )));
         };
+        let loader = |name: &str| match CString::new(name) {
+            // SAFETY: the header requires a loader for the context current
+            // on this thread, called with a NUL-terminated name.
+            Ok(name) => unsafe { load(name.as_ptr(), user_data) },
+            Err(_) => std::ptr::null(),
+        };
+        // glow keeps a null pointer and panics only when it is called, in
+        // the middle of a pass: every function is checked first.
+        let missing = |name: &str| {
+            Failure::new(
+                DmsaaStatus::Unsupported,
+                format!(
+                    "{F}: the loader returns null for {name}, which the library calls; \
+                     nothing was made or changed"
+                ),
+            )
+        };
+        if let Some(name) = deferred_msaa::gl::first_missing_function(loader) {
+            return Err(missing(name));
+        }
         // SAFETY: the loader returns entry points of the context current
         // on this thread, as the header requires.
         let gl = unsafe {
@@ -702,6 +722,10 @@ pub unsafe extern "C" fn dmsaa_retrofit_new(
                 load(name.as_ptr(), user_data)
             })
         };
+        if let Some(name) = deferred_msaa::gl::first_missing_conditional_function(&gl, loader) {
+            return Err(missing(name));
+        }
+        deferred_msaa::gl::load_state_functions(loader)?;
         let host = deferred_msaa::glow::NativeFramebuffer(fbo);
         let retrofit = MsaaRetrofit::new(&gl, host, &converted.options)?;
         let handle = Box::new(DmsaaRetrofit {

@@ -219,6 +219,12 @@ pub(crate) fn introspect_point(
                     "texture {raw} is attached at mip level {level}; only level 0 can be retrofitted"
                 )));
             }
+            if !unsafe { gl.is_texture(texture) } {
+                return Err(refuse(format!(
+                    "texture {raw} was deleted (glIsTexture is false) and is still attached; \
+                     attach a texture that exists"
+                )));
+            }
             let target = texture_target(gl, texture);
             let image = match target {
                 Some(glow::TEXTURE_2D) => HostImageKind::Texture2d(texture),
@@ -257,6 +263,12 @@ pub(crate) fn introspect_point(
             let rb = std::num::NonZeroU32::new(raw)
                 .map(glow::NativeRenderbuffer)
                 .ok_or_else(|| refuse("the driver reports renderbuffer 0".into()))?;
+            if !unsafe { gl.is_renderbuffer(rb) } {
+                return Err(refuse(format!(
+                    "renderbuffer {raw} was deleted (glIsRenderbuffer is false) and is still \
+                     attached; attach a renderbuffer that exists"
+                )));
+            }
             let (internal, w, h, samples) = unsafe {
                 gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
                 let p = |pname| gl.get_renderbuffer_parameter_i32(glow::RENDERBUFFER, pname);
@@ -311,11 +323,19 @@ pub(crate) fn introspect_point(
 /// Read a host framebuffer's attachments, formats, sizes and draw-buffer
 /// mapping. The host's bindings are left as they were.
 pub fn introspect(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFramebuffer> {
-    let host = SetupState::capture(gl);
+    // Binding a name that is not a framebuffer is `GL_INVALID_OPERATION`
+    // (and every query after it reads the host's own binding): say so.
+    if !unsafe { gl.is_framebuffer(fbo) } {
+        return Err(Error::invalid(format!(
+            "host framebuffer {} is not a framebuffer object (glIsFramebuffer is false: never \
+             bound since glGenFramebuffers, or deleted); pass the G-buffer framebuffer the \
+             geometry pass draws into",
+            fbo.0
+        )));
+    }
+    let _host = SetupState::capture(gl).guard(gl);
     unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo)) };
-    let result = introspect_bound(gl, fbo);
-    host.restore(gl);
-    result
+    introspect_bound(gl, fbo)
 }
 
 fn introspect_bound(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFramebuffer> {

@@ -12,7 +12,7 @@ use crate::frame::Frame;
 use crate::gbuffer::{MemoryBudget, MultisampleTwin, TwinSpec, budget_twins};
 use crate::gl::Texture2d;
 use crate::gl::{
-    Attachment, ColorAttachment, Format, Framebuffer, GlObject, Handle, HostImage, Made,
+    Attachment, ColorAttachment, Format, Framebuffer, GlObject, Handle, HostImage, Made, Owned,
     SavedState, SetupState, TextureRef, check_error, destroy_object,
 };
 pub use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect};
@@ -369,6 +369,25 @@ fn check_stencil_copy_point(gl: &glow::Context, host: &HostFramebuffer) -> Resul
     })
 }
 
+/// Before a public call's GL calls: an error the host left pending is not
+/// the call's; it is logged and cleared, so that [`settle`] sees the call's
+/// own.
+fn clear_host_errors(gl: &glow::Context) {
+    if let Err(e) = check_error(gl, "the host's GL calls before this call") {
+        log::warn!("{e}");
+    }
+}
+
+/// The end of a public call, after the host's state is back: any GL error
+/// the call's own GL calls left pending is drained, so that none is left for
+/// the host whatever the result; after a call that succeeded it is the
+/// call's error.
+fn settle<T>(gl: &glow::Context, stage: &str, result: Result<T>) -> Result<T> {
+    let pending = check_error(gl, stage);
+    let value = result?;
+    pending.map(|()| value)
+}
+
 impl MsaaRetrofit {
     /// Introspect `host_fbo`, build its multisampled twins under
     /// `options` and compile the resolve's programs.
@@ -382,10 +401,11 @@ impl MsaaRetrofit {
         host_fbo: glow::Framebuffer,
         options: &RetrofitOptions,
     ) -> Result<Self> {
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        let host = SetupState::capture(gl).guard(gl);
         let result = Self::create(gl, host_fbo, options);
-        host.restore(gl);
-        result
+        drop(host);
+        settle(gl, "making the retrofit", result)
     }
 
     fn create(
@@ -397,25 +417,25 @@ impl MsaaRetrofit {
             let resolver = made.keep(Resolver::new(gl)?);
             Ok::<_, Error>((resolver, Self::build(gl, host_fbo, options)?))
         })?;
-        let mut retrofit = MsaaRetrofit {
-            host: built.host,
-            options: options.clone(),
-            twin: built.twin,
-            target: built.target,
-            rules: built.rules,
-            key: built.key,
-            resolver,
-            warnings: built.warnings,
-            stencil: built.stencil,
-            normal: built.normal,
-            second: built.second,
-            profile: StepProfile::default(),
-        };
-        if let Err(e) = retrofit.prepare(gl) {
-            retrofit.destroy(gl);
-            return Err(e);
-        }
-        Ok(retrofit)
+        let mut retrofit = Owned::new(
+            gl,
+            MsaaRetrofit {
+                host: built.host,
+                options: options.clone(),
+                twin: built.twin,
+                target: built.target,
+                rules: built.rules,
+                key: built.key,
+                resolver,
+                warnings: built.warnings,
+                stencil: built.stencil,
+                normal: built.normal,
+                second: built.second,
+                profile: StepProfile::default(),
+            },
+        );
+        retrofit.prepare(gl)?;
+        Ok(retrofit.into_inner())
     }
 
     /// The sample count `budget` allows for twins of `host`'s attachments.
@@ -672,10 +692,11 @@ impl MsaaRetrofit {
             ),
             Some(params) => {
                 let selected = profile.time(gl, "second layer: selection", || {
-                    let state = SavedState::capture(gl, 1);
-                    let selected = second.select(gl, params.projection.clear_depth as f32);
-                    state.restore(gl);
-                    selected
+                    let mut state = SavedState::capture(gl, 1);
+                    // The selection sets the stencil function.
+                    state.keep_stencil_func(gl)?;
+                    let _state = state.guard(gl);
+                    second.select(gl, params.projection.clear_depth as f32)
                 });
                 profile.time(gl, "second layer: resolve", || {
                     self.resolver.run_second_layer(
@@ -838,6 +859,11 @@ impl MsaaRetrofit {
     /// Resolve the twins into the host's textures: call it after the
     /// geometry pass, before the host's lighting reads its G-buffer.
     pub fn resolve(&mut self, gl: &glow::Context, frame: &Frame) -> Result<()> {
+        if self.second.as_ref().is_some_and(|s| s.lighting) {
+            return Err(Error::invalid(
+                "resolve was called between begin_second_layer and finish_second_layer",
+            ));
+        }
         let params = self.params(frame)?;
         let extra = self.extra_outputs();
         // A frame begins: its profile replaces the last one's.
@@ -845,7 +871,7 @@ impl MsaaRetrofit {
         profile.clear();
         let result = self.resolve_profiled(gl, &params, extra, &mut profile);
         self.profile = profile;
-        result
+        settle(gl, "resolving", result)
     }
 
     fn resolve_profiled(
@@ -919,7 +945,8 @@ impl MsaaRetrofit {
         let Some(second) = &mut self.second else {
             return Ok(false);
         };
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        let host = SetupState::capture(gl).guard(gl);
         let profile = &mut self.profile;
         let mut result = second.begin(gl, output, self.options.restore_first_layer, profile);
         // The host's stencil, for its lighting's tests: the second
@@ -934,8 +961,8 @@ impl MsaaRetrofit {
                 s.pass.run(gl, depth, &self.twin.fbo, reference, &s.target)
             });
         }
-        host.restore(gl);
-        result.map(|()| true)
+        drop(host);
+        settle(gl, "beginning the second layer", result.map(|()| true))
     }
 
     /// After the host lit the second layer into `output` (the one given to
@@ -955,10 +982,14 @@ impl MsaaRetrofit {
                 "finish_second_layer needs two layers (ResolveSettings::layers = 2)",
             ));
         };
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        let mut host = SetupState::capture(gl);
+        // The mix tests the selection's stencil.
+        host.keep_stencil_func(gl)?;
+        let host = host.guard(gl);
         let result = second.finish(gl, output, &mut self.profile);
-        host.restore(gl);
-        result
+        drop(host);
+        settle(gl, "finishing the second layer", result)
     }
 
     /// The second layer's coverage `α = n2 / (n1 + n2)` per pixel (R16F, in
@@ -1029,10 +1060,11 @@ impl MsaaRetrofit {
     /// the new twins); the programs whenever the resolve's permutation
     /// changes. On error the retrofit keeps working with the options it had.
     pub fn set_options(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        let host = SetupState::capture(gl).guard(gl);
         let result = self.change_options(gl, options);
-        host.restore(gl);
-        result
+        drop(host);
+        settle(gl, "changing the options", result)
     }
 
     fn change_options(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
@@ -1076,10 +1108,11 @@ impl MsaaRetrofit {
     }
 
     fn rebuild(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        let host = SetupState::capture(gl).guard(gl);
         let result = self.rebuild_within(gl, options);
-        host.restore(gl);
-        result
+        drop(host);
+        settle(gl, "rebuilding the twins", result)
     }
 
     /// Put `built` in place of what the retrofit was built with; that is
@@ -1101,16 +1134,18 @@ impl MsaaRetrofit {
 
     fn rebuild_within(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
         let built = Self::build(gl, self.host.fbo, options)?;
-        let old = self.swap_built(built);
+        // Freed when this returns, or if the compilation panics; taken back
+        // if it fails.
+        let old = Owned::new(gl, self.swap_built(built));
         let old_options = std::mem::replace(&mut self.options, options.clone());
         match self.prepare(gl) {
             Ok(()) => {
-                old.destroy(gl);
+                drop(old);
                 Ok(())
             }
             Err(e) => {
                 // Put the working twins back.
-                self.swap_built(old).destroy(gl);
+                self.swap_built(old.into_inner()).destroy(gl);
                 self.options = old_options;
                 Err(e)
             }

@@ -135,7 +135,10 @@ impl StencilPass {
         reference: &Texture2d,
         target: &Framebuffer,
     ) -> Result<()> {
-        let state = SavedState::capture(gl, 2);
+        let mut state = SavedState::capture(gl, 2);
+        // The passes set the stencil function.
+        state.keep_stencil_func(gl)?;
+        let state = state.guard(gl);
         let clear = unsafe { gl.get_parameter_i32(glow::STENCIL_CLEAR_VALUE) };
         let result = match &self.program {
             None => unsafe {
@@ -198,7 +201,7 @@ impl StencilPass {
                 Ok(())
             },
         };
-        state.restore(gl);
+        drop(state);
         // The bit passes cleared with 0; the host's clear value comes back.
         unsafe { gl.clear_stencil(clear) };
         result.and_then(|()| check_error(gl, "copying the host's stencil"))
