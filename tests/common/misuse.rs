@@ -782,6 +782,15 @@ pub fn take_stats() -> String {
     })
 }
 
+/// Whether a failed `dmsaa_retrofit_new` was refused by the C layer's own
+/// checks, which come before any GL call (null pointers, options out of
+/// range, a zero framebuffer): every refusal after those is GL's.
+fn before_gl(status: c::DmsaaStatus, message: &str) -> bool {
+    status == c::DmsaaStatus::NullPointer
+        || (status == c::DmsaaStatus::InvalidArgument
+            && !message.contains("is not a framebuffer object"))
+}
+
 /// What the loader is given as user data.
 struct Loader<'a> {
     context: &'a HeadlessContext,
@@ -1003,11 +1012,9 @@ impl Run<'_> {
         }
         if let Some(name) = needed {
             let message = last_error();
-            // The C layer's own checks (options, a zero framebuffer) come
-            // before any GL call; every other way fails naming the function.
-            let argument = status == c::DmsaaStatus::InvalidArgument
-                && !message.contains("not a framebuffer object");
-            if !argument && (status != c::DmsaaStatus::Unsupported || !message.contains(name)) {
+            if !before_gl(status, &message)
+                && (status != c::DmsaaStatus::Unsupported || !message.contains(name))
+            {
                 self.fail(
                     index,
                     format!("a loader without {name}: {status:?}, {message:?}"),
@@ -1016,9 +1023,8 @@ impl Run<'_> {
         }
         if fbo == Fbo::NotAFramebuffer
             && missing.is_none()
-            && status != c::DmsaaStatus::NullPointer
-            && !last_error().contains("not a framebuffer")
-            && !last_error().contains("DmsaaOptions")
+            && !before_gl(status, &last_error())
+            && !last_error().contains("is not a framebuffer object")
         {
             self.fail(
                 index,

@@ -6,7 +6,7 @@
 //! to the calls that still fail and the command that replays it:
 //! `DEFERRED_MSAA_MISUSE_REPLAY=SEED:i,j,k cargo test --test slow
 //! misuse -- --ignored --nocapture`. `DEFERRED_MSAA_MISUSE_SEQUENCES` sets
-//! how many (2000 by default).
+//! how many (5000 by default).
 
 use crate::common;
 use crate::common::misuse::{Sequence, replay_value, run_sequence, shrink};
@@ -58,7 +58,7 @@ fn child(range: &str) {
             continue;
         }
         let (keep, shrunk) = shrink(&ctx, &s);
-        let mut report = format!(
+        let report = format!(
             "sequence {seed} failed: {}\nshrunk to {} call(s):\n{}{}\nreplay: {REPLAY}={} cargo test --test slow misuse -- --ignored --nocapture",
             failures.first().map_or("", String::as_str),
             keep.len(),
@@ -66,8 +66,9 @@ fn child(range: &str) {
             shrunk.join("\n"),
             replay_value(seed, &keep)
         );
-        report = report.replace('\n', "\n  | ");
-        println!("misuse report {report}");
+        for line in report.lines() {
+            println!("misuse report {seed} {line}");
+        }
         println!("misuse end {seed} failed");
     }
 }
@@ -99,7 +100,8 @@ fn spawn(range: &str) -> (Child, mpsc::Receiver<String>) {
 #[derive(Default)]
 struct Outcome {
     passed: u64,
-    reports: Vec<String>,
+    /// Each failed sequence's report, by seed.
+    reports: std::collections::BTreeMap<u64, String>,
     crashed: Vec<(u64, String)>,
     hung: Vec<u64>,
 }
@@ -123,7 +125,11 @@ fn run_range(start: u64, end: u64, outcome: &mut Outcome) {
                 *current = None;
                 *next = seed + 1;
             } else if let Some(report) = line.strip_prefix("misuse report ") {
-                outcome.reports.push(report.replace("\n  | ", "\n"));
+                let (seed, text) = report.split_once(' ').unwrap_or((report, ""));
+                let seed: u64 = seed.parse().expect("a seed");
+                let entry = outcome.reports.entry(seed).or_default();
+                entry.push_str(text);
+                entry.push('\n');
             }
         };
         let ended = loop {
@@ -232,7 +238,7 @@ fn random_call_sequences_keep_the_hosts_state_in_child_processes() {
     let total: u64 = std::env::var(SEQUENCES)
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(2000);
+        .unwrap_or(5000);
     let workers = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
         .clamp(1, 2) as u64;
@@ -270,7 +276,7 @@ fn random_call_sequences_keep_the_hosts_state_in_child_processes() {
         all.crashed.len(),
         all.hung.len()
     );
-    let mut problems = all.reports.clone();
+    let mut problems: Vec<String> = all.reports.values().cloned().collect();
     for (seed, status) in &all.crashed {
         let keep = shrink_crash(*seed);
         problems.push(format!(
