@@ -1,5 +1,7 @@
 //! The C API's misuse fuzzer: random call sequences over a real context,
-//! with the host's GL state compared around every call.
+//! with the host's GL state compared around every call. One sequence in
+//! three drives the Rust API (`MsaaRetrofit`) the same way, leaving out
+//! what its types cannot express ([`Api::Rust`]).
 //!
 //! A sequence is drawn from a `u64` seed (the kit's `Rng`): a host
 //! G-buffer (one to three colour attachments, depth with or without
@@ -29,6 +31,12 @@
 //! child processes (a crash or a hang is that sequence's) and prints each
 //! failure's shrunk sequence with the command that replays it.
 
+use deferred_msaa::gbuffer::MemoryBudget;
+use deferred_msaa::resolve::{NormalEncoding, ResolveMethod, ResolveRule, StencilCopy, Window};
+use deferred_msaa::{
+    ColorAttachment, DepthMode, FirstLayerRestore, Frame, LayerMix, MsaaRetrofit, NormalAttachment,
+    PositionSpace, RetrofitOptions,
+};
 use deferred_msaa_capi as c;
 use deferred_msaa_lab::context::HeadlessContext;
 use deferred_msaa_testkit::{Rng, projection};
@@ -159,11 +167,24 @@ pub fn loader_names() -> Vec<&'static str> {
         .collect()
 }
 
+/// The API a sequence drives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Api {
+    /// The C entry points.
+    C,
+    /// `MsaaRetrofit` itself; steps the Rust types cannot express (null
+    /// pointers, a zero framebuffer, a loader, enumeration values out of
+    /// range) are left out.
+    Rust,
+}
+
 /// A sequence: its host and its calls.
 #[derive(Clone, Debug)]
 pub struct Sequence {
     /// The seed it was drawn from.
     pub seed: u64,
+    /// The API it drives.
+    pub api: Api,
     /// Colour attachments (1 to 3).
     pub colors: usize,
     /// Depth with stencil.
@@ -316,6 +337,8 @@ impl Sequence {
         }
         Sequence {
             seed,
+            // One sequence in three drives the Rust API.
+            api: if seed % 3 == 2 { Api::Rust } else { Api::C },
             colors,
             stencil,
             ops,
@@ -333,8 +356,9 @@ impl Sequence {
     /// One call a line, numbered.
     pub fn describe(&self) -> String {
         let mut s = format!(
-            "seed {}: {} colour attachment(s), depth {}\n",
+            "seed {} ({:?} API): {} colour attachment(s), depth {}\n",
             self.seed,
+            self.api,
             self.colors,
             if self.stencil {
                 "GL_DEPTH24_STENCIL8"
@@ -770,6 +794,15 @@ thread_local! {
         Default::default();
 }
 
+/// How many library calls were checked on this thread since the last
+/// time this was asked.
+pub fn take_call_count() -> u64 {
+    STATS.with(|s| {
+        let s = std::mem::take(&mut *s.borrow_mut());
+        s.values().map(|(ok, other)| ok + other).sum()
+    })
+}
+
 /// The calls made on this thread since the last call, by name: OK and
 /// other statuses, one line.
 pub fn take_stats() -> String {
@@ -857,6 +890,12 @@ struct Run<'a> {
     context: &'a HeadlessContext,
     host: Host,
     slots: [Option<Handle>; 2],
+    /// The Rust API's handles, for a sequence of [`Api::Rust`].
+    retrofits: [Option<(MsaaRetrofit, c::DmsaaOptions)>; 2],
+    api: Api,
+    /// A Rust API call is under way: its message is its error's, checked by
+    /// [`Run::call_rust`], not `dmsaa_last_error`.
+    in_rust_call: bool,
     failures: Vec<String>,
 }
 
@@ -893,6 +932,13 @@ impl Run<'_> {
         }
         let before = GlState::capture(gl);
         let status = f(self);
+        // A Rust call's outcome, by its own words.
+        let outcome = match (self.in_rust_call, status) {
+            (false, status) => format!("{status:?}"),
+            (true, c::DmsaaStatus::Ok) => "Ok".into(),
+            (true, c::DmsaaStatus::Panic) => "a panic".into(),
+            (true, _) => "Err".into(),
+        };
         STATS.with(|s| {
             let mut s = s.borrow_mut();
             let entry = s.entry(name.to_string()).or_default();
@@ -906,13 +952,16 @@ impl Run<'_> {
         if error != glow::NO_ERROR {
             self.fail(
                 index,
-                format!("{name} returned {status:?} and left GL error 0x{error:04X}"),
+                format!("{name} returned {outcome} and left GL error 0x{error:04X}"),
             );
             while unsafe { gl.get_error() } != glow::NO_ERROR {}
         }
         let after = GlState::capture(gl);
         for d in before.differences(&after) {
-            self.fail(index, format!("{name} ({status:?}) changed {d}"));
+            self.fail(index, format!("{name} ({outcome}) changed {d}"));
+        }
+        if self.in_rust_call {
+            return status;
         }
         if status == c::DmsaaStatus::Panic {
             self.fail(index, format!("{name} panicked: {}", last_error()));
@@ -1061,22 +1110,7 @@ impl Run<'_> {
             );
             return;
         }
-        // The host's own clear of its G-buffer: what the frame must be.
-        unsafe {
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.host.fbo));
-            reset(gl);
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.host.fbo));
-            Host::clear(gl, self.host.colors);
-        }
-        let expected = self.host.read(gl);
-        unsafe {
-            // Something else in the host's images, so the resolve must write.
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.host.fbo));
-            for k in 0..self.host.colors {
-                gl.clear_buffer_f32_slice(glow::COLOR, k as u32, &[0.0; 4]);
-            }
-            gl.clear_buffer_depth_stencil(glow::DEPTH_STENCIL, 0, 1.0, 0);
-        }
+        let expected = self.expected_frame();
         self.draw(index, which);
         let (projection, view) = matrices(Projection::Perspective, &options);
         let status = self.call(index, "dmsaa_resolve (recovery)", |_| unsafe {
@@ -1092,8 +1126,35 @@ impl Run<'_> {
             );
             return;
         }
-        let got = self.host.read(gl);
-        for (k, (g, e)) in got.iter().zip(&expected).enumerate() {
+        self.check_frame(index, &expected);
+    }
+
+    /// The host's own clear of its G-buffer, read back: what a resolve of
+    /// the uniform draw must give. The images are cleared to something
+    /// else after, so that the resolve must write them.
+    fn expected_frame(&mut self) -> Vec<Vec<f32>> {
+        let gl = self.gl;
+        unsafe {
+            reset(gl);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.host.fbo));
+            Host::clear(gl, self.host.colors);
+        }
+        let expected = self.host.read(gl);
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.host.fbo));
+            for k in 0..self.host.colors {
+                gl.clear_buffer_f32_slice(glow::COLOR, k as u32, &[0.0; 4]);
+            }
+            gl.clear_buffer_depth_stencil(glow::DEPTH_STENCIL, 0, 1.0, 0);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        }
+        expected
+    }
+
+    /// Every attachment and the depth bit for bit as `expected`.
+    fn check_frame(&mut self, index: usize, expected: &[Vec<f32>]) {
+        let got = self.host.read(self.gl);
+        for (k, (g, e)) in got.iter().zip(expected).enumerate() {
             if let Some(p) = g
                 .iter()
                 .zip(e)
@@ -1127,12 +1188,17 @@ impl Run<'_> {
         if status != c::DmsaaStatus::Ok {
             return;
         }
+        let Some(fbo) = std::num::NonZeroU32::new(fbo).map(glow::NativeFramebuffer) else {
+            self.fail(index, "dmsaa_framebuffer gave 0".into());
+            return;
+        };
+        self.draw_into(fbo);
+    }
+
+    /// The uniform draw into a multisampled framebuffer.
+    fn draw_into(&mut self, fbo: glow::Framebuffer) {
         let gl = self.gl;
         unsafe {
-            let Some(fbo) = std::num::NonZeroU32::new(fbo).map(glow::NativeFramebuffer) else {
-                self.fail(index, "dmsaa_framebuffer gave 0".into());
-                return;
-            };
             gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
             let draw_buffers = gl.get_parameter_i32(glow::MAX_DRAW_BUFFERS).max(1) as u32;
             for i in 0..draw_buffers {
@@ -1150,6 +1216,9 @@ impl Run<'_> {
 
     fn step(&mut self, index: usize, op: &Op) {
         let gl = self.gl;
+        if self.api == Api::Rust && self.step_rust(index, op) {
+            return;
+        }
         match op {
             Op::New {
                 fbo,
@@ -1293,6 +1362,347 @@ impl Run<'_> {
     }
 }
 
+/// `options` as the Rust API takes them; `None` where a value has no Rust
+/// form (an enumeration out of range, a curve mix without its text).
+fn rust_options(o: &c::DmsaaOptions) -> Option<(RetrofitOptions, DepthMode, bool)> {
+    let get = |items: &[u32], v: u32| items.contains(&v).then_some(v);
+    let attachment = |v: i32| match v {
+        -1 => Some(None),
+        v if v >= 0 => Some(Some(ColorAttachment(v as u32))),
+        _ => None,
+    };
+    let mut options = RetrofitOptions {
+        samples: o.samples,
+        ..RetrofitOptions::default()
+    };
+    options.resolve.layers = o.layers;
+    options.position_attachment = attachment(o.position_attachment)?;
+    let world = match o.world_space_position {
+        0 => false,
+        1 => true,
+        _ => return None,
+    };
+    options.position_space = if world {
+        PositionSpace::World
+    } else {
+        PositionSpace::View
+    };
+    let encoding = [
+        NormalEncoding::Xyz,
+        NormalEncoding::Unorm,
+        NormalEncoding::Octahedral,
+        NormalEncoding::OctahedralUnorm,
+    ]
+    .get(o.normal_encoding as usize)
+    .copied()?;
+    options.normal_attachment =
+        attachment(o.normal_attachment)?.map(|attachment| NormalAttachment {
+            attachment,
+            encoding,
+        });
+    options.resolve.method = [
+        ResolveMethod::Average,
+        ResolveMethod::Front,
+        ResolveMethod::Median,
+        ResolveMethod::Back,
+    ]
+    .get(o.method as usize)
+    .copied()?;
+    options.resolve.window = [Window::Hard, Window::Smooth]
+        .get(o.window as usize)
+        .copied()?;
+    for (k, &rule) in o.rules.iter().enumerate() {
+        let rule = [
+            None,
+            Some(ResolveRule::Blend),
+            Some(ResolveRule::BlendNormal),
+            Some(ResolveRule::BlendHdr),
+            Some(ResolveRule::Select),
+        ]
+        .get(rule as usize)
+        .copied()?;
+        if let Some(rule) = rule {
+            options.rules.push((ColorAttachment(k as u32), rule));
+        }
+    }
+    options.stencil = [
+        StencilCopy::Auto,
+        StencilCopy::Export,
+        StencilCopy::BitPasses,
+        StencilCopy::Blit,
+    ]
+    .get(o.stencil_copy as usize)
+    .copied()?;
+    options.layer_mix = match get(&[0, 1, 2], o.layer_mix)? {
+        0 => LayerMix::Auto,
+        1 => LayerMix::Linear,
+        _ => LayerMix::Tonemapped,
+    };
+    options.restore_first_layer = [
+        FirstLayerRestore::Nothing,
+        FirstLayerRestore::Everything,
+        FirstLayerRestore::DepthAndStencil,
+    ]
+    .get(o.restore_first_layer as usize)
+    .copied()?;
+    let strict = o.memory_budget_strict == 1;
+    options.memory_budget = match o.memory_budget_bytes {
+        c::DMSAA_MEMORY_BUDGET_NONE => None,
+        c::DMSAA_MEMORY_BUDGET_DRIVER => Some(MemoryBudget {
+            bytes: None,
+            strict,
+        }),
+        bytes => Some(MemoryBudget {
+            bytes: Some(bytes),
+            strict,
+        }),
+    };
+    let depth_mode = [
+        DepthMode::Standard,
+        DepthMode::ZeroToOne,
+        DepthMode::ReversedZ,
+    ]
+    .get(o.depth_mode as usize)
+    .copied()?;
+    Some((options, depth_mode, world))
+}
+
+impl Run<'_> {
+    /// One Rust API call with the checks around it (as [`Run::call`]; a
+    /// panic is caught and is a failure); whether it succeeded.
+    fn call_rust(
+        &mut self,
+        index: usize,
+        name: &str,
+        f: impl FnOnce(&mut Self) -> deferred_msaa::Result<()>,
+    ) -> bool {
+        let mut outcome = None;
+        self.in_rust_call = true;
+        self.call(index, name, |run| {
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(run)));
+            let status = match &result {
+                Ok(Ok(())) => c::DmsaaStatus::Ok,
+                Ok(Err(_)) => c::DmsaaStatus::InvalidArgument,
+                Err(_) => c::DmsaaStatus::Panic,
+            };
+            outcome = Some(result);
+            status
+        });
+        self.in_rust_call = false;
+        match outcome {
+            Some(Ok(Ok(()))) => true,
+            Some(Ok(Err(e))) => {
+                let message = e.to_string();
+                let driver_log = matches!(
+                    e,
+                    deferred_msaa::Error::ShaderCompile { .. }
+                        | deferred_msaa::Error::ProgramLink { .. }
+                );
+                if message.trim().is_empty() || (message.contains('\n') && !driver_log) {
+                    self.fail(index, format!("{name} failed with the message {message:?}"));
+                }
+                if std::env::var_os("DEFERRED_MSAA_VERBOSE").is_some() {
+                    eprintln!("call {index}: {name}: {message}");
+                }
+                false
+            }
+            Some(Err(_)) => {
+                self.fail(index, format!("{name} panicked"));
+                false
+            }
+            None => false,
+        }
+    }
+
+    /// The Rust API's form of `op`; `false` for the host's own steps,
+    /// which [`Run::step`] takes as they are. Steps with no Rust form do
+    /// nothing.
+    fn step_rust(&mut self, index: usize, op: &Op) -> bool {
+        let gl = self.gl;
+        let live = |run: &Self, which: &Which| match which {
+            Which::Slot(k) if run.retrofits[*k].is_some() => Some(*k),
+            _ => None,
+        };
+        match op {
+            Op::New {
+                fbo,
+                options,
+                missing: None,
+            } => {
+                let Some(k) = self.retrofits.iter().position(Option::is_none) else {
+                    return true;
+                };
+                let c_options = options.apply();
+                let (Some((options, _, _)), Some(fbo)) = (
+                    rust_options(&c_options),
+                    std::num::NonZeroU32::new(self.host.fbo_arg(*fbo)),
+                ) else {
+                    return true;
+                };
+                let before = deferred_msaa::gl::live_objects().total();
+                let ok = self.call_rust(index, "MsaaRetrofit::new", |run| {
+                    let r = MsaaRetrofit::new(gl, glow::NativeFramebuffer(fbo), &options)?;
+                    run.retrofits[k] = Some((r, c_options));
+                    Ok(())
+                });
+                if !ok && deferred_msaa::gl::live_objects().total() != before {
+                    self.fail(index, "a failed MsaaRetrofit::new left GL objects".into());
+                }
+            }
+            // A loader is the Rust host's own business.
+            Op::New { .. } => {}
+            Op::Destroy(which) => {
+                if let Some(k) = live(self, which) {
+                    self.call_rust(index, "MsaaRetrofit::destroy", |run| {
+                        if let Some((r, _)) = run.retrofits[k].take() {
+                            r.destroy(gl);
+                        }
+                        Ok(())
+                    });
+                }
+            }
+            Op::Getters(which) => {
+                if let Some(k) = live(self, which) {
+                    self.call_rust(index, "MsaaRetrofit getters", |run| {
+                        if let Some((r, _)) = &run.retrofits[k] {
+                            let _ = (r.framebuffer(), r.samples(), r.second_layer_selection());
+                        }
+                        Ok(())
+                    });
+                }
+            }
+            Op::Resolve(which, kind, with_view) => {
+                if *kind != Projection::Null {
+                    self.resolve_rust(index, which, *kind, *with_view);
+                }
+            }
+            Op::Begin(which, output, _) | Op::Finish(which, output) => {
+                let Some(k) = live(self, which) else {
+                    return true;
+                };
+                let output = std::num::NonZeroU32::new(self.host.fbo_arg(*output))
+                    .map(glow::NativeFramebuffer);
+                let begin = matches!(op, Op::Begin(..));
+                let name = if begin {
+                    "MsaaRetrofit::begin_second_layer"
+                } else {
+                    "MsaaRetrofit::finish_second_layer"
+                };
+                self.call_rust(index, name, |run| match run.retrofits[k].as_mut() {
+                    Some((r, _)) if begin => r.begin_second_layer(gl, output).map(|_| ()),
+                    Some((r, _)) => r.finish_second_layer(gl, output),
+                    None => Ok(()),
+                });
+            }
+            Op::SetOptions(which, options) => {
+                let Some(k) = live(self, which) else {
+                    return true;
+                };
+                let c_options = options.apply();
+                let Some((options, _, _)) = rust_options(&c_options) else {
+                    return true;
+                };
+                self.call_rust(index, "MsaaRetrofit::set_options", |run| {
+                    match run.retrofits[k].as_mut() {
+                        Some((r, o)) => {
+                            r.set_options(gl, &options)?;
+                            *o = c_options;
+                            Ok(())
+                        }
+                        None => Ok(()),
+                    }
+                });
+            }
+            Op::Refresh(which) => {
+                if let Some(k) = live(self, which) {
+                    self.call_rust(index, "MsaaRetrofit::refresh", |run| {
+                        match run.retrofits[k].as_mut() {
+                            Some((r, _)) => r.refresh(gl),
+                            None => Ok(()),
+                        }
+                    });
+                }
+            }
+            Op::Draw(which) => {
+                if let Some(k) = live(self, which) {
+                    if let Some(fbo) = self.retrofits[k].as_ref().map(|(r, _)| r.framebuffer()) {
+                        self.draw_into(fbo);
+                    }
+                }
+            }
+            Op::Recover(which) => {
+                self.host.put_back(gl);
+                let Some(k) = live(self, which) else {
+                    return true;
+                };
+                let ok = self.call_rust(index, "MsaaRetrofit::refresh (recovery)", |run| match run
+                    .retrofits[k]
+                    .as_mut()
+                {
+                    Some((r, _)) => r.refresh(gl),
+                    None => Ok(()),
+                });
+                if !ok {
+                    self.fail(
+                        index,
+                        "no recovery: MsaaRetrofit::refresh failed with the G-buffer put back"
+                            .into(),
+                    );
+                    return true;
+                }
+                let expected = self.expected_frame();
+                if let Some(fbo) = self.retrofits[k].as_ref().map(|(r, _)| r.framebuffer()) {
+                    self.draw_into(fbo);
+                }
+                if self.resolve_rust(index, which, Projection::Perspective, true) {
+                    self.check_frame(index, &expected);
+                } else {
+                    self.fail(
+                        index,
+                        "no recovery: MsaaRetrofit::resolve failed after refresh".into(),
+                    );
+                }
+            }
+            Op::Frame(which) => {
+                self.step_rust(index, &Op::Draw(*which));
+                self.resolve_rust(index, which, Projection::Perspective, true);
+                self.step_rust(index, &Op::Begin(*which, Fbo::Light, false));
+                self.step_rust(index, &Op::Finish(*which, Fbo::Light));
+            }
+            Op::Dirty(_) | Op::Set(_) | Op::Reallocate(_) | Op::Delete(_) | Op::PutBack => {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// A Rust API resolve of `which`'s retrofit (if it has one); whether it
+    /// succeeded.
+    fn resolve_rust(&mut self, index: usize, which: &Which, kind: Projection, view: bool) -> bool {
+        let gl = self.gl;
+        let Which::Slot(k) = *which else {
+            return false;
+        };
+        let Some(options) = self.retrofits[k].as_ref().map(|(_, o)| *o) else {
+            return false;
+        };
+        let Some((_, depth_mode, _)) = rust_options(&options) else {
+            return false;
+        };
+        let (projection, v) = matrices(kind, &options);
+        let mut frame = Frame::from_matrix(projection).with_depth_mode(depth_mode);
+        if view {
+            frame = frame.with_view(v);
+        }
+        self.call_rust(index, "MsaaRetrofit::resolve", |run| {
+            match run.retrofits[k].as_mut() {
+                Some((r, _)) => r.resolve(gl, &frame),
+                None => Ok(()),
+            }
+        })
+    }
+}
+
 /// Run `sequence` on `context` (current on this thread); its failures,
 /// empty when every check held.
 pub fn run_sequence(context: &HeadlessContext, sequence: &Sequence) -> Vec<String> {
@@ -1305,6 +1715,9 @@ pub fn run_sequence(context: &HeadlessContext, sequence: &Sequence) -> Vec<Strin
         context,
         host,
         slots: [None, None],
+        retrofits: [None, None],
+        api: sequence.api,
+        in_rust_call: false,
         failures: Vec::new(),
     };
     let end = sequence.ops.len();
@@ -1312,8 +1725,8 @@ pub fn run_sequence(context: &HeadlessContext, sequence: &Sequence) -> Vec<Strin
         run.step(index, op);
     }
     for k in 0..2 {
-        if run.slots[k].is_some() {
-            run.recover(end, Which::Slot(k));
+        if run.slots[k].is_some() || run.retrofits[k].is_some() {
+            run.step(end, &Op::Recover(Which::Slot(k)));
             run.step(end, &Op::Destroy(Which::Slot(k)));
         }
     }

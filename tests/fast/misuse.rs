@@ -19,16 +19,22 @@
 
 use crate::common;
 use crate::common::misuse::{
-    Fbo, Op, Options, Projection, Sequence, Setting, Which, loader_names, run_sequence,
+    Api, Fbo, Op, Options, Projection, Sequence, Setting, Which, loader_names, run_sequence,
 };
 
 const H: Which = Which::Slot(0);
 
 /// A sequence over a host of `colors` attachments and depth with or
-/// without stencil.
+/// without stencil, through the C API.
 fn sequence(colors: usize, stencil: bool, ops: Vec<Op>) -> Sequence {
+    on(Api::C, colors, stencil, ops)
+}
+
+/// The same through `api`.
+fn on(api: Api, colors: usize, stencil: bool, ops: Vec<Op>) -> Sequence {
     Sequence {
         seed: 0,
+        api,
         colors,
         stencil,
         ops,
@@ -82,8 +88,9 @@ fn assert_clean(sequence: &Sequence) {
 
 #[test]
 fn per_buffer_blend_enables_survive_every_call() {
-    for stencil in [false, true] {
-        assert_clean(&sequence(
+    for (api, stencil) in [(Api::C, false), (Api::C, true), (Api::Rust, true)] {
+        assert_clean(&on(
+            api,
             3,
             stencil,
             every_call(&[Setting::BlendOnlyOn(1), Setting::BlendOnlyOn(2)]),
@@ -93,8 +100,9 @@ fn per_buffer_blend_enables_survive_every_call() {
 
 #[test]
 fn per_buffer_colour_masks_survive_every_call() {
-    for stencil in [false, true] {
-        assert_clean(&sequence(
+    for (api, stencil) in [(Api::C, false), (Api::C, true), (Api::Rust, true)] {
+        assert_clean(&on(
+            api,
             3,
             stencil,
             every_call(&[Setting::MaskOff(1), Setting::MaskOff(5)]),
@@ -106,8 +114,9 @@ fn per_buffer_colour_masks_survive_every_call() {
 fn stencil_references_survive_with_framebuffer_zero_bound() {
     // With a depth-stencil host the stencil copy and the second layer's
     // selection set the stencil function; with a depth-only one nothing does.
-    for stencil in [true, false] {
-        assert_clean(&sequence(
+    for (api, stencil) in [(Api::C, true), (Api::C, false), (Api::Rust, true)] {
+        assert_clean(&on(
+            api,
             2,
             stencil,
             every_call(&[
@@ -150,28 +159,31 @@ fn a_name_that_is_no_framebuffer_is_refused_as_such() {
 
 #[test]
 fn a_handle_recovers_after_a_size_change() {
-    assert_clean(&sequence(
-        3,
-        true,
-        vec![
-            new(Fbo::Host, &[]),
-            Op::Draw(H),
-            Op::Resolve(H, Projection::Perspective, false),
-            Op::Reallocate(1),
-            Op::SetOptions(H, Options(vec![(1, 2)])),
-            Op::Refresh(H),
-            Op::Resolve(H, Projection::Perspective, false),
-            Op::Reallocate(3),
-            Op::Refresh(H),
-            Op::Recover(H),
-            Op::Delete(0),
-            Op::Refresh(H),
-            Op::Recover(H),
-            Op::Reallocate(0),
-            Op::SetOptions(H, Options(vec![(0, 1)])),
-            Op::Recover(H),
-        ],
-    ));
+    for api in [Api::C, Api::Rust] {
+        assert_clean(&on(
+            api,
+            3,
+            true,
+            vec![
+                new(Fbo::Host, &[]),
+                Op::Draw(H),
+                Op::Resolve(H, Projection::Perspective, false),
+                Op::Reallocate(1),
+                Op::SetOptions(H, Options(vec![(1, 2)])),
+                Op::Refresh(H),
+                Op::Resolve(H, Projection::Perspective, false),
+                Op::Reallocate(3),
+                Op::Refresh(H),
+                Op::Recover(H),
+                Op::Delete(0),
+                Op::Refresh(H),
+                Op::Recover(H),
+                Op::Reallocate(0),
+                Op::SetOptions(H, Options(vec![(0, 1)])),
+                Op::Recover(H),
+            ],
+        ));
+    }
 }
 
 #[test]

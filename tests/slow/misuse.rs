@@ -9,7 +9,7 @@
 //! how many (5000 by default).
 
 use crate::common;
-use crate::common::misuse::{Sequence, replay_value, run_sequence, shrink};
+use crate::common::misuse::{Api, Sequence, replay_value, run_sequence, shrink, take_call_count};
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
@@ -21,6 +21,9 @@ const CHILD: &str = "DEFERRED_MSAA_MISUSE_CHILD";
 const REPLAY: &str = "DEFERRED_MSAA_MISUSE_REPLAY";
 const SEQUENCES: &str = "DEFERRED_MSAA_MISUSE_SEQUENCES";
 const HANG_SECONDS: u64 = 120;
+/// `crash:SEED` or `hang:SEED`: the child aborts or sleeps at that
+/// sequence, for the test of the runner itself.
+const INJECT: &str = "DEFERRED_MSAA_MISUSE_INJECT";
 
 /// `SEED:i,j,k` → the seed and the calls kept.
 fn parse_replay(value: &str) -> (u64, Option<Vec<usize>>) {
@@ -49,15 +52,25 @@ fn child(range: &str) {
     let (start, end) = range.split_once(':').expect("start:end");
     let (start, end): (u64, u64) = (start.parse().expect("start"), end.parse().expect("end"));
     let ctx = common::egl_context().expect("an EGL context in the child");
+    let inject = std::env::var(INJECT).unwrap_or_default();
     for seed in start..end {
         println!("misuse begin {seed}");
+        if inject == format!("crash:{seed}") {
+            std::process::abort();
+        }
+        if inject == format!("hang:{seed}") {
+            std::thread::sleep(Duration::from_secs(3600));
+        }
         let s = Sequence::generate(seed);
         let failures = run_sequence(&ctx, &s);
+        println!("misuse calls {}", take_call_count());
         if failures.is_empty() {
             println!("misuse end {seed} ok");
             continue;
         }
         let (keep, shrunk) = shrink(&ctx, &s);
+        // The shrinking's calls are not the next sequence's.
+        let _ = take_call_count();
         let report = format!(
             "sequence {seed} failed: {}\nshrunk to {} call(s):\n{}{}\nreplay: {REPLAY}={} cargo test --test slow misuse -- --ignored --nocapture",
             failures.first().map_or("", String::as_str),
@@ -74,12 +87,13 @@ fn child(range: &str) {
 }
 
 /// A child on `start:end`, and its output line by line.
-fn spawn(range: &str) -> (Child, mpsc::Receiver<String>) {
+fn spawn(range: &str, inject: &str) -> (Child, mpsc::Receiver<String>) {
     let exe = std::env::current_exe().expect("the test binary's path");
     let mut child = Command::new(exe)
         .args(["--exact", TEST, "--include-ignored", "--nocapture"])
         .args(["--test-threads", "1"])
         .env(CHILD, range)
+        .env(INJECT, inject)
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
@@ -100,17 +114,21 @@ fn spawn(range: &str) -> (Child, mpsc::Receiver<String>) {
 #[derive(Default)]
 struct Outcome {
     passed: u64,
+    /// Library calls checked.
+    calls: u64,
     /// Each failed sequence's report, by seed.
     reports: std::collections::BTreeMap<u64, String>,
     crashed: Vec<(u64, String)>,
     hung: Vec<u64>,
 }
 
-/// Run `start..end` in children, one after another, past crashes and hangs.
-fn run_range(start: u64, end: u64, outcome: &mut Outcome) {
+/// Run `start..end` in children, one after another, past crashes and
+/// hangs (no line for `hang`); `inject` is passed to the children
+/// ([`INJECT`]).
+fn run_range(start: u64, end: u64, hang: Duration, inject: &str, outcome: &mut Outcome) {
     let mut next = start;
     while next < end {
-        let (mut child, lines) = spawn(&format!("{next}:{end}"));
+        let (mut child, lines) = spawn(&format!("{next}:{end}"), inject);
         let mut current: Option<u64> = None;
         let mut last = Instant::now();
         let mut take = |line: &str, current: &mut Option<u64>, next: &mut u64| {
@@ -124,6 +142,8 @@ fn run_range(start: u64, end: u64, outcome: &mut Outcome) {
                 }
                 *current = None;
                 *next = seed + 1;
+            } else if let Some(calls) = line.strip_prefix("misuse calls ") {
+                outcome.calls += calls.parse::<u64>().unwrap_or(0);
             } else if let Some(report) = line.strip_prefix("misuse report ") {
                 let (seed, text) = report.split_once(' ').unwrap_or((report, ""));
                 let seed: u64 = seed.parse().expect("a seed");
@@ -141,7 +161,7 @@ fn run_range(start: u64, end: u64, outcome: &mut Outcome) {
                 // Its output closed: it is exiting.
                 Err(mpsc::RecvTimeoutError::Disconnected) => break child.wait().ok(),
                 Err(mpsc::RecvTimeoutError::Timeout) => {
-                    if last.elapsed() > Duration::from_secs(HANG_SECONDS) {
+                    if last.elapsed() > hang {
                         let _ = child.kill();
                         let _ = child.wait();
                         break None;
@@ -249,7 +269,13 @@ fn random_call_sequences_keep_the_hosts_state_in_child_processes() {
                 let (start, end) = (total * w / workers, total * (w + 1) / workers);
                 scope.spawn(move || {
                     let mut outcome = Outcome::default();
-                    run_range(start, end, &mut outcome);
+                    run_range(
+                        start,
+                        end,
+                        Duration::from_secs(HANG_SECONDS),
+                        "",
+                        &mut outcome,
+                    );
                     outcome
                 })
             })
@@ -262,14 +288,21 @@ fn random_call_sequences_keep_the_hosts_state_in_child_processes() {
     let mut all = Outcome::default();
     for o in outcomes {
         all.passed += o.passed;
+        all.calls += o.calls;
         all.reports.extend(o.reports);
         all.crashed.extend(o.crashed);
         all.hung.extend(o.hung);
     }
-    let calls: usize = (0..total).map(|s| Sequence::generate(s).ops.len()).sum();
+    let steps: usize = (0..total).map(|s| Sequence::generate(s).ops.len()).sum();
+    let rust = (0..total)
+        .filter(|&s| Sequence::generate(s).api == Api::Rust)
+        .count();
     eprintln!(
-        "misuse fuzzer: {total} sequences ({calls} steps) in {:.0} s on {workers} worker(s): \
+        "misuse fuzzer: {total} sequences ({} through the C API, {rust} through the Rust API; \
+         {steps} steps, {} library calls checked) in {:.0} s on {workers} worker(s): \
          {} passed, {} failed, {} crashed, {} hung",
+        total as usize - rust,
+        all.calls,
         started.elapsed().as_secs_f64(),
         all.passed,
         all.reports.len(),
@@ -293,4 +326,25 @@ fn random_call_sequences_keep_the_hosts_state_in_child_processes() {
     }
     assert!(problems.is_empty(), "{}", problems.join("\n\n"));
     assert_eq!(all.passed, total, "sequences that did not report");
+}
+
+#[test]
+#[ignore = "slow tier: cargo test --test slow -- --ignored"]
+fn the_runner_charges_a_crash_and_a_hang_to_their_sequences() {
+    if common::egl_context().is_none() {
+        return;
+    }
+    // Sequence 1's child aborts, sequence 3's sleeps: each is charged, and a
+    // new child goes on from the next.
+    for (inject, crashed, hung) in [("crash:1", vec![1], vec![]), ("hang:3", vec![], vec![3])] {
+        let mut outcome = Outcome::default();
+        run_range(0, 5, Duration::from_secs(5), inject, &mut outcome);
+        assert_eq!(
+            outcome.crashed.iter().map(|(s, _)| *s).collect::<Vec<_>>(),
+            crashed,
+            "{inject}"
+        );
+        assert_eq!(outcome.hung, hung, "{inject}");
+        assert_eq!(outcome.passed, 4, "{inject}");
+    }
 }
