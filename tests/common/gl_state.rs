@@ -2,7 +2,8 @@
 //! name (bindings of every texture unit, framebuffers, buffers, program,
 //! pixel store, depth, stencil, blend, capabilities, viewport, scissor,
 //! masks, clear values, and per draw buffer the blend enable and the colour
-//! mask), taken before and after a call and compared. The zoo, the
+//! mask, and with viewport arrays every viewport, scissor box and scissor
+//! test), taken before and after a call and compared. The zoo, the
 //! property test and the misuse fuzzer read the same list.
 //!
 //! Two values GL hides are read around the hiding: the per-buffer colour
@@ -19,14 +20,71 @@ use std::sync::atomic::{AtomicPtr, Ordering};
 type IsEnabledi = unsafe extern "system" fn(target: u32, index: u32) -> u8;
 type GetBooleaniV = unsafe extern "system" fn(target: u32, index: u32, data: *mut u8);
 
+type GetFloatiV = unsafe extern "system" fn(target: u32, index: u32, data: *mut f32);
+type GetIntegeriV = unsafe extern "system" fn(target: u32, index: u32, data: *mut i32);
+
 static IS_ENABLEDI: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
 static GET_BOOLEANI_V: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
+static GET_FLOATI_V: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
+static GET_INTEGERI_V: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
 
 /// Load the snapshot's own `glIsEnabledi` and `glGetBooleani_v` (not the
 /// crate's, which it checks).
 pub fn load(mut loader: impl FnMut(&str) -> *const c_void) {
     IS_ENABLEDI.store(loader("glIsEnabledi").cast_mut(), Ordering::Release);
     GET_BOOLEANI_V.store(loader("glGetBooleani_v").cast_mut(), Ordering::Release);
+    GET_FLOATI_V.store(loader("glGetFloati_v").cast_mut(), Ordering::Release);
+    GET_INTEGERI_V.store(loader("glGetIntegeri_v").cast_mut(), Ordering::Release);
+}
+
+/// Whether the context has viewport arrays (GL 4.1 or
+/// `GL_ARB_viewport_array`).
+pub fn has_viewport_arrays(gl: &glow::Context) -> bool {
+    let v = gl.version();
+    (v.major, v.minor) >= (4, 1) || gl.supported_extensions().contains("GL_ARB_viewport_array")
+}
+
+/// Every viewport, scissor box and scissor test by index, with viewport
+/// arrays.
+fn viewport_arrays(gl: &glow::Context, out: &mut Vec<(String, Vec<i64>)>) {
+    if !has_viewport_arrays(gl) {
+        return;
+    }
+    let (floats, ints) = (
+        GET_FLOATI_V.load(Ordering::Acquire),
+        GET_INTEGERI_V.load(Ordering::Acquire),
+    );
+    assert!(
+        !floats.is_null() && !ints.is_null(),
+        "gl_state::load was not called"
+    );
+    // SAFETY: non-null pointers the context's loader gave for these names;
+    // each query writes four values.
+    let (get_floati_v, get_integeri_v) = unsafe {
+        (
+            std::mem::transmute::<*mut c_void, GetFloatiV>(floats),
+            std::mem::transmute::<*mut c_void, GetIntegeriV>(ints),
+        )
+    };
+    let (is_enabledi, _) = indexed();
+    unsafe {
+        let count = gl.get_parameter_i32(glow::MAX_VIEWPORTS).clamp(1, 64) as u32;
+        for i in 0..count {
+            let mut v = [0f32; 4];
+            get_floati_v(glow::VIEWPORT, i, v.as_mut_ptr());
+            out.push((
+                format!("GL_VIEWPORT {i}"),
+                v.map(|x| i64::from(x.to_bits())).to_vec(),
+            ));
+            let mut b = [0i32; 4];
+            get_integeri_v(glow::SCISSOR_BOX, i, b.as_mut_ptr());
+            out.push((format!("GL_SCISSOR_BOX {i}"), b.map(i64::from).to_vec()));
+            out.push((
+                format!("GL_SCISSOR_TEST {i}"),
+                vec![i64::from(is_enabledi(glow::SCISSOR_TEST, i))],
+            ));
+        }
+    }
 }
 
 fn indexed() -> (IsEnabledi, GetBooleaniV) {
@@ -234,6 +292,7 @@ impl GlState {
                 "GL_STENCIL_REF and GL_STENCIL_BACK_REF through an 8-bit stencil".into(),
                 stencil_references(gl),
             ));
+            viewport_arrays(gl, &mut s);
             for (name, e) in [
                 ("GL_STENCIL_BACK_VALUE_MASK", glow::STENCIL_BACK_VALUE_MASK),
                 ("GL_STENCIL_BACK_FAIL", glow::STENCIL_BACK_FAIL),

@@ -151,6 +151,9 @@ pub enum Setting {
     StencilReferences(i32, i32),
     /// `glBindFramebuffer(GL_FRAMEBUFFER, 0)`.
     DefaultFramebuffer,
+    /// With viewport arrays: viewport and scissor box `i` of their own, and
+    /// the scissor test on for `i` alone.
+    Viewport(u32),
 }
 
 /// Every entry point a loader may leave out: the required ones, then the
@@ -639,7 +642,32 @@ fn dirty(gl: &glow::Context, host: &Host, seed: u64) {
     let flip = |rng: &mut Rng| rng.below(2) == 0;
     unsafe {
         for _ in 0..1 + rng.below(8) {
-            match rng.below(18) {
+            match rng.below(20) {
+                18 | 19 if super::gl_state::has_viewport_arrays(gl) => {
+                    let count = gl.get_parameter_i32(glow::MAX_VIEWPORTS).clamp(1, 64) as u32;
+                    let i = rng.below(count);
+                    if rng.below(2) == 0 {
+                        gl.viewport_f32_slice(
+                            i,
+                            1,
+                            &[[
+                                rng.below(8) as f32,
+                                rng.below(8) as f32,
+                                1.0 + rng.below(50) as f32,
+                                0.5 + rng.below(50) as f32,
+                            ]],
+                        );
+                        gl.scissor_slice(
+                            i,
+                            1,
+                            &[[rng.below(8) as i32, 0, 1 + rng.below(30) as i32, 4]],
+                        );
+                    } else if flip(&mut rng) {
+                        gl.enable_draw_buffer(glow::SCISSOR_TEST, i);
+                    } else {
+                        gl.disable_draw_buffer(glow::SCISSOR_TEST, i);
+                    }
+                }
                 0 => {
                     let i = rng.below(draw_buffers);
                     if flip(&mut rng) {
@@ -1333,6 +1361,15 @@ impl Run<'_> {
                         gl.stencil_func_separate(glow::BACK, glow::GEQUAL, back, 0x7F);
                     }
                     Setting::DefaultFramebuffer => gl.bind_framebuffer(glow::FRAMEBUFFER, None),
+                    Setting::Viewport(i) => {
+                        if super::gl_state::has_viewport_arrays(gl) {
+                            let k = i as i32;
+                            gl.viewport_f32_slice(i, 1, &[[1.0 + k as f32, 2.0, 7.5, 9.0]]);
+                            gl.scissor_slice(i, 1, &[[k, 3, 5, 6]]);
+                            gl.disable(glow::SCISSOR_TEST);
+                            gl.enable_draw_buffer(glow::SCISSOR_TEST, i);
+                        }
+                    }
                 }
             },
             Op::Reallocate(k) => {

@@ -128,6 +128,26 @@ fn stencil_references_survive_with_framebuffer_zero_bound() {
 }
 
 #[test]
+fn viewport_arrays_survive_every_call() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    if !common::gl_state::has_viewport_arrays(ctx.gl()) {
+        eprintln!("not run: this context has no viewport arrays (GL 4.1)");
+        return;
+    }
+    drop(ctx);
+    for (api, stencil) in [(Api::C, true), (Api::Rust, false)] {
+        assert_clean(&on(
+            api,
+            2,
+            stencil,
+            every_call(&[Setting::Viewport(1), Setting::Viewport(3)]),
+        ));
+    }
+}
+
+#[test]
 fn a_loader_without_one_function_is_refused_naming_it() {
     // Every function the library calls, left out one at a time; the fuzzer
     // checks the status, the name in the message, `*out` null, the live

@@ -130,6 +130,9 @@ pub const CONDITIONAL_FUNCTIONS: &[(&str, (u32, u32), &str)] = &[
     ("glGetQueryObjectui64v", (3, 3), "GL_ARB_timer_query"),
     ("glObjectLabel", (4, 3), "GL_KHR_debug"),
     ("glDebugMessageCallback", (4, 3), "GL_KHR_debug"),
+    ("glGetFloati_v", (4, 1), "GL_ARB_viewport_array"),
+    ("glViewportArrayv", (4, 1), "GL_ARB_viewport_array"),
+    ("glScissorArrayv", (4, 1), "GL_ARB_viewport_array"),
 ];
 
 /// The first of [`REQUIRED_FUNCTIONS`] that `loader` returns null for.
@@ -265,6 +268,7 @@ mod tests {
         ("read_pixels", &["glReadPixels"]),
         ("renderbuffer_storage", &["glRenderbufferStorage"]),
         ("scissor", &["glScissor"]),
+        ("scissor_slice", &["glScissorArrayv"]),
         ("shader_source", &["glShaderSource"]),
         ("stencil_func", &["glStencilFunc"]),
         ("stencil_func_separate", &["glStencilFuncSeparate"]),
@@ -288,6 +292,7 @@ mod tests {
         ("use_program", &["glUseProgram"]),
         ("version", &[]),
         ("viewport", &["glViewport"]),
+        ("viewport_f32_slice", &["glViewportArrayv"]),
     ];
 
     fn sources(dir: &std::path::Path, out: &mut Vec<(String, String)>) {

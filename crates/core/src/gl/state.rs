@@ -41,22 +41,31 @@ const PASS_OFF: [u32; 18] = [
 ];
 
 /// `glIsEnabledi` and `glGetBooleani_v`, which glow does not wrap, as
-/// [`load_state_functions`] stored them (null until then).
+/// [`load_state_functions`] stored them (null until then), and
+/// `glGetFloati_v` and `glGetIntegeri_v` with room for four values, for the
+/// viewport arrays of GL 4.1 (null where the loader has none).
 static IS_ENABLEDI: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
 static GET_BOOLEANI_V: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
+static GET_FLOATI_V: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
+static GET_INTEGERI_V: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
 
 type IsEnabledi = unsafe extern "system" fn(target: u32, index: u32) -> u8;
 type GetBooleaniV = unsafe extern "system" fn(target: u32, index: u32, data: *mut u8);
+type GetFloatiV = unsafe extern "system" fn(target: u32, index: u32, data: *mut f32);
+type GetIntegeriV = unsafe extern "system" fn(target: u32, index: u32, data: *mut i32);
 
 /// Load the two GL 3.0 entry points glow does not wrap and the saved state
 /// needs to read each draw buffer's blend enable and colour mask
-/// (`glIsEnabledi`, `glGetBooleani_v`), through the host's loader. The
+/// (`glIsEnabledi`, `glGetBooleani_v`), through the host's loader, and,
+/// where it has them, `glGetFloati_v` and `glGetIntegeri_v`, to read each
+/// viewport, scissor box and scissor test of GL 4.1's viewport arrays. The
 /// pointers are kept for the whole process: GL entry points from
 /// `eglGetProcAddress` and `glXGetProcAddress` are the same for every
 /// context. Call it once, with any context current, before making a
 /// retrofit (the C API does). Without it the per-buffer blend enables are
-/// read through `glGetIntegeri_v`, and the colour mask is read and put back
-/// as buffer 0's for every draw buffer.
+/// read through `glGetIntegeri_v`, the colour mask is read and put back
+/// as buffer 0's for every draw buffer, and with viewport arrays every
+/// viewport, scissor box and scissor test as the first's.
 ///
 /// Errors: [`Error::Unsupported`] naming the first function the loader
 /// returned null for (none is stored then).
@@ -77,6 +86,8 @@ pub fn load_state_functions(mut loader: impl FnMut(&str) -> *const c_void) -> Re
     }
     IS_ENABLEDI.store(is_enabledi.cast_mut(), Ordering::Release);
     GET_BOOLEANI_V.store(get_booleani_v.cast_mut(), Ordering::Release);
+    GET_FLOATI_V.store(loader("glGetFloati_v").cast_mut(), Ordering::Release);
+    GET_INTEGERI_V.store(loader("glGetIntegeri_v").cast_mut(), Ordering::Release);
     Ok(())
 }
 
@@ -94,6 +105,82 @@ fn indexed_queries() -> Option<(IsEnabledi, GetBooleaniV)> {
             std::mem::transmute::<*mut c_void, IsEnabledi>(is_enabledi),
             std::mem::transmute::<*mut c_void, GetBooleaniV>(get_booleani_v),
         ))
+    }
+}
+
+/// Every viewport, scissor box and scissor test of a context with viewport
+/// arrays (GL 4.1 or `GL_ARB_viewport_array`), `0..GL_MAX_VIEWPORTS`:
+/// `glViewport`, `glScissor` and `glEnable(GL_SCISSOR_TEST)` set them all.
+#[derive(Clone, Debug, PartialEq)]
+struct ViewportArrays {
+    viewports: Vec<[f32; 4]>,
+    scissors: Vec<[i32; 4]>,
+    scissor_tests: Vec<bool>,
+}
+
+impl ViewportArrays {
+    /// Read them; `None` without viewport arrays or without the loaded
+    /// queries ([`load_state_functions`]).
+    fn capture(gl: &glow::Context) -> Option<Self> {
+        let version = gl.version();
+        if (version.major, version.minor) < (4, 1)
+            && !gl.supported_extensions().contains("GL_ARB_viewport_array")
+        {
+            return None;
+        }
+        let (is_enabledi, _) = indexed_queries()?;
+        let (floats, ints) = (
+            GET_FLOATI_V.load(Ordering::Acquire),
+            GET_INTEGERI_V.load(Ordering::Acquire),
+        );
+        if floats.is_null() || ints.is_null() {
+            return None;
+        }
+        // SAFETY: non-null pointers the loader returned for these names,
+        // whose GL signatures these are; each query below writes four values.
+        let (get_floati_v, get_integeri_v) = unsafe {
+            (
+                std::mem::transmute::<*mut c_void, GetFloatiV>(floats),
+                std::mem::transmute::<*mut c_void, GetIntegeriV>(ints),
+            )
+        };
+        unsafe {
+            let count = gl.get_parameter_i32(glow::MAX_VIEWPORTS).clamp(1, 64) as u32;
+            Some(ViewportArrays {
+                viewports: (0..count)
+                    .map(|i| {
+                        let mut v = [0f32; 4];
+                        get_floati_v(glow::VIEWPORT, i, v.as_mut_ptr());
+                        v
+                    })
+                    .collect(),
+                scissors: (0..count)
+                    .map(|i| {
+                        let mut v = [0i32; 4];
+                        get_integeri_v(glow::SCISSOR_BOX, i, v.as_mut_ptr());
+                        v
+                    })
+                    .collect(),
+                scissor_tests: (0..count)
+                    .map(|i| is_enabledi(glow::SCISSOR_TEST, i) != 0)
+                    .collect(),
+            })
+        }
+    }
+
+    /// Put them back (`glViewportArrayv`, `glScissorArrayv`, `glEnablei`).
+    fn restore(&self, gl: &glow::Context) {
+        unsafe {
+            gl.viewport_f32_slice(0, self.viewports.len() as i32, &self.viewports);
+            gl.scissor_slice(0, self.scissors.len() as i32, &self.scissors);
+            for (i, &on) in self.scissor_tests.iter().enumerate() {
+                if on {
+                    gl.enable_draw_buffer(glow::SCISSOR_TEST, i as u32);
+                } else {
+                    gl.disable_draw_buffer(glow::SCISSOR_TEST, i as u32);
+                }
+            }
+        }
     }
 }
 
@@ -198,6 +285,8 @@ pub struct SavedState {
     vertex_array: i32,
     active_texture: i32,
     viewport: [i32; 4],
+    /// Every viewport, scissor box and scissor test, with viewport arrays.
+    viewport_arrays: Option<ViewportArrays>,
     depth_func: i32,
     depth_mask: bool,
     stencil: StencilFaces,
@@ -279,6 +368,7 @@ impl SavedState {
                 active_texture: active,
                 textures,
                 viewport,
+                viewport_arrays: ViewportArrays::capture(gl),
                 depth_func: gl.get_parameter_i32(glow::DEPTH_FUNC),
                 depth_mask: gl.get_parameter_i32(glow::DEPTH_WRITEMASK) != 0,
                 stencil: StencilFaces {
@@ -448,6 +538,11 @@ impl Restore for SavedState {
         self.draw_buffers.restore(gl);
         for &(cap, on) in &self.capabilities {
             set(gl, cap, on);
+        }
+        // After `glViewport`, `glScissor` and `glEnable(GL_SCISSOR_TEST)`,
+        // which set every viewport to the first's.
+        if let Some(arrays) = &self.viewport_arrays {
+            arrays.restore(gl);
         }
     }
 }
