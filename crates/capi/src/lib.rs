@@ -870,7 +870,9 @@ fn matrix(function: &str, name: &str, m: *const f32) -> Result<[f32; 16], Failur
 /// `DMSAA_STATUS_INVALID_ARGUMENT` for a projection that is not a GL
 /// perspective matrix; `DMSAA_STATUS_OUT_OF_ORDER` between
 /// [`dmsaa_begin_second_layer`] and [`dmsaa_finish_second_layer`];
-/// `DMSAA_STATUS_GL`.
+/// `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the host re-allocated,
+/// deleted or replaced an attachment since it was read (call
+/// [`dmsaa_refresh`]); `DMSAA_STATUS_GL`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn dmsaa_resolve(
     retrofit: *mut DmsaaRetrofit,
@@ -917,7 +919,9 @@ pub unsafe extern "C" fn dmsaa_resolve(
 /// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or
 /// `run_lighting`; `DMSAA_STATUS_OUT_OF_ORDER` before this frame's
 /// [`dmsaa_resolve`] or when already begun; `DMSAA_STATUS_INVALID_ARGUMENT`
-/// for an output the second layer cannot use; `DMSAA_STATUS_GL`.
+/// for an output the second layer cannot use (no framebuffer, or
+/// incomplete); `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the G-buffer
+/// changed since it was read, as for [`dmsaa_resolve`]; `DMSAA_STATUS_GL`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn dmsaa_begin_second_layer(
     retrofit: *mut DmsaaRetrofit,

@@ -388,6 +388,50 @@ fn settle<T>(gl: &glow::Context, stage: &str, result: Result<T>) -> Result<T> {
     pending.map(|()| value)
 }
 
+/// The second layer's lighting output, checked when `begin_second_layer`
+/// is given it (`finish_second_layer` takes begin's alone): a name
+/// that is no framebuffer, or a framebuffer GL calls incomplete (the
+/// default framebuffer of a surfaceless context, say), is refused saying
+/// so, rather than as the GL error a copy from it raises. The read binding
+/// is put back.
+fn check_output(gl: &glow::Context, output: Option<glow::Framebuffer>) -> Result<()> {
+    use glow::HasContext;
+    let name = || {
+        output.map_or("the default framebuffer (0)".to_string(), |f| {
+            format!("framebuffer {}", f.0)
+        })
+    };
+    if let Some(f) = output {
+        if !unsafe { gl.is_framebuffer(f) } {
+            return Err(Error::invalid(format!(
+                "the lighting output, {}, is not a framebuffer object (glIsFramebuffer is false)",
+                name()
+            )));
+        }
+    }
+    let status = unsafe {
+        let read = gl.get_parameter_i32(glow::READ_FRAMEBUFFER_BINDING);
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, output);
+        let status = gl.check_framebuffer_status(glow::READ_FRAMEBUFFER);
+        gl.bind_framebuffer(
+            glow::READ_FRAMEBUFFER,
+            std::num::NonZeroU32::new(read as u32)
+                .map(glow::NativeFramebuffer)
+                .filter(|&f| gl.is_framebuffer(f)),
+        );
+        status
+    };
+    if status != glow::FRAMEBUFFER_COMPLETE {
+        return Err(Error::invalid(format!(
+            "the lighting output, {}, is incomplete ({}): the second layer reads the lit image \
+             from it",
+            name(),
+            crate::gl::framebuffer_status_name(status)
+        )));
+    }
+    Ok(())
+}
+
 impl MsaaRetrofit {
     /// Introspect `host_fbo`, build its multisampled twins under
     /// `options` and compile the resolve's programs.
@@ -858,6 +902,12 @@ impl MsaaRetrofit {
 
     /// Resolve the twins into the host's textures: call it after the
     /// geometry pass, before the host's lighting reads its G-buffer.
+    ///
+    /// Errors: [`Error::InvalidArgument`] between `begin_second_layer` and
+    /// `finish_second_layer` or for a projection that is not a GL
+    /// perspective; [`Error::Retrofit`] when the host re-allocated, deleted
+    /// or replaced an attachment since the retrofit read it (call
+    /// [`MsaaRetrofit::refresh`]); [`Error::Gl`].
     pub fn resolve(&mut self, gl: &glow::Context, frame: &Frame) -> Result<()> {
         if self.second.as_ref().is_some_and(|s| s.lighting) {
             return Err(Error::invalid(
@@ -865,6 +915,7 @@ impl MsaaRetrofit {
             ));
         }
         let params = self.params(frame)?;
+        crate::host::check_unchanged(gl, &self.host)?;
         let extra = self.extra_outputs();
         // A frame begins: its profile replaces the last one's.
         let mut profile = std::mem::take(&mut self.profile);
@@ -946,6 +997,8 @@ impl MsaaRetrofit {
             return Ok(false);
         };
         clear_host_errors(gl);
+        crate::host::check_unchanged(gl, &self.host)?;
+        check_output(gl, output)?;
         let host = SetupState::capture(gl).guard(gl);
         let profile = &mut self.profile;
         let mut result = second.begin(gl, output, self.options.restore_first_layer, profile);
@@ -983,6 +1036,12 @@ impl MsaaRetrofit {
             ));
         };
         clear_host_errors(gl);
+        if let Err(e) = crate::host::check_unchanged(gl, &self.host) {
+            // The first layer has no images left to go back into: the
+            // frame is over, and `refresh` reads the new G-buffer.
+            second.lighting = false;
+            return Err(e);
+        }
         let mut host = SetupState::capture(gl);
         // The mix tests the selection's stencil.
         host.keep_stencil_func(gl)?;
