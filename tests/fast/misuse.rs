@@ -226,3 +226,45 @@ fn random_call_sequences_keep_the_hosts_state() {
     );
     assert!(failed.is_empty(), "{}", failed.join("\n\n"));
 }
+
+#[test]
+fn a_panic_puts_the_state_back_and_frees_what_was_made() {
+    use deferred_msaa::gl::{Format, Made, Owned, SetupState, Texture2d, live_objects};
+    use glow::HasContext;
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    unsafe {
+        gl.enable_draw_buffer(glow::BLEND, 1);
+        gl.color_mask_draw_buffer(2, false, true, false, true);
+        gl.viewport(1, 2, 30, 40);
+    }
+    let before = common::gl_state::GlState::capture(gl);
+    let live = live_objects().total();
+    // A panic in the middle of a call: state changed, objects made, in a
+    // constructor and after it.
+    let unwound = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let _host = SetupState::capture(gl).guard(gl);
+        unsafe {
+            gl.disable(glow::BLEND);
+            gl.color_mask(true, true, true, true);
+            gl.viewport(0, 0, 4, 4);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        }
+        let kept = Owned::new(
+            gl,
+            Texture2d::new(gl, "made before the panic", Format::Rgba8, 4, 4).expect("a texture"),
+        );
+        let _: Result<(), deferred_msaa::Error> = Made::build(gl, |made| {
+            made.keep(Texture2d::new(gl, "made inside", Format::Rgba8, 4, 4)?);
+            assert_eq!(live_objects().total(), live + 2, "both textures made");
+            panic!("deliberately, with texture {} alive", kept.raw().0);
+        });
+    }));
+    assert!(unwound.is_err(), "the closure panics");
+    let differences = before.differences(&common::gl_state::GlState::capture(gl));
+    assert!(differences.is_empty(), "{}", differences.join("\n"));
+    assert_eq!(live_objects().total(), live, "what was made was freed");
+    assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
+}
