@@ -290,6 +290,8 @@ pub struct SavedState {
     depth_func: i32,
     depth_mask: bool,
     stencil: StencilFaces,
+    /// `GL_STENCIL_CLEAR_VALUE` (the stencil copy's bit passes clear).
+    stencil_clear: i32,
     /// Per texture unit `0..units`: the 2D, 2D-array and multisample bindings.
     textures: Vec<[i32; 3]>,
 }
@@ -371,6 +373,7 @@ impl SavedState {
                 viewport_arrays: ViewportArrays::capture(gl),
                 depth_func: gl.get_parameter_i32(glow::DEPTH_FUNC),
                 depth_mask: gl.get_parameter_i32(glow::DEPTH_WRITEMASK) != 0,
+                stencil_clear: gl.get_parameter_i32(glow::STENCIL_CLEAR_VALUE),
                 stencil: StencilFaces {
                     func: None,
                     ops: [
@@ -525,6 +528,7 @@ impl Restore for SavedState {
             );
             gl.depth_func(self.depth_func as u32);
             gl.depth_mask(self.depth_mask);
+            gl.clear_stencil(self.stencil_clear);
             for (k, face) in [glow::FRONT, glow::BACK].into_iter().enumerate() {
                 if let Some(func) = self.stencil.func {
                     let [func, reference, mask] = func[k];

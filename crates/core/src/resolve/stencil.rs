@@ -139,7 +139,6 @@ impl StencilPass {
         // The passes set the stencil function.
         state.keep_stencil_func(gl)?;
         let state = state.guard(gl);
-        let clear = unsafe { gl.get_parameter_i32(glow::STENCIL_CLEAR_VALUE) };
         let result = match &self.program {
             None => unsafe {
                 gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(twin_fbo.raw()));
@@ -201,9 +200,9 @@ impl StencilPass {
                 Ok(())
             },
         };
+        // The host's state, its stencil clear value included (the bit passes
+        // clear with 0), comes back.
         drop(state);
-        // The bit passes cleared with 0; the host's clear value comes back.
-        unsafe { gl.clear_stencil(clear) };
         result.and_then(|()| check_error(gl, "copying the host's stencil"))
     }
 }
