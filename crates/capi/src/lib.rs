@@ -392,7 +392,16 @@ fn with_handle<T>(
         ));
     }
     handle.poisoned = true;
-    let result = body(handle);
+    // The core's guards put the host's state back while a panic unwinds;
+    // a GL error left on the way is drained before the panic goes on to
+    // `entry`, so that none is left for the host.
+    let result = match catch_unwind(AssertUnwindSafe(|| body(&mut *handle))) {
+        Ok(result) => result,
+        Err(payload) => {
+            let _ = deferred_msaa::gl::check_error(&handle.gl, "a panic");
+            std::panic::resume_unwind(payload)
+        }
+    };
     handle.poisoned = false;
     result
 }
@@ -734,7 +743,16 @@ pub unsafe extern "C" fn dmsaa_retrofit_new(
         }
         deferred_msaa::gl::load_state_functions(loader)?;
         let host = deferred_msaa::glow::NativeFramebuffer(fbo);
-        let retrofit = MsaaRetrofit::new(&gl, host, &converted.options)?;
+        // As in `with_handle`: no GL error left behind a panic either.
+        let retrofit = match catch_unwind(AssertUnwindSafe(|| {
+            MsaaRetrofit::new(&gl, host, &converted.options)
+        })) {
+            Ok(result) => result?,
+            Err(payload) => {
+                let _ = deferred_msaa::gl::check_error(&gl, "a panic");
+                std::panic::resume_unwind(payload)
+            }
+        };
         let handle = Box::new(DmsaaRetrofit {
             gl,
             retrofit,
