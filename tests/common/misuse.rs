@@ -132,6 +132,8 @@ pub enum Op {
     Delete(usize),
     /// The host puts its G-buffer back (new textures for deleted ones).
     PutBack,
+    /// The host deletes its framebuffer and makes it again (the same name).
+    Recreate,
     /// The host puts its G-buffer back and a handle must recover.
     Recover(Which),
     /// A whole frame in order: draw, resolve, and the second layer's
@@ -334,6 +336,7 @@ impl Sequence {
                 26 => Op::Delete(rng.below(colors as u32 + 1) as usize),
                 27 => Op::PutBack,
                 28 => Op::Frame(which(&mut rng)),
+                29 if rng.below(2) == 0 => Op::Recreate,
                 _ => Op::Recover(which(&mut rng)),
             };
             ops.push(op);
@@ -520,6 +523,24 @@ impl Host {
     fn put_back(&mut self, gl: &glow::Context) {
         for k in 0..self.images.len() {
             self.specify(gl, k, SIZE);
+        }
+    }
+
+    /// The framebuffer deleted and made again, as an engine does on a
+    /// resize, every image attached again with the same draw buffers. GL
+    /// need not give the freed name back (Mesa does not): the handles made
+    /// for the old one cannot follow, and say so.
+    fn recreate(&mut self, gl: &glow::Context) {
+        unsafe {
+            gl.delete_framebuffer(self.fbo);
+            self.fbo = gl.create_framebuffer().expect("host framebuffer");
+            self.put_back(gl);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.fbo));
+            let draw: Vec<u32> = (0..self.colors as u32)
+                .map(|k| glow::COLOR_ATTACHMENT0 + k)
+                .collect();
+            gl.draw_buffers(&draw);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
         }
     }
 
@@ -873,6 +894,8 @@ unsafe extern "C" fn load(name: *const c_char, user: *mut c_void) -> *const c_vo
 struct Handle {
     raw: *mut c::DmsaaRetrofit,
     options: c::DmsaaOptions,
+    /// The framebuffer it was made for.
+    fbo: u32,
 }
 
 /// The calling thread's `dmsaa_last_error()`.
@@ -1069,6 +1092,7 @@ impl Run<'_> {
             self.slots[slot] = Some(Handle {
                 raw: out,
                 options: c_options,
+                fbo: host_fbo,
             });
             return;
         }
@@ -1121,10 +1145,29 @@ impl Run<'_> {
         let Which::Slot(k) = which else {
             return;
         };
-        let Some(options) = self.slots[k].as_ref().map(|h| h.options) else {
+        let Some((options, fbo)) = self.slots[k].as_ref().map(|h| (h.options, h.fbo)) else {
             return;
         };
         let raw = self.handle(which);
+        if fbo != self.host.fbo.0.get() {
+            // The host made its framebuffer again under another name: the
+            // handle refuses, saying its framebuffer is gone.
+            let status = self.call(index, "dmsaa_refresh (framebuffer gone)", |_| unsafe {
+                c::dmsaa_refresh(raw)
+            });
+            if status != c::DmsaaStatus::InvalidArgument
+                || !last_error().contains("no longer a framebuffer object")
+            {
+                self.fail(
+                    index,
+                    format!(
+                        "dmsaa_refresh with the framebuffer deleted: {status:?}: {}",
+                        last_error()
+                    ),
+                );
+            }
+            return;
+        }
         let status = self.call(index, "dmsaa_refresh (recovery)", |_| unsafe {
             c::dmsaa_refresh(raw)
         });
@@ -1381,6 +1424,7 @@ impl Run<'_> {
                 self.host.delete(gl, k);
             }
             Op::PutBack => self.host.put_back(gl),
+            Op::Recreate => self.host.recreate(gl),
             Op::Recover(which) => self.recover(index, *which),
             Op::Frame(which) => {
                 self.draw(index, *which);
@@ -1672,6 +1716,29 @@ impl Run<'_> {
                 let Some(k) = live(self, which) else {
                     return true;
                 };
+                let made_for = self.retrofits[k].as_ref().map(|(r, _)| r.host().fbo);
+                if made_for != Some(self.host.fbo) {
+                    // The host made its framebuffer again under another name:
+                    // the retrofit refuses, saying its framebuffer is gone.
+                    let mut message = String::new();
+                    let refused =
+                        !self.call_rust(index, "MsaaRetrofit::refresh (framebuffer gone)", |run| {
+                            match run.retrofits[k].as_mut().map(|(r, _)| r.refresh(gl)) {
+                                Some(Err(e)) => {
+                                    message = e.to_string();
+                                    Err(e)
+                                }
+                                _ => Ok(()),
+                            }
+                        });
+                    if !refused || !message.contains("no longer a framebuffer object") {
+                        self.fail(
+                            index,
+                            format!("refresh with the framebuffer deleted: {message:?}"),
+                        );
+                    }
+                    return true;
+                }
                 let ok = self.call_rust(index, "MsaaRetrofit::refresh (recovery)", |run| match run
                     .retrofits[k]
                     .as_mut()
@@ -1706,7 +1773,12 @@ impl Run<'_> {
                 self.step_rust(index, &Op::Begin(*which, Fbo::Light, false));
                 self.step_rust(index, &Op::Finish(*which, Fbo::Light));
             }
-            Op::Dirty(_) | Op::Set(_) | Op::Reallocate(_) | Op::Delete(_) | Op::PutBack => {
+            Op::Dirty(_)
+            | Op::Set(_)
+            | Op::Reallocate(_)
+            | Op::Delete(_)
+            | Op::PutBack
+            | Op::Recreate => {
                 return false;
             }
         }

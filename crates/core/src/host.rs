@@ -331,13 +331,7 @@ pub(crate) fn introspect_point(
 /// Errors: [`Error::Retrofit`] naming the first attachment that changed and
 /// how, or [`Error::InvalidArgument`] when the framebuffer is gone.
 pub(crate) fn check_unchanged(gl: &glow::Context, host: &HostFramebuffer) -> Result<()> {
-    if !unsafe { gl.is_framebuffer(host.fbo) } {
-        return Err(Error::invalid(format!(
-            "host framebuffer {} is no longer a framebuffer object (deleted since the retrofit \
-             read it); make a new retrofit for the host's new framebuffer",
-            host.fbo.0
-        )));
-    }
+    check_alive(gl, host.fbo)?;
     let changed = |a: &HostAttachment, what: String| Error::Retrofit {
         attachment: a.point.name(),
         reason: format!(
@@ -441,6 +435,22 @@ pub(crate) fn check_unchanged(gl: &glow::Context, host: &HostFramebuffer) -> Res
         }
     }
     result
+}
+
+/// Whether the framebuffer a retrofit was made for still exists: a host
+/// that deletes it and makes another (whose name GL does not promise to be
+/// the same) makes a new retrofit for that one.
+///
+/// Errors: [`Error::InvalidArgument`] saying so.
+pub(crate) fn check_alive(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<()> {
+    if unsafe { gl.is_framebuffer(fbo) } {
+        return Ok(());
+    }
+    Err(Error::invalid(format!(
+        "host framebuffer {} is no longer a framebuffer object (deleted since the retrofit read \
+         it); make a new retrofit for the host's new framebuffer",
+        fbo.0
+    )))
 }
 
 /// Read a host framebuffer's attachments, formats, sizes and draw-buffer

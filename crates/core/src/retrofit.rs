@@ -1178,6 +1178,7 @@ impl MsaaRetrofit {
 
     fn rebuild(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
         clear_host_errors(gl);
+        crate::host::check_alive(gl, self.host.fbo)?;
         let host = SetupState::capture(gl).guard(gl);
         let result = self.rebuild_within(gl, options);
         drop(host);
