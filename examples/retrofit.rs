@@ -67,6 +67,9 @@ fn run(args: Args) -> AnyResult<()> {
     let scene = Scene::load(&args.scene)?;
     let context = HeadlessContext::new(Backend::Egl)?;
     let gl = context.gl();
+    // Once per process: the per-draw-buffer queries glow does not wrap, so
+    // that the retrofit keeps the engine's per-buffer blend and masks.
+    deferred_msaa::gl::load_state_functions(|name| context.get_proc_address(name))?;
 
     let engine = Engine::new(gl, &scene, width, height)?;
     let image = match method {

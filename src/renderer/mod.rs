@@ -514,7 +514,9 @@ impl Renderer {
     /// and allocate the targets for `options`.
     ///
     /// `loader` looks up GL entry points glow does not wrap (`glClipControl`,
-    /// for reversed-Z) for the current context: the host's
+    /// for reversed-Z; `glIsEnabledi` and `glGetBooleani_v`, which the
+    /// retrofit's saved state needs: [`load_state_functions`](deferred_msaa::gl::load_state_functions))
+    /// for the current context: the host's
     /// `eglGetProcAddress` or equivalent, e.g.
     /// `|name| ctx.get_proc_address(name)` with a
     /// [`HeadlessContext`](crate::context::HeadlessContext).
@@ -534,6 +536,7 @@ impl Renderer {
         requested: &RenderOptions,
     ) -> Result<Self> {
         requested.validate()?;
+        deferred_msaa::gl::load_state_functions(&loader)?;
         sparse::check_support(gl, &requested.aa)?;
         let needs = SceneNeeds::of(scene);
         let plan_context = PlanContext::query(gl, &requested.layout);

@@ -1,10 +1,144 @@
 //! The GL state a host keeps across the retrofit's calls: a snapshot by
 //! name (bindings of every texture unit, framebuffers, buffers, program,
 //! pixel store, depth, stencil, blend, capabilities, viewport, scissor,
-//! masks, clear values), taken before and after a call and compared. The
-//! zoo and the property test read the same list.
+//! masks, clear values, and per draw buffer the blend enable and the colour
+//! mask, and with viewport arrays every viewport, scissor box and scissor
+//! test), taken before and after a call and compared. The zoo, the
+//! property test and the misuse fuzzer read the same list.
+//!
+//! Two values GL hides are read around the hiding: the per-buffer colour
+//! mask through `glGetBooleani_v`, which glow does not wrap (loaded by
+//! [`load`], which `common::context` calls), and the stencil references,
+//! which a query clamps to the bound draw framebuffer's stencil bits (0 on
+//! a surfaceless default framebuffer): they are read again with a
+//! framebuffer of an 8-bit stencil bound, made for the read and deleted.
 
 use glow::HasContext;
+use std::ffi::c_void;
+use std::sync::atomic::{AtomicPtr, Ordering};
+
+type IsEnabledi = unsafe extern "system" fn(target: u32, index: u32) -> u8;
+type GetBooleaniV = unsafe extern "system" fn(target: u32, index: u32, data: *mut u8);
+
+type GetFloatiV = unsafe extern "system" fn(target: u32, index: u32, data: *mut f32);
+type GetIntegeriV = unsafe extern "system" fn(target: u32, index: u32, data: *mut i32);
+
+static IS_ENABLEDI: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
+static GET_BOOLEANI_V: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
+static GET_FLOATI_V: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
+static GET_INTEGERI_V: AtomicPtr<c_void> = AtomicPtr::new(std::ptr::null_mut());
+
+/// Load the snapshot's own `glIsEnabledi` and `glGetBooleani_v` (not the
+/// crate's, which it checks).
+pub fn load(mut loader: impl FnMut(&str) -> *const c_void) {
+    IS_ENABLEDI.store(loader("glIsEnabledi").cast_mut(), Ordering::Release);
+    GET_BOOLEANI_V.store(loader("glGetBooleani_v").cast_mut(), Ordering::Release);
+    GET_FLOATI_V.store(loader("glGetFloati_v").cast_mut(), Ordering::Release);
+    GET_INTEGERI_V.store(loader("glGetIntegeri_v").cast_mut(), Ordering::Release);
+}
+
+/// Whether the context has viewport arrays (GL 4.1 or
+/// `GL_ARB_viewport_array`).
+pub fn has_viewport_arrays(gl: &glow::Context) -> bool {
+    let v = gl.version();
+    (v.major, v.minor) >= (4, 1) || gl.supported_extensions().contains("GL_ARB_viewport_array")
+}
+
+/// Every viewport, scissor box and scissor test by index, with viewport
+/// arrays.
+fn viewport_arrays(gl: &glow::Context, out: &mut Vec<(String, Vec<i64>)>) {
+    if !has_viewport_arrays(gl) {
+        return;
+    }
+    let (floats, ints) = (
+        GET_FLOATI_V.load(Ordering::Acquire),
+        GET_INTEGERI_V.load(Ordering::Acquire),
+    );
+    assert!(
+        !floats.is_null() && !ints.is_null(),
+        "gl_state::load was not called"
+    );
+    // SAFETY: non-null pointers the context's loader gave for these names;
+    // each query writes four values.
+    let (get_floati_v, get_integeri_v) = unsafe {
+        (
+            std::mem::transmute::<*mut c_void, GetFloatiV>(floats),
+            std::mem::transmute::<*mut c_void, GetIntegeriV>(ints),
+        )
+    };
+    let (is_enabledi, _) = indexed();
+    unsafe {
+        let count = gl.get_parameter_i32(glow::MAX_VIEWPORTS).clamp(1, 64) as u32;
+        for i in 0..count {
+            let mut v = [0f32; 4];
+            get_floati_v(glow::VIEWPORT, i, v.as_mut_ptr());
+            out.push((
+                format!("GL_VIEWPORT {i}"),
+                v.map(|x| i64::from(x.to_bits())).to_vec(),
+            ));
+            let mut b = [0i32; 4];
+            get_integeri_v(glow::SCISSOR_BOX, i, b.as_mut_ptr());
+            out.push((format!("GL_SCISSOR_BOX {i}"), b.map(i64::from).to_vec()));
+            out.push((
+                format!("GL_SCISSOR_TEST {i}"),
+                vec![i64::from(is_enabledi(glow::SCISSOR_TEST, i))],
+            ));
+        }
+    }
+}
+
+fn indexed() -> (IsEnabledi, GetBooleaniV) {
+    let (a, b) = (
+        IS_ENABLEDI.load(Ordering::Acquire),
+        GET_BOOLEANI_V.load(Ordering::Acquire),
+    );
+    assert!(
+        !a.is_null() && !b.is_null(),
+        "gl_state::load was not called (common::context calls it)"
+    );
+    // SAFETY: non-null pointers the context's loader gave for these names.
+    unsafe {
+        (
+            std::mem::transmute::<*mut c_void, IsEnabledi>(a),
+            std::mem::transmute::<*mut c_void, GetBooleaniV>(b),
+        )
+    }
+}
+
+/// The front and back stencil references, read with a framebuffer of an
+/// 8-bit stencil bound (and every binding it changes put back).
+fn stencil_references(gl: &glow::Context) -> Vec<i64> {
+    unsafe {
+        let draw = gl.get_parameter_i32(glow::DRAW_FRAMEBUFFER_BINDING) as u32;
+        let renderbuffer = gl.get_parameter_i32(glow::RENDERBUFFER_BINDING) as u32;
+        let rb = gl.create_renderbuffer().expect("a probe renderbuffer");
+        gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
+        gl.renderbuffer_storage(glow::RENDERBUFFER, glow::DEPTH24_STENCIL8, 1, 1);
+        let fbo = gl.create_framebuffer().expect("a probe framebuffer");
+        gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(fbo));
+        gl.framebuffer_renderbuffer(
+            glow::DRAW_FRAMEBUFFER,
+            glow::DEPTH_STENCIL_ATTACHMENT,
+            glow::RENDERBUFFER,
+            Some(rb),
+        );
+        let refs = vec![
+            gl.get_parameter_i32(glow::STENCIL_REF) as i64,
+            gl.get_parameter_i32(glow::STENCIL_BACK_REF) as i64,
+        ];
+        gl.bind_framebuffer(
+            glow::DRAW_FRAMEBUFFER,
+            std::num::NonZeroU32::new(draw).map(glow::NativeFramebuffer),
+        );
+        gl.bind_renderbuffer(
+            glow::RENDERBUFFER,
+            std::num::NonZeroU32::new(renderbuffer).map(glow::NativeRenderbuffer),
+        );
+        gl.delete_framebuffer(fbo);
+        gl.delete_renderbuffer(rb);
+        refs
+    }
+}
 
 /// The host state the retrofit's calls must leave as they found it, by name.
 #[derive(Clone, Debug, PartialEq)]
@@ -141,6 +275,38 @@ impl GlState {
                 "GL_SAMPLE_MASK_VALUE".into(),
                 vec![gl.get_parameter_indexed_i32(glow::SAMPLE_MASK_VALUE, 0) as i64],
             ));
+            let (is_enabledi, get_booleani_v) = indexed();
+            for i in 0..max_draw {
+                s.push((
+                    format!("GL_BLEND of draw buffer {i}"),
+                    vec![i64::from(is_enabledi(glow::BLEND, i))],
+                ));
+                let mut mask = [0u8; 4];
+                get_booleani_v(glow::COLOR_WRITEMASK, i, mask.as_mut_ptr());
+                s.push((
+                    format!("GL_COLOR_WRITEMASK of draw buffer {i}"),
+                    mask.map(i64::from).to_vec(),
+                ));
+            }
+            s.push((
+                "GL_STENCIL_REF and GL_STENCIL_BACK_REF through an 8-bit stencil".into(),
+                stencil_references(gl),
+            ));
+            viewport_arrays(gl, &mut s);
+            for (name, e) in [
+                ("GL_STENCIL_BACK_VALUE_MASK", glow::STENCIL_BACK_VALUE_MASK),
+                ("GL_STENCIL_BACK_FAIL", glow::STENCIL_BACK_FAIL),
+                (
+                    "GL_STENCIL_BACK_PASS_DEPTH_FAIL",
+                    glow::STENCIL_BACK_PASS_DEPTH_FAIL,
+                ),
+                (
+                    "GL_STENCIL_BACK_PASS_DEPTH_PASS",
+                    glow::STENCIL_BACK_PASS_DEPTH_PASS,
+                ),
+            ] {
+                s.push((name.into(), int(e)));
+            }
         }
         GlState(s)
     }

@@ -2,11 +2,13 @@
 //! `deferred-msaa-testkit` crate (the toy host, the generator, projections):
 //! contexts and the skip rule, a test run alone (`alone`), goldens (`golden`),
 //! the GL state snapshot (`gl_state`), the property test over random host
-//! G-buffers (`property`), the sRGB transfer function in f64 (`srgb`).
+//! G-buffers (`property`), the C API's misuse fuzzer (`misuse`), the sRGB
+//! transfer function in f64 (`srgb`).
 #![allow(dead_code)]
 
 pub mod gl_state;
 pub mod golden;
+pub mod misuse;
 pub mod property;
 pub mod srgb;
 pub mod xvfb;
@@ -26,7 +28,14 @@ pub fn context(backend: Backend) -> Option<HeadlessContext> {
         return None;
     }
     match HeadlessContext::new(backend) {
-        Ok(c) => Some(c),
+        Ok(c) => {
+            // As a Rust host does: the crate's per-draw-buffer queries, and
+            // the snapshot's own.
+            deferred_msaa_lab::gl::load_state_functions(|name| c.get_proc_address(name))
+                .expect("glIsEnabledi and glGetBooleani_v");
+            gl_state::load(|name| c.get_proc_address(name));
+            Some(c)
+        }
         Err(e) => panic!("creating a {backend} context failed: {e}"),
     }
 }

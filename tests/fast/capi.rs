@@ -228,6 +228,8 @@ fn c_hosts_build_against_the_installed_library_and_run() {
         "zero FBO",
         "FBO without depth",
         "finish without begin",
+        "loader without glGetBooleani_v",
+        "a name that is no framebuffer",
     ] {
         assert!(
             lines

@@ -1,7 +1,7 @@
 //! The fast tier of the lab's integration tests, one binary: what plain
 //! `cargo test` runs, in minutes on two cores. The resolve against the CPU
 //! reference, the retrofit, the goldens, reliability, the renderer, scenes,
-//! the CLI, the host zoo and the C API from C. The slow tier (`tests/slow`) is the bench, the
+//! the CLI, the host zoo, the C API from C and the C API under misuse. The slow tier (`tests/slow`) is the bench, the
 //! examples under Xvfb and the viewer's long runs; `scripts/test` runs both.
 //! The shared test kit (contexts and skips, the RNG, the host renderer and
 //! its projections, goldens) is `tests/common`.
@@ -20,6 +20,7 @@ mod goldens;
 mod host_equivalence;
 mod host_habits;
 mod lit_target;
+mod misuse;
 mod plan;
 mod property;
 mod reliability;

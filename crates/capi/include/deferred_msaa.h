@@ -76,7 +76,8 @@ typedef enum {
   // an attachment it lacks): the message names the attachment.
   DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER = 4,
   // The context lacks what is asked for: a GL version or extension, a
-  // sample count or a multisampled format.
+  // sample count or a multisampled format; or the loader returns null
+  // for a GL function the library calls (the message names it).
   DMSAA_STATUS_UNSUPPORTED = 5,
   // The twins would take more memory than the options' budget allows.
   DMSAA_STATUS_MEMORY_BUDGET = 6,
@@ -361,13 +362,19 @@ DmsaaOptions dmsaa_options_default(void);
 // sharing its objects). The GL state the host set (bindings, program,
 // viewport, enables, draw buffers...) is as it was when the call returns.
 //
+// Every GL function the library calls is asked of the loader before
+// anything is made: one it returns null for is
+// `DMSAA_STATUS_UNSUPPORTED`, naming it.
+//
 // Errors: `DMSAA_STATUS_NULL_POINTER` for a null `get_proc_address`,
 // `options` or `out`; `DMSAA_STATUS_INVALID_ARGUMENT` for a `host_fbo` of
-// 0 (the default framebuffer has no textures to resolve into) or options
-// out of range; `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the framebuffer
-// cannot be retrofitted (no depth attachment, for one);
-// `DMSAA_STATUS_UNSUPPORTED`, `DMSAA_STATUS_MEMORY_BUDGET`,
-// `DMSAA_STATUS_GL` as their names say.
+// 0 (the default framebuffer has no textures to resolve into), a name that
+// is no framebuffer object, or options out of range;
+// `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the framebuffer cannot be
+// retrofitted (no depth attachment, for one); `DMSAA_STATUS_UNSUPPORTED`
+// (a function the loader lacks, too), `DMSAA_STATUS_MEMORY_BUDGET`,
+// `DMSAA_STATUS_GL` as their names say. No GL error is left, and the host's
+// GL state is as it was, whatever the status.
 DmsaaStatus dmsaa_retrofit_new(DmsaaGetProcAddress get_proc_address,
                                void *user_data,
                                uint32_t host_fbo,
@@ -444,7 +451,9 @@ DmsaaStatus dmsaa_second_layer_selection(DmsaaRetrofit *retrofit, uint32_t *out_
 // `DMSAA_STATUS_INVALID_ARGUMENT` for a projection that is not a GL
 // perspective matrix; `DMSAA_STATUS_OUT_OF_ORDER` between
 // [`dmsaa_begin_second_layer`] and [`dmsaa_finish_second_layer`];
-// `DMSAA_STATUS_GL`.
+// `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the host re-allocated,
+// deleted or replaced an attachment since it was read (call
+// [`dmsaa_refresh`]); `DMSAA_STATUS_GL`.
 DmsaaStatus dmsaa_resolve(DmsaaRetrofit *retrofit,
                           const float *projection,
                           const float *view_or_null);
@@ -462,7 +471,9 @@ DmsaaStatus dmsaa_resolve(DmsaaRetrofit *retrofit,
 // Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or
 // `run_lighting`; `DMSAA_STATUS_OUT_OF_ORDER` before this frame's
 // [`dmsaa_resolve`] or when already begun; `DMSAA_STATUS_INVALID_ARGUMENT`
-// for an output the second layer cannot use; `DMSAA_STATUS_GL`.
+// for an output the second layer cannot use (no framebuffer, or
+// incomplete); `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the G-buffer
+// changed since it was read, as for [`dmsaa_resolve`]; `DMSAA_STATUS_GL`.
 DmsaaStatus dmsaa_begin_second_layer(DmsaaRetrofit *retrofit,
                                      uint32_t output_fbo,
                                      bool *run_lighting);

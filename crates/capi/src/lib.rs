@@ -63,7 +63,8 @@ pub enum DmsaaStatus {
     /// an attachment it lacks): the message names the attachment.
     UnsuitableFramebuffer = 4,
     /// The context lacks what is asked for: a GL version or extension, a
-    /// sample count or a multisampled format.
+    /// sample count or a multisampled format; or the loader returns null
+    /// for a GL function the library calls (the message names it).
     Unsupported = 5,
     /// The twins would take more memory than the options' budget allows.
     MemoryBudget = 6,
@@ -434,7 +435,16 @@ fn with_handle<T>(
         ));
     }
     handle.poisoned = true;
-    let result = body(handle);
+    // The core's guards put the host's state back while a panic unwinds;
+    // a GL error left on the way is drained before the panic goes on to
+    // `entry`, so that none is left for the host.
+    let result = match catch_unwind(AssertUnwindSafe(|| body(&mut *handle))) {
+        Ok(result) => result,
+        Err(payload) => {
+            let _ = deferred_msaa::gl::check_error(&handle.gl, "a panic");
+            std::panic::resume_unwind(payload)
+        }
+    };
     handle.poisoned = false;
     result
 }
@@ -723,13 +733,19 @@ pub extern "C" fn dmsaa_options_default() -> DmsaaOptions {
 /// sharing its objects). The GL state the host set (bindings, program,
 /// viewport, enables, draw buffers...) is as it was when the call returns.
 ///
+/// Every GL function the library calls is asked of the loader before
+/// anything is made: one it returns null for is
+/// `DMSAA_STATUS_UNSUPPORTED`, naming it.
+///
 /// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `get_proc_address`,
 /// `options` or `out`; `DMSAA_STATUS_INVALID_ARGUMENT` for a `host_fbo` of
-/// 0 (the default framebuffer has no textures to resolve into) or options
-/// out of range; `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the framebuffer
-/// cannot be retrofitted (no depth attachment, for one);
-/// `DMSAA_STATUS_UNSUPPORTED`, `DMSAA_STATUS_MEMORY_BUDGET`,
-/// `DMSAA_STATUS_GL` as their names say.
+/// 0 (the default framebuffer has no textures to resolve into), a name that
+/// is no framebuffer object, or options out of range;
+/// `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the framebuffer cannot be
+/// retrofitted (no depth attachment, for one); `DMSAA_STATUS_UNSUPPORTED`
+/// (a function the loader lacks, too), `DMSAA_STATUS_MEMORY_BUDGET`,
+/// `DMSAA_STATUS_GL` as their names say. No GL error is left, and the host's
+/// GL state is as it was, whatever the status.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn dmsaa_retrofit_new(
     get_proc_address: DmsaaGetProcAddress,
@@ -755,6 +771,26 @@ pub unsafe extern "C" fn dmsaa_retrofit_new(
                  resolve into; pass the G-buffer framebuffer the geometry pass draws into"
             )));
         };
+        let loader = |name: &str| match CString::new(name) {
+            // SAFETY: the header requires a loader for the context current
+            // on this thread, called with a NUL-terminated name.
+            Ok(name) => unsafe { load(name.as_ptr(), user_data) },
+            Err(_) => std::ptr::null(),
+        };
+        // glow keeps a null pointer and panics only when it is called, in
+        // the middle of a pass: every function is checked first.
+        let missing = |name: &str| {
+            Failure::new(
+                DmsaaStatus::Unsupported,
+                format!(
+                    "{F}: the loader returns null for {name}, which the library calls; \
+                     nothing was made or changed"
+                ),
+            )
+        };
+        if let Some(name) = deferred_msaa::gl::first_missing_function(loader) {
+            return Err(missing(name));
+        }
         // SAFETY: the loader returns entry points of the context current
         // on this thread, as the header requires.
         let gl = unsafe {
@@ -762,8 +798,21 @@ pub unsafe extern "C" fn dmsaa_retrofit_new(
                 load(name.as_ptr(), user_data)
             })
         };
+        if let Some(name) = deferred_msaa::gl::first_missing_conditional_function(&gl, loader) {
+            return Err(missing(name));
+        }
+        deferred_msaa::gl::load_state_functions(loader)?;
         let host = deferred_msaa::glow::NativeFramebuffer(fbo);
-        let retrofit = MsaaRetrofit::new(&gl, host, &converted.options)?;
+        // As in `with_handle`: no GL error left behind a panic either.
+        let retrofit = match catch_unwind(AssertUnwindSafe(|| {
+            MsaaRetrofit::new(&gl, host, &converted.options)
+        })) {
+            Ok(result) => result?,
+            Err(payload) => {
+                let _ = deferred_msaa::gl::check_error(&gl, "a panic");
+                std::panic::resume_unwind(payload)
+            }
+        };
         let handle = Box::new(DmsaaRetrofit {
             gl,
             retrofit,
@@ -934,7 +983,9 @@ fn matrix(function: &str, name: &str, m: *const f32) -> Result<[f32; 16], Failur
 /// `DMSAA_STATUS_INVALID_ARGUMENT` for a projection that is not a GL
 /// perspective matrix; `DMSAA_STATUS_OUT_OF_ORDER` between
 /// [`dmsaa_begin_second_layer`] and [`dmsaa_finish_second_layer`];
-/// `DMSAA_STATUS_GL`.
+/// `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the host re-allocated,
+/// deleted or replaced an attachment since it was read (call
+/// [`dmsaa_refresh`]); `DMSAA_STATUS_GL`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn dmsaa_resolve(
     retrofit: *mut DmsaaRetrofit,
@@ -986,7 +1037,9 @@ pub unsafe extern "C" fn dmsaa_resolve(
 /// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or
 /// `run_lighting`; `DMSAA_STATUS_OUT_OF_ORDER` before this frame's
 /// [`dmsaa_resolve`] or when already begun; `DMSAA_STATUS_INVALID_ARGUMENT`
-/// for an output the second layer cannot use; `DMSAA_STATUS_GL`.
+/// for an output the second layer cannot use (no framebuffer, or
+/// incomplete); `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the G-buffer
+/// changed since it was read, as for [`dmsaa_resolve`]; `DMSAA_STATUS_GL`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn dmsaa_begin_second_layer(
     retrofit: *mut DmsaaRetrofit,

@@ -219,6 +219,12 @@ pub(crate) fn introspect_point(
                     "texture {raw} is attached at mip level {level}; only level 0 can be retrofitted"
                 )));
             }
+            if !unsafe { gl.is_texture(texture) } {
+                return Err(refuse(format!(
+                    "texture {raw} was deleted (glIsTexture is false) and is still attached; \
+                     attach a texture that exists"
+                )));
+            }
             let target = texture_target(gl, texture);
             let image = match target {
                 Some(glow::TEXTURE_2D) => HostImageKind::Texture2d(texture),
@@ -257,6 +263,12 @@ pub(crate) fn introspect_point(
             let rb = std::num::NonZeroU32::new(raw)
                 .map(glow::NativeRenderbuffer)
                 .ok_or_else(|| refuse("the driver reports renderbuffer 0".into()))?;
+            if !unsafe { gl.is_renderbuffer(rb) } {
+                return Err(refuse(format!(
+                    "renderbuffer {raw} was deleted (glIsRenderbuffer is false) and is still \
+                     attached; attach a renderbuffer that exists"
+                )));
+            }
             let (internal, w, h, samples) = unsafe {
                 gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
                 let p = |pname| gl.get_renderbuffer_parameter_i32(glow::RENDERBUFFER, pname);
@@ -308,14 +320,155 @@ pub(crate) fn introspect_point(
     }))
 }
 
+/// Whether the host's framebuffer still holds what `host` read: each image
+/// attached where it was, not deleted, at the size it had. A host that
+/// re-allocates, deletes or replaces an attachment must call `refresh`; a
+/// pass over the old images would write part of an image of another size
+/// or raise a GL error naming none of this. The host's bindings are left
+/// as they were (the read framebuffer, the active unit's 2D and 2D-array
+/// textures and the renderbuffer are put back).
+///
+/// Errors: [`Error::Retrofit`] naming the first attachment that changed and
+/// how, or [`Error::InvalidArgument`] when the framebuffer is gone.
+pub(crate) fn check_unchanged(gl: &glow::Context, host: &HostFramebuffer) -> Result<()> {
+    check_alive(gl, host.fbo)?;
+    let changed = |a: &HostAttachment, what: String| Error::Retrofit {
+        attachment: a.point.name(),
+        reason: format!(
+            "{what} since the retrofit read it ({}x{}); call refresh after re-allocating the \
+             G-buffer",
+            a.width, a.height
+        ),
+    };
+    let restore = unsafe {
+        [
+            (glow::READ_FRAMEBUFFER, glow::READ_FRAMEBUFFER_BINDING),
+            (glow::TEXTURE_2D, glow::TEXTURE_BINDING_2D),
+            (glow::TEXTURE_2D_ARRAY, glow::TEXTURE_BINDING_2D_ARRAY),
+            (glow::RENDERBUFFER, glow::RENDERBUFFER_BINDING),
+        ]
+        .map(|(target, binding)| (target, gl.get_parameter_i32(binding)))
+    };
+    let result = (|| {
+        for a in host.colors.iter().chain([&host.depth]) {
+            let (size, attached) = unsafe {
+                gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(host.fbo));
+                // The depth-stencil point is read at depth, as introspection reads it.
+                let point = match a.point {
+                    Attachment::DepthStencil => glow::DEPTH_ATTACHMENT,
+                    p => p.gl_enum(),
+                };
+                let attached = gl.get_framebuffer_attachment_parameter_i32(
+                    glow::READ_FRAMEBUFFER,
+                    point,
+                    glow::FRAMEBUFFER_ATTACHMENT_OBJECT_NAME,
+                ) as u32;
+                let size = match a.image {
+                    HostImageKind::Texture2d(t)
+                    | HostImageKind::TextureLayer { texture: t, .. }
+                        if gl.is_texture(t) =>
+                    {
+                        let target = match a.image {
+                            HostImageKind::TextureLayer { .. } => glow::TEXTURE_2D_ARRAY,
+                            _ => glow::TEXTURE_2D,
+                        };
+                        gl.bind_texture(target, Some(t));
+                        Some((
+                            gl.get_tex_level_parameter_i32(target, 0, glow::TEXTURE_WIDTH),
+                            gl.get_tex_level_parameter_i32(target, 0, glow::TEXTURE_HEIGHT),
+                        ))
+                    }
+                    HostImageKind::Renderbuffer(rb) if gl.is_renderbuffer(rb) => {
+                        gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
+                        Some((
+                            gl.get_renderbuffer_parameter_i32(
+                                glow::RENDERBUFFER,
+                                glow::RENDERBUFFER_WIDTH,
+                            ),
+                            gl.get_renderbuffer_parameter_i32(
+                                glow::RENDERBUFFER,
+                                glow::RENDERBUFFER_HEIGHT,
+                            ),
+                        ))
+                    }
+                    _ => None,
+                };
+                (size, attached)
+            };
+            let Some((w, h)) = size else {
+                return Err(changed(a, "the host deleted its image".into()));
+            };
+            if attached != a.object_name() {
+                return Err(changed(
+                    a,
+                    format!(
+                        "another image ({attached}) is attached in place of {}",
+                        a.object_name()
+                    ),
+                ));
+            }
+            if (w.max(0) as u32, h.max(0) as u32) != (a.width, a.height) {
+                return Err(changed(a, format!("the host re-allocated it at {w}x{h}")));
+            }
+        }
+        Ok(())
+    })();
+    unsafe {
+        for (target, raw) in restore {
+            let name = std::num::NonZeroU32::new(raw as u32);
+            match target {
+                glow::READ_FRAMEBUFFER => gl.bind_framebuffer(
+                    target,
+                    name.map(glow::NativeFramebuffer)
+                        .filter(|&f| gl.is_framebuffer(f)),
+                ),
+                glow::RENDERBUFFER => gl.bind_renderbuffer(
+                    target,
+                    name.map(glow::NativeRenderbuffer)
+                        .filter(|&r| gl.is_renderbuffer(r)),
+                ),
+                _ => gl.bind_texture(
+                    target,
+                    name.map(glow::NativeTexture).filter(|&t| gl.is_texture(t)),
+                ),
+            }
+        }
+    }
+    result
+}
+
+/// Whether the framebuffer a retrofit was made for still exists: a host
+/// that deletes it and makes another (whose name GL does not promise to be
+/// the same) makes a new retrofit for that one.
+///
+/// Errors: [`Error::InvalidArgument`] saying so.
+pub(crate) fn check_alive(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<()> {
+    if unsafe { gl.is_framebuffer(fbo) } {
+        return Ok(());
+    }
+    Err(Error::invalid(format!(
+        "host framebuffer {} is no longer a framebuffer object (deleted since the retrofit read \
+         it); make a new retrofit for the host's new framebuffer",
+        fbo.0
+    )))
+}
+
 /// Read a host framebuffer's attachments, formats, sizes and draw-buffer
 /// mapping. The host's bindings are left as they were.
 pub fn introspect(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFramebuffer> {
-    let host = SetupState::capture(gl);
+    // Binding a name that is not a framebuffer is `GL_INVALID_OPERATION`
+    // (and every query after it reads the host's own binding): say so.
+    if !unsafe { gl.is_framebuffer(fbo) } {
+        return Err(Error::invalid(format!(
+            "host framebuffer {} is not a framebuffer object (glIsFramebuffer is false: never \
+             bound since glGenFramebuffers, or deleted); pass the G-buffer framebuffer the \
+             geometry pass draws into",
+            fbo.0
+        )));
+    }
+    let _host = SetupState::capture(gl).guard(gl);
     unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo)) };
-    let result = introspect_bound(gl, fbo);
-    host.restore(gl);
-    result
+    introspect_bound(gl, fbo)
 }
 
 fn introspect_bound(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<HostFramebuffer> {

@@ -128,7 +128,7 @@ impl Readback {
         fbo: &Framebuffer,
     ) -> Result<SampleImage> {
         let (w, h) = (texture.width as usize, texture.height as usize);
-        let state = SavedState::capture(gl, 1);
+        let state = SavedState::capture(gl, 1).guard(gl);
         self.program(gl, texture.target, texture.format.sample_kind())?;
         let pass = &self.programs[&(texture.target, texture.format.sample_kind())];
         let mut data = vec![0.0f32; count as usize * w * h * 4];
@@ -163,7 +163,7 @@ impl Readback {
             gl.bind_texture(texture.target, None);
             gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
         }
-        state.restore(gl);
+        drop(state);
         check_error(gl, "reading a texture back")?;
         Ok(SampleImage {
             samples: count,

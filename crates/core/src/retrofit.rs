@@ -13,7 +13,7 @@ use crate::frame::Frame;
 use crate::gbuffer::{MemoryBudget, MultisampleTwin, TwinSpec, budget_twins};
 use crate::gl::Texture2d;
 use crate::gl::{
-    Attachment, ColorAttachment, Format, Framebuffer, GlObject, Handle, HostImage, Made,
+    Attachment, ColorAttachment, Format, Framebuffer, GlObject, Handle, HostImage, Made, Owned,
     SavedState, SetupState, TextureRef, check_error, destroy_object,
 };
 pub use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect};
@@ -489,6 +489,70 @@ fn check_stencil_copy_point(gl: &glow::Context, host: &HostFramebuffer) -> Resul
     })
 }
 
+/// Before a public call's GL calls: an error the host left pending is not
+/// the call's; it is logged and cleared, so that [`settle`] sees the call's
+/// own.
+fn clear_host_errors(gl: &glow::Context) {
+    if let Err(e) = check_error(gl, "the host's GL calls before this call") {
+        log::warn!("{e}");
+    }
+}
+
+/// The end of a public call, after the host's state is back: any GL error
+/// the call's own GL calls left pending is drained, so that none is left for
+/// the host whatever the result; after a call that succeeded it is the
+/// call's error (one no step of the call checked, which the misuse fuzzer
+/// has not met).
+fn settle<T>(gl: &glow::Context, stage: &str, result: Result<T>) -> Result<T> {
+    let pending = check_error(gl, stage);
+    let value = result?;
+    pending.map(|()| value)
+}
+
+/// The second layer's lighting output, checked when `begin_second_layer`
+/// is given it (`finish_second_layer` takes begin's alone): a name
+/// that is no framebuffer, or a framebuffer GL calls incomplete (the
+/// default framebuffer of a surfaceless context, say), is refused saying
+/// so, rather than as the GL error a copy from it raises. The read binding
+/// is put back.
+fn check_output(gl: &glow::Context, output: Option<glow::Framebuffer>) -> Result<()> {
+    use glow::HasContext;
+    let name = || {
+        output.map_or("the default framebuffer (0)".to_string(), |f| {
+            format!("framebuffer {}", f.0)
+        })
+    };
+    if let Some(f) = output {
+        if !unsafe { gl.is_framebuffer(f) } {
+            return Err(Error::invalid(format!(
+                "the lighting output, {}, is not a framebuffer object (glIsFramebuffer is false)",
+                name()
+            )));
+        }
+    }
+    let status = unsafe {
+        let read = gl.get_parameter_i32(glow::READ_FRAMEBUFFER_BINDING);
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, output);
+        let status = gl.check_framebuffer_status(glow::READ_FRAMEBUFFER);
+        gl.bind_framebuffer(
+            glow::READ_FRAMEBUFFER,
+            std::num::NonZeroU32::new(read as u32)
+                .map(glow::NativeFramebuffer)
+                .filter(|&f| gl.is_framebuffer(f)),
+        );
+        status
+    };
+    if status != glow::FRAMEBUFFER_COMPLETE {
+        return Err(Error::invalid(format!(
+            "the lighting output, {}, is incomplete ({}): the second layer reads the lit image \
+             from it",
+            name(),
+            crate::gl::framebuffer_status_name(status)
+        )));
+    }
+    Ok(())
+}
+
 impl MsaaRetrofit {
     /// Introspect `host_fbo`, build its multisampled twins under
     /// `options` and compile the resolve's programs.
@@ -502,10 +566,20 @@ impl MsaaRetrofit {
         host_fbo: glow::Framebuffer,
         options: &RetrofitOptions,
     ) -> Result<Self> {
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        let host = SetupState::capture(gl).guard(gl);
         let result = Self::create(gl, host_fbo, options);
-        host.restore(gl);
-        result
+        drop(host);
+        match (result, check_error(gl, "making the retrofit")) {
+            // An error no step checked: the retrofit is not handed out, and
+            // what it made is freed.
+            (Ok(retrofit), Err(e)) => {
+                retrofit.destroy(gl);
+                let _ = check_error(gl, "freeing a retrofit that left a GL error");
+                Err(e)
+            }
+            (result, _) => result,
+        }
     }
 
     fn create(
@@ -517,26 +591,26 @@ impl MsaaRetrofit {
             let resolver = made.keep(Resolver::new(gl)?);
             Ok::<_, Error>((resolver, Self::build(gl, host_fbo, options)?))
         })?;
-        let mut retrofit = MsaaRetrofit {
-            host: built.host,
-            options: options.clone(),
-            twin: built.twin,
-            target: built.target,
-            rules: built.rules,
-            key: built.key,
-            resolver,
-            warnings: built.warnings,
-            stencil: built.stencil,
-            normal: built.normal,
-            second: built.second,
-            profile: StepProfile::default(),
-            forward: None,
-        };
-        if let Err(e) = retrofit.prepare(gl) {
-            retrofit.destroy(gl);
-            return Err(e);
-        }
-        Ok(retrofit)
+        let mut retrofit = Owned::new(
+            gl,
+            MsaaRetrofit {
+                host: built.host,
+                options: options.clone(),
+                twin: built.twin,
+                target: built.target,
+                rules: built.rules,
+                key: built.key,
+                resolver,
+                warnings: built.warnings,
+                stencil: built.stencil,
+                normal: built.normal,
+                second: built.second,
+                profile: StepProfile::default(),
+                forward: None,
+            },
+        );
+        retrofit.prepare(gl)?;
+        Ok(retrofit.into_inner())
     }
 
     /// The sample count `budget` allows for twins of `host`'s attachments.
@@ -809,10 +883,11 @@ impl MsaaRetrofit {
             }
             Some(params) => {
                 let selected = profile.time(gl, "second layer: selection", || {
-                    let state = SavedState::capture(gl, 1);
-                    let selected = second.select(gl, params.projection.clear_depth as f32);
-                    state.restore(gl);
-                    selected
+                    let mut state = SavedState::capture(gl, 1);
+                    // The selection sets the stencil function.
+                    state.keep_stencil_func(gl)?;
+                    let _state = state.guard(gl);
+                    second.select(gl, params.projection.clear_depth as f32)
                 });
                 profile.time(gl, "second layer: resolve", || {
                     let selected = selected?;
@@ -907,14 +982,18 @@ impl MsaaRetrofit {
     /// Errors: [`Error::Retrofit`] naming the deleted object (then
     /// [`MsaaRetrofit::refresh`] makes new twins), and the GL layer's.
     pub fn begin_frame(&mut self, gl: &glow::Context) -> Result<glow::Framebuffer> {
+        clear_host_errors(gl);
         self.check_twins(gl)?;
         if let Some(clear) = &self.options.twin_clear {
-            let host = SetupState::capture(gl);
+            let host = SetupState::capture(gl).guard(gl);
             clear_twins(gl, &self.host, &self.twin, clear);
-            host.restore(gl);
-            check_error(gl, "clearing the multisampled twins")?;
+            drop(host);
         }
-        Ok(self.twin.fbo.raw())
+        settle(
+            gl,
+            "clearing the multisampled twins",
+            Ok(self.twin.fbo.raw()),
+        )
     }
 
     /// The multisampled framebuffer and textures exist: nobody else deleted
@@ -1040,7 +1119,18 @@ impl MsaaRetrofit {
 
     /// Resolve the twins into the host's textures: call it after the
     /// geometry pass, before the host's lighting reads its G-buffer.
+    ///
+    /// Errors: [`Error::InvalidArgument`] between `begin_second_layer` and
+    /// `finish_second_layer` or for a projection that is not a GL
+    /// perspective; [`Error::Retrofit`] when the host re-allocated, deleted
+    /// or replaced an attachment since the retrofit read it (call
+    /// [`MsaaRetrofit::refresh`]); [`Error::Gl`].
     pub fn resolve(&mut self, gl: &glow::Context, frame: &Frame) -> Result<()> {
+        if self.second.as_ref().is_some_and(|s| s.lighting) {
+            return Err(Error::invalid(
+                "resolve was called between begin_second_layer and finish_second_layer",
+            ));
+        }
         let params = self.params(frame)?;
         self.check_twins(gl)?;
         // An error the host's calls left pending (a geometry pass that
@@ -1052,6 +1142,7 @@ impl MsaaRetrofit {
         {
             return Err(Error::HostGl { code, code_name });
         }
+        crate::host::check_unchanged(gl, &self.host)?;
         let extra = self.extra_outputs();
         if let Some(second) = &mut self.second {
             second.end_first_lighting(gl);
@@ -1061,7 +1152,7 @@ impl MsaaRetrofit {
         profile.clear();
         let result = self.resolve_profiled(gl, &params, extra, &mut profile);
         self.profile = profile;
-        result
+        settle(gl, "resolving", result)
     }
 
     fn resolve_profiled(
@@ -1177,7 +1268,10 @@ impl MsaaRetrofit {
                 "begin_second_layer between begin_forward and finish_forward: light both layers before the forward pass",
             ));
         }
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        crate::host::check_unchanged(gl, &self.host)?;
+        check_output(gl, output)?;
+        let host = SetupState::capture(gl).guard(gl);
         let profile = &mut self.profile;
         let mut result = second.begin(
             gl,
@@ -1201,16 +1295,16 @@ impl MsaaRetrofit {
                 result = Err(e);
             }
         }
-        host.restore(gl);
+        drop(host);
         match result {
             Ok(own) => {
                 // Counted from here to finish: the host's second lighting.
                 second.lighting_begins(gl);
-                Ok(Some(own))
+                settle(gl, "beginning the second layer", Ok(Some(own)))
             }
             Err(e) => {
                 second.abandon_check(gl);
-                Err(e)
+                settle(gl, "beginning the second layer", Err(e))
             }
         }
     }
@@ -1232,10 +1326,20 @@ impl MsaaRetrofit {
                 "finish_second_layer needs two layers (ResolveSettings::layers = 2)",
             ));
         };
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        if let Err(e) = crate::host::check_unchanged(gl, &self.host) {
+            // The first layer has no images left to go back into: the
+            // frame is over, and `refresh` reads the new G-buffer.
+            second.lighting = false;
+            return Err(e);
+        }
+        let mut host = SetupState::capture(gl);
+        // The mix tests the selection's stencil.
+        host.keep_stencil_func(gl)?;
+        let host = host.guard(gl);
         let result = second.finish(gl, output, &mut self.profile);
-        host.restore(gl);
-        result
+        drop(host);
+        settle(gl, "finishing the second layer", result)
     }
 
     /// MSAA for what the host draws forward after lighting (light cubes,
@@ -1273,7 +1377,8 @@ impl MsaaRetrofit {
         if let Some(second) = &mut self.second {
             second.end_first_lighting(gl);
         }
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        let host = SetupState::capture(gl).guard(gl);
         let framebuffer_srgb = unsafe { gl.is_enabled(glow::FRAMEBUFFER_SRGB) };
         let result = self
             .forward_for(gl, output, framebuffer_srgb)
@@ -1284,8 +1389,8 @@ impl MsaaRetrofit {
                     .ok_or_else(|| Error::invalid("the forward target was not made"))?;
                 self.profile.time(gl, "forward: fill", || forward.begin(gl))
             });
-        host.restore(gl);
-        result
+        drop(host);
+        settle(gl, "beginning the forward target", result)
     }
 
     /// The forward target for `output`, made again when the output, the
@@ -1337,12 +1442,13 @@ impl MsaaRetrofit {
                 "finish_forward was given another output than begin_forward",
             ));
         }
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        let host = SetupState::capture(gl).guard(gl);
         let result = self
             .profile
             .time(gl, "forward: resolve", || forward.finish(gl));
-        host.restore(gl);
-        result
+        drop(host);
+        settle(gl, "resolving the forward target", result)
     }
 
     /// The bytes the forward target allocates (0 before the first
@@ -1419,10 +1525,11 @@ impl MsaaRetrofit {
     /// the new twins); the programs whenever the resolve's permutation
     /// changes. On error the retrofit keeps working with the options it had.
     pub fn set_options(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        let host = SetupState::capture(gl).guard(gl);
         let result = self.change_options(gl, options);
-        host.restore(gl);
-        result
+        drop(host);
+        settle(gl, "changing the options", result)
     }
 
     fn change_options(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
@@ -1467,10 +1574,12 @@ impl MsaaRetrofit {
     }
 
     fn rebuild(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
-        let host = SetupState::capture(gl);
+        clear_host_errors(gl);
+        crate::host::check_alive(gl, self.host.fbo)?;
+        let host = SetupState::capture(gl).guard(gl);
         let result = self.rebuild_within(gl, options);
-        host.restore(gl);
-        result
+        drop(host);
+        settle(gl, "rebuilding the twins", result)
     }
 
     /// Put `built` in place of what the retrofit was built with; that is
@@ -1492,11 +1601,13 @@ impl MsaaRetrofit {
 
     fn rebuild_within(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
         let built = Self::build(gl, self.host.fbo, options)?;
-        let old = self.swap_built(built);
+        // Freed when this returns, or if the compilation panics; taken back
+        // if it fails.
+        let old = Owned::new(gl, self.swap_built(built));
         let old_options = std::mem::replace(&mut self.options, options.clone());
         match self.prepare(gl) {
             Ok(()) => {
-                old.destroy(gl);
+                drop(old);
                 // The forward target attaches the old twins' depth.
                 if let Some(forward) = self.forward.take() {
                     destroy_object(gl, forward);
@@ -1505,7 +1616,7 @@ impl MsaaRetrofit {
             }
             Err(e) => {
                 // Put the working twins back.
-                self.swap_built(old).destroy(gl);
+                self.swap_built(old.into_inner()).destroy(gl);
                 self.options = old_options;
                 Err(e)
             }

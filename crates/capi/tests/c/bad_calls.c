@@ -2,7 +2,8 @@
  * Every bad call a C host can make returns an error status with a
  * one-line message, and the process keeps running: null options, a null
  * handle, a zero FBO, an FBO without depth, the second layer's calls out
- * of order, options out of range, a projection that is not one. Each bad
+ * of order, options out of range, a projection that is not one, a loader
+ * without one GL function, a name that is no framebuffer. Each bad
  * call prints one line, "bad call: NAME: status S: MESSAGE"; a valid
  * retrofit made afterwards still resolves. Exits non-zero, saying why, if
  * any call succeeds that must not, returns another status than expected,
@@ -29,6 +30,28 @@ static void expect(DmsaaStatus got, DmsaaStatus expected, const char *name)
     }
     if (!message || !message[0] || strchr(message, '\n')) {
         fprintf(stderr, "FAIL: %s left no one-line message\n", name);
+        failures++;
+    }
+}
+
+/* A loader without the one function named by `user_data`. */
+static const void *load_without(const char *name, void *user_data)
+{
+    if (strcmp(name, (const char *)user_data) == 0)
+        return NULL;
+    return load_gl(name, NULL);
+}
+
+/* Fails unless the last message holds `text` and no GL error is left. */
+static void expect_message(const char *text, const char *name)
+{
+    if (!strstr(dmsaa_last_error(), text)) {
+        fprintf(stderr, "FAIL: the message for %s does not say `%s`\n", name, text);
+        failures++;
+    }
+    GLenum error = glGetError();
+    if (error != GL_NO_ERROR) {
+        fprintf(stderr, "FAIL: %s left GL error 0x%x\n", name, error);
         failures++;
     }
 }
@@ -142,6 +165,13 @@ int main(void)
     bad.layer_mix = DMSAA_LAYER_MIX_CURVE;
     expect(dmsaa_retrofit_new(load_gl, NULL, gbuffer, &bad, &msaa), DMSAA_STATUS_NULL_POINTER,
            "curve mix without its text");
+    /* a loader without one function, a name that is no framebuffer */
+    expect(dmsaa_retrofit_new(load_without, (void *)"glGetBooleani_v", gbuffer, &options, &msaa),
+           DMSAA_STATUS_UNSUPPORTED, "loader without glGetBooleani_v");
+    expect_message("glGetBooleani_v", "a loader without glGetBooleani_v");
+    expect(dmsaa_retrofit_new(load_gl, NULL, 9999, &options, &msaa),
+           DMSAA_STATUS_INVALID_ARGUMENT, "a name that is no framebuffer");
+    expect_message("is not a framebuffer object", "a name that is no framebuffer");
     if (dmsaa_live_objects() != 0) {
         fprintf(stderr, "FAIL: failed dmsaa_retrofit_new calls left %lld GL objects\n",
                 (long long)dmsaa_live_objects());

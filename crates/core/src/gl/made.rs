@@ -154,21 +154,38 @@ pub struct Made {
 }
 
 impl Made {
-    /// Run the constructor `f`; if it returns `Err`, destroy everything it
-    /// passed through [`Made::keep`] (newest first) and return the error.
+    /// Run the constructor `f`; if it returns `Err`, or panics, destroy
+    /// everything it passed through [`Made::keep`] (newest first) and
+    /// return the error (or go on unwinding).
     ///
     /// Objects kept must not be destroyed inside `f` (they would be freed twice).
     pub fn build<T, E>(
         gl: &glow::Context,
         f: impl FnOnce(&mut Made) -> Result<T, E>,
     ) -> Result<T, E> {
-        let mut made = Made::default();
-        let result = f(&mut made);
-        if result.is_err() {
-            for handle in made.handles.into_iter().rev() {
-                handle.delete(gl);
+        /// Frees what was kept when dropped unarmed: after an `Err` and
+        /// while a panic unwinds.
+        struct Undo<'a> {
+            gl: &'a glow::Context,
+            made: Made,
+            succeeded: bool,
+        }
+        impl Drop for Undo<'_> {
+            fn drop(&mut self) {
+                if !self.succeeded {
+                    for handle in std::mem::take(&mut self.made.handles).into_iter().rev() {
+                        handle.delete(self.gl);
+                    }
+                }
             }
         }
+        let mut undo = Undo {
+            gl,
+            made: Made::default(),
+            succeeded: false,
+        };
+        let result = f(&mut undo.made);
+        undo.succeeded = result.is_ok();
         result
     }
 
@@ -176,6 +193,62 @@ impl Made {
     pub fn keep<O: GlObject>(&mut self, object: O) -> O {
         object.handles(&mut self.handles);
         object
+    }
+}
+
+/// A value owning GL objects that is destroyed ([`destroy_object`]) when
+/// dropped, unless taken out with [`Owned::into_inner`]: for a step after
+/// construction (compiling a made retrofit's programs, say) that may fail or
+/// panic, so that neither way out leaks what was made.
+pub struct Owned<'a, T: GlObject> {
+    gl: &'a glow::Context,
+    value: Option<T>,
+}
+
+impl<'a, T: GlObject> Owned<'a, T> {
+    /// Own `value` until [`Owned::into_inner`].
+    pub fn new(gl: &'a glow::Context, value: T) -> Self {
+        Owned {
+            gl,
+            value: Some(value),
+        }
+    }
+
+    /// The value, no longer destroyed on drop.
+    pub fn into_inner(mut self) -> T {
+        match self.value.take() {
+            Some(value) => value,
+            // `value` is `Some` from `new` until this call, which consumes
+            // the guard.
+            None => unreachable!("an Owned guard's value is taken once"),
+        }
+    }
+}
+
+impl<T: GlObject> std::ops::Deref for Owned<'_, T> {
+    type Target = T;
+    fn deref(&self) -> &T {
+        match &self.value {
+            Some(value) => value,
+            None => unreachable!("an Owned guard's value is taken once"),
+        }
+    }
+}
+
+impl<T: GlObject> std::ops::DerefMut for Owned<'_, T> {
+    fn deref_mut(&mut self) -> &mut T {
+        match &mut self.value {
+            Some(value) => value,
+            None => unreachable!("an Owned guard's value is taken once"),
+        }
+    }
+}
+
+impl<T: GlObject> Drop for Owned<'_, T> {
+    fn drop(&mut self) {
+        if let Some(value) = self.value.take() {
+            destroy_object(self.gl, value);
+        }
     }
 }
 

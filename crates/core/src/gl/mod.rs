@@ -17,6 +17,7 @@ mod counters;
 mod debug;
 pub mod format;
 mod framebuffer;
+mod functions;
 mod made;
 mod pass;
 mod program;
@@ -34,12 +35,16 @@ pub use format::Format;
 pub use framebuffer::{
     Attachment, ColorAttachment, Framebuffer, HostImage, framebuffer_status_name,
 };
-pub use made::{GlObject, Handle, Made, destroy_object};
+pub use functions::{
+    CONDITIONAL_FUNCTIONS, REQUIRED_FUNCTIONS, first_missing_conditional_function,
+    first_missing_function,
+};
+pub use made::{GlObject, Handle, Made, Owned, destroy_object};
 pub use pass::{FullscreenPass, draw_fullscreen_triangle};
 pub use program::{Program, ShaderStage, preamble};
 pub use query::{GpuTimer, SamplesPassedQuery, TimerKind};
 pub use source::{HEADER_NAME, ShaderSource};
-pub use state::{SavedState, SetupState};
+pub use state::{DrawBufferState, Guard, Restore, SavedState, SetupState, load_state_functions};
 pub use target::{RenderTarget, TargetTexture};
 pub use texture::{Texture2d, Texture2dArray, Texture2dMultisample, TextureRef};
 

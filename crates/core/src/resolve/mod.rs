@@ -749,9 +749,14 @@ impl Resolver {
             log::warn!("{e}");
         }
         // Units 0..=colors hold the inputs.
-        let state = SavedState::capture(gl, inputs.colors.len() as u32 + 1);
+        let mut state = SavedState::capture(gl, inputs.colors.len() as u32 + 1);
+        if run.stencil.is_some() {
+            // The draw tests the target's stencil.
+            state.keep_stencil_func(gl)?;
+        }
+        let state = state.guard(gl);
         let result = self.draw(gl, &base, inputs, target, params, run.stencil);
-        state.restore(gl);
+        drop(state);
         result?;
         check_error(gl, run.stage)
     }

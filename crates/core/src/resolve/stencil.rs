@@ -140,8 +140,10 @@ impl StencilPass {
                 "the stencil copy by shader needs the resolve's reference index",
             ));
         }
-        let state = SavedState::capture(gl, 2);
-        let clear = unsafe { gl.get_parameter_i32(glow::STENCIL_CLEAR_VALUE) };
+        let mut state = SavedState::capture(gl, 2);
+        // The passes set the stencil function.
+        state.keep_stencil_func(gl)?;
+        let state = state.guard(gl);
         let result = match &self.program {
             None => unsafe {
                 gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(twin_fbo.raw()));
@@ -205,9 +207,9 @@ impl StencilPass {
                 Ok(())
             },
         };
-        state.restore(gl);
-        // The bit passes cleared with 0; the host's clear value comes back.
-        unsafe { gl.clear_stencil(clear) };
+        // The host's state, its stencil clear value included (the bit passes
+        // clear with 0), comes back.
+        drop(state);
         result.and_then(|()| check_error(gl, "copying the host's stencil"))
     }
 }
