@@ -9,16 +9,17 @@
 //  2. The history there, Catmull-Rom filtered from 4x4 texels (a bilinear
 //     tap would blur the history a little more on every frame the camera
 //     moves; at a texel centre the filter returns the texel itself).
-//  3. Variance clipping, of every pixel: in YCoCg, the box of mean +-
-//     u_gamma standard deviations of this frame's 3x3 neighbourhood,
-//     within its min-max box; the history is pulled towards the box's
-//     centre until it lies inside it, so a colour this frame does not show
-//     near the pixel cannot linger. That holds where the pixel itself
-//     barely moves too: a far background a thin bar has just left holds
-//     the bar in its history, a disocclusion no shipped TAA keeps.
+//  3. Variance clipping of every pixel while the camera moves: in YCoCg,
+//     the box of mean +- u_gamma standard deviations of this frame's 3x3
+//     neighbourhood, within its min-max box; the history is pulled towards
+//     the box's centre until it lies inside it, so a colour this frame
+//     does not show near the pixel cannot linger. That holds where the
+//     pixel itself barely moves too: a far background or the sky a thin
+//     bar has just left holds the bar in its history, a disocclusion no
+//     shipped TAA keeps. While the camera is still nothing is uncovered.
 //  4. A blend by confidence: the history's alpha counts the frames it
 //     accumulated; this frame weighs 1 / count (a running mean), but at
-//     least u_alpha where the pixel moves and u_alpha_still where it does
+//     least u_alpha while the camera moves and u_alpha_still while it does
 //     not, so a still camera converges on many phases while a moving one
 //     keeps up.
 //  The motion comes from the nearest surface of the 3x3 neighbourhood
@@ -44,7 +45,8 @@ uniform int u_has_history;     // 0 on the first frame after a reset
 uniform int u_zero_to_one;     // 1: NDC z is the depth value (reversed-Z); 0: z = 2 depth - 1
 uniform float u_alpha;         // weight of this frame
 uniform float u_gamma;         // half-size of the clip box in standard deviations
-uniform float u_alpha_still;   // the least weight of this frame where the pixel does not move
+uniform float u_alpha_still;   // the least weight of this frame while the camera is still
+uniform int u_camera_still;    // 1: the camera has not moved since the last frame
 
 out vec4 o_color;
 #ifndef TAA_REPROJECTED
@@ -161,12 +163,18 @@ void main() {
         }
         m1 /= 9.0;
         vec3 sigma = sqrt(max(m2 / 9.0 - m1 * m1, vec3(0.0)));
+        // While the camera moves, every pixel is clipped, whatever its own
+        // motion (the sky and a far wall barely move, yet a bar passing in
+        // front uncovers them). While it is still, the scene (static here)
+        // uncovers nothing, and a clip would only pull the mean of the
+        // jitter's phases towards the one phase this frame shows.
+        bool still = u_camera_still != 0;
         vec3 box_lo = max(m1 - u_gamma * sigma, lo);
         vec3 box_hi = min(m1 + u_gamma * sigma, hi);
-        history = from_ycocg(clip_to_box(history, box_lo, box_hi));
+        history = from_ycocg(still ? history : clip_to_box(history, box_lo, box_hi));
         // 4. The blend: a running mean, floored by the pixel's motion.
         count = clamp(held, 1.0, 1024.0) + 1.0;
-        float least = length(motion) < 0.01 ? u_alpha_still : u_alpha;
+        float least = still ? u_alpha_still : u_alpha;
         float weight = max(1.0 / count, least);
         result = mix(max(history, vec3(0.0)), current, weight);
     }

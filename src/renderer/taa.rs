@@ -28,7 +28,7 @@ pub(crate) const CURRENT_FORMAT: Format = Format::Srgb8Alpha8;
 /// the neighbourhood (Salvi's variance clipping; 1 is the usual choice).
 pub(crate) const GAMMA: f32 = 1.0;
 
-/// The least weight of this frame where a pixel does not move, as a share
+/// The least weight of this frame while the camera is still, as a share
 /// of `alpha` (0.015 at the default 0.1): a still camera averages many
 /// jitter phases, a running mean until it holds that many.
 pub(crate) const STILL_ALPHA_SHARE: f32 = 0.15;
@@ -128,6 +128,9 @@ pub(crate) struct ResolveInputs {
     pub(crate) reproject: [f32; 16],
     /// Whether a history exists (not the first frame after a reset).
     pub(crate) has_history: bool,
+    /// Whether the camera (its unjittered view-projection) is the last
+    /// frame's: nothing was uncovered, and the history is not clipped.
+    pub(crate) camera_still: bool,
     /// Whether NDC z is the depth value itself (reversed-Z's clip control).
     pub(crate) zero_to_one: bool,
     /// The weight of this frame.
@@ -211,6 +214,7 @@ impl TaaPasses {
         p.set_f32(gl, "u_alpha", inputs.alpha);
         p.set_f32(gl, "u_gamma", GAMMA);
         p.set_f32(gl, "u_alpha_still", inputs.alpha * STILL_ALPHA_SHARE);
+        p.set_i32(gl, "u_camera_still", i32::from(inputs.camera_still));
         draw_fullscreen(gl, vao);
         unsafe { gl.active_texture(glow::TEXTURE0) };
         Ok(check_error(gl, "the taa resolve")?)

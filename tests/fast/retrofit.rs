@@ -1508,8 +1508,21 @@ fn refusals_say_what_gl_shows_of_the_host_framebuffer() {
     .unwrap_err()
     .to_string();
     assert!(text.contains("nothing is attached there"), "{text}");
-    // A framebuffer whose engine attaches its images on first bind: empty.
+    // A framebuffer whose engine attaches its images on first bind: before
+    // that bind GL has no object of the name; bound once, it has one with
+    // nothing attached.
     let empty = unsafe { gl.create_framebuffer().unwrap() };
+    let text = MsaaRetrofit::new(gl, empty, &RetrofitOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        text.contains("never bound") && !text.contains("has no depth attachment"),
+        "{text}"
+    );
+    unsafe {
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(empty));
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+    }
     let text = MsaaRetrofit::new(gl, empty, &RetrofitOptions::default())
         .unwrap_err()
         .to_string();
@@ -1517,10 +1530,12 @@ fn refusals_say_what_gl_shows_of_the_host_framebuffer() {
         text.contains("nothing attached at all") && !text.contains("has no depth attachment"),
         "{text}"
     );
-    unsafe {
-        gl.delete_framebuffer(empty);
-        while gl.get_error() != glow::NO_ERROR {}
-    }
+    assert_eq!(
+        unsafe { gl.get_error() },
+        glow::NO_ERROR,
+        "a GL error left behind"
+    );
+    unsafe { gl.delete_framebuffer(empty) };
     fbo.destroy(gl);
     for t in [colour, undrawn, depth] {
         t.destroy(gl);

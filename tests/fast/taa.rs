@@ -20,33 +20,23 @@ use glam::{Mat4, Vec3};
 /// After its warm-up (the bench renders [`AaMode::warmup_frames`] frames
 /// from a reset before the frame it measures), `taa`'s FLIP against the
 /// supersampled reference is at most the per-sample 4x method's, and below
-/// `none`'s: the issue's "converges to within the per-sample 4x method's
-/// FLIP of the reference after its warm-up", read as `taa <= per-sample`.
+/// `none`'s, on `greebles`, `transparent` and `thin`; on `box`, within
+/// 1.25x of per-sample's (there the blend weighs the last phases more,
+/// and every edge sits a fraction of a pixel off).
 ///
-/// Against the bench's 4x4 reference on `greebles` and `transparent`. On
-/// `thin` against an 8x8 reference rendered here: the 4x pattern's samples
-/// (at odd eighths of the pixel) are four of the 4x4 reference's own
-/// sixteen, so on sub-pixel wires per-sample 4x matches that reference
-/// better than it matches the scene (at 160x90: taa 0.0234, per-sample
-/// 0.0162 against 4x4; 0.0176 and 0.0268 against 8x8). Printed, not
-/// asserted: `box`, where `taa` has the lower mean absolute error but the
-/// higher FLIP against both references (0.00235 and 0.00225 against
-/// per-sample's 0.00198 and 0.00210): the blend weighs the recent phases
-/// more, so the weighted centre of the last frames' jitter is not the
-/// pixel's, and every edge sits a fraction of a pixel off.
+/// On `thin` against an 8x8 reference rendered here: the 4x pattern's
+/// samples (at odd eighths of the pixel) are four of the 4x4 reference's
+/// own sixteen, so on sub-pixel wires per-sample 4x matches that reference
+/// better than it matches the scene.
 #[test]
 fn taa_on_a_still_camera_converges_to_within_per_sample_error() {
     if common::egl_context().is_none() {
         return;
     }
     let (w, h) = (160, 90);
-    let asserted = ["greebles", "transparent", "thin"];
+    let asserted = ["box", "greebles", "transparent", "thin"];
     let config = BenchConfig {
-        scenes: asserted
-            .iter()
-            .chain(&["box"])
-            .map(|s| format!("builtin:{s}"))
-            .collect(),
+        scenes: asserted.iter().map(|s| format!("builtin:{s}")).collect(),
         width: w,
         height: h,
         samples: vec![4],
@@ -59,7 +49,7 @@ fn taa_on_a_still_camera_converges_to_within_per_sample_error() {
     // After the bench's own context: this one is current.
     let ctx = common::egl_context().expect("a context");
     let gl = ctx.gl();
-    for scene in asserted.iter().chain(&["box"]) {
+    for scene in &asserted {
         let spec = format!("builtin:{scene}");
         let fine = (*scene == "thin").then(|| {
             let options = RenderOptions {
@@ -97,14 +87,13 @@ fn taa_on_a_still_camera_converges_to_within_per_sample_error() {
         let (none, per_sample, taa) = (flip("none"), flip("per-sample"), flip("taa"));
         let against = if fine.is_some() { "8x8" } else { "4x4" };
         eprintln!(
-            "{scene}: FLIP against the {against} reference: none {none:.5}, per-sample 4x {per_sample:.5}, taa {taa:.5}"
+            "{scene}: FLIP against the {against} reference: none {none:.5}, per-sample 4x {per_sample:.5}, taa {taa:.5} ({:.2}x per-sample)",
+            taa / per_sample
         );
-        if !asserted.contains(scene) {
-            continue;
-        }
+        let bound = if *scene == "box" { 1.25 } else { 1.0 };
         assert!(
-            taa <= per_sample,
-            "{scene}: taa FLIP {taa} is above per-sample's {per_sample} ({against} reference)"
+            taa <= bound * per_sample,
+            "{scene}: taa FLIP {taa} is above {bound}x per-sample's {per_sample} ({against} reference)"
         );
         assert!(taa < none, "{scene}: taa FLIP {taa}, none {none}");
     }
@@ -469,12 +458,11 @@ fn a_bar_moving_away_over_a_far_wall_leaves_no_trail() {
     for (x, y, p) in after.enumerate_pixels() {
         let (xi, yi) = (i64::from(x), i64::from(y));
         let was_bar = bright(before.get_pixel(x, y));
-        // Now at least two pixels from any bright pixel of this frame's
-        // own bar (its edges blend with the wall).
-        let near_bar = (-2..=2).any(|dx: i64| {
-            let nx = xi + dx;
-            nx >= 0 && nx < i64::from(W) && yi >= 0 && bright(after.get_pixel(nx as u32, y))
-        });
+        // Now at least two pixels from where the bar is (pixels 17 to 20:
+        // it moved 3 pixels left; its edges blend with the wall), known from
+        // the geometry, not from this frame's image, where a trail would
+        // hide itself.
+        let near_bar = (15..22).contains(&xi) && yi >= 0;
         if was_bar && !near_bar {
             uncovered += 1;
             if (0..3).any(|c| p[c].abs_diff(wall_colour[c]) > 2) {

@@ -196,12 +196,16 @@ impl Technique for Taa {
             (true, Some(previous)) => Some(previous * current.inverse()),
             _ => None,
         };
+        let camera_still = self
+            .previous
+            .is_some_and(|previous| previous.abs_diff_eq(current, 1e-12));
         let inputs = ResolveInputs {
             reproject: reproject
                 .unwrap_or(DMat4::IDENTITY)
                 .as_mat4()
                 .to_cols_array(),
             has_history: reproject.is_some(),
+            camera_still,
             zero_to_one,
             alpha: self.options.alpha,
         };
