@@ -14,6 +14,7 @@
 //! | `hull`        | FreeSpace Open's case: a hull filling the view, covered in detail close to it in depth (plates and seams, painted strips, pipes, low greebles), coloured point lights, dark space |
 //! | `halo`        | the paper's Figure 4: point lights just behind a box's edges, a far wall out of their range; averaging positions across the edge lights it |
 //! | `lamps`       | the deferred tutorial's picture: boxes lit by a dozen coloured point lights, each light shown as a small bright cube drawn forward after lighting (a blended material), over a dark floor and black sky: forward silhouettes the G-buffer never sees |
+//! | `slats`       | thin bright boxes seen at an angle (their side faces sub-pixel slivers) in front of a dark, unlit wall 190 units behind: pixels of three surfaces (front face, side sliver, wall), and in motion a background that barely moves while the slats pass over it |
 //! | `bars`        | thin silhouettes: bright slanted bars 1.3 to 3.4 pixels wide at 640x360 in front of a dark far wall, beside a plate of shallow ridges (creases: close in depth, different normals); the scene declares the bars, so the bench measures how wide each method draws them |
 
 use glam::{Mat4, Quat, Vec3};
@@ -38,6 +39,7 @@ pub(crate) const NAMES: &[&str] = &[
     "bars",
     "ridges",
     "lamps",
+    "slats",
 ];
 
 /// Builds the built-in scene `name`, or `None` when there is none so named.
@@ -55,6 +57,7 @@ pub(crate) fn build(name: &str) -> Option<Scene> {
         "bars" => bars(),
         "ridges" => ridges(),
         "lamps" => lamps(),
+        "slats" => slats(),
         _ => return None,
     };
     Some(scene)
@@ -1124,6 +1127,52 @@ fn lamps() -> Scene {
             40f32.to_radians(),
             0.1,
             Some(60.0),
+        )
+    })
+}
+
+/// Thin bright slats, boxes 0.05 deep turned 40 degrees about their long
+/// axis so that a side face shows as a sliver beside the front one,
+/// slanted in the image plane, in front of a dark wall 190 units behind
+/// them that no light reaches. At 640x360 a slat is 2 to 4 pixels wide.
+fn slats() -> Scene {
+    let mut sb = SceneBuilder::new("slats");
+    let slat_mat = sb.material(Material::solid("slats", [0.85, 0.82, 0.76], 0.0, 0.6));
+    let wall_mat = sb.material(Material::solid("wall", [0.03, 0.03, 0.035], 0.0, 0.9));
+    // World units per pixel in z = 0 at 360 pixels high.
+    let unit_per_px = 2.0 * 10.0 * (15f32.to_radians()).tan() / 360.0;
+    let mut slats = MeshBuilder::default();
+    for k in 0..7 {
+        let (width_px, slant_deg) = (1.5 + 0.4 * k as f32, -35.0 + 11.0 * k as f32);
+        let centre = Vec3::new(-4.2 + 1.4 * k as f32, 0.3 * ((k % 3) as f32 - 1.0), 0.0);
+        let turn = Quat::from_rotation_z(slant_deg.to_radians()) * Quat::from_rotation_y(0.7);
+        slats.cuboid(
+            centre,
+            Vec3::new(0.5 * width_px * unit_per_px, 2.2, 0.025),
+            turn,
+        );
+    }
+    sb.object("slats", slats, slat_mat, Mat4::IDENTITY);
+    let (wall_z, w, h) = (-190.0f32, 130.0f32, 75.0f32);
+    let mut wall = MeshBuilder::default();
+    wall.quad([
+        Vec3::new(-w, -h, wall_z),
+        Vec3::new(w, -h, wall_z),
+        Vec3::new(w, h, wall_z),
+        Vec3::new(-w, h, wall_z),
+    ]);
+    sb.object("far wall", wall, wall_mat, Mat4::IDENTITY);
+    // Lights near the slats, out of the wall's reach.
+    for (x, y, c) in [(-3.0, 2.0, rgb(1.0, 0.95, 0.85)), (3.0, -1.5, rgb(0.8, 0.9, 1.0))] {
+        sb.lights.push(Light::point(Vec3::new(x, y, 3.0), c, 60.0, Some(20.0)));
+    }
+    sb.finish(Background::Black, |_| {
+        Camera::look_at(
+            Vec3::new(0.0, 0.0, 10.0),
+            Vec3::ZERO,
+            30f32.to_radians(),
+            0.1,
+            Some(250.0),
         )
     })
 }
