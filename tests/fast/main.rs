@@ -13,6 +13,7 @@ mod budget;
 mod capi;
 mod cli;
 mod context;
+mod foreign;
 mod gbaa;
 mod gl_layer;
 mod gltf_sources;
