@@ -9,10 +9,14 @@
 //!   as it was (the snapshot of `common::gl_state`, read around each call);
 //! - with two layers the second lighting runs and the mix changes the lit
 //!   image at some pixels;
+//! - a second frame runs the other calls (`begin_frame`, the second layer
+//!   lit into the crate's own target, the forward target with nothing
+//!   drawn, which leaves the lit image bit for bit), under the same checks;
 //! - no GL object of the crate's is left after `destroy`;
 //! - the lit image is closer (FLIP mean) to the host's own 16x supersampled
 //!   image (the host drawn at 4x the width and height, averaged 4x4) than
-//!   the host's image without MSAA, and two layers closer than one.
+//!   the host's image without MSAA, and two layers closer than one (on
+//!   both frames).
 //!
 //! `cargo test --test fast foreign -- --nocapture` prints the FLIP figures.
 
@@ -413,8 +417,14 @@ impl Host017 {
     /// program, vertex array and G-buffer textures bound afterwards, on
     /// units 0 to 2, and unit 2 active, as engines do.
     fn lighting_pass(&self, gl: &glow017::Context) {
+        self.lighting_into(gl, self.lit_fbo);
+    }
+
+    /// The same lighting into `target` (the retrofit's own target for the
+    /// second layer).
+    fn lighting_into(&self, gl: &glow017::Context, target: glow017::Framebuffer) {
         unsafe {
-            gl.bind_framebuffer(glow017::FRAMEBUFFER, Some(self.lit_fbo));
+            gl.bind_framebuffer(glow017::FRAMEBUFFER, Some(target));
             gl.viewport(0, 0, self.width, self.height);
             gl.disable(glow017::DEPTH_TEST);
             gl.use_program(Some(self.lighting));
@@ -506,13 +516,15 @@ fn host_image(gl: &glow017::Context, scale: i32) -> RgbaImage {
     })
 }
 
-/// The host retrofitted through `ForeignRetrofit` with `layers` layers:
-/// its lit image and what went wrong, call by call.
+/// The host retrofitted through `ForeignRetrofit` with `layers` layers,
+/// two frames: its lit image with the second layer lit into its own
+/// target, then with it lit into the crate's own target (and the forward
+/// target run with nothing drawn), and what went wrong, call by call.
 fn retrofitted(
     ctx: &deferred_msaa_lab::context::HeadlessContext,
     gl: &glow017::Context,
     layers: u32,
-) -> (RgbaImage, Vec<String>) {
+) -> (RgbaImage, RgbaImage, Vec<String>) {
     let state = ctx.gl(); // the lab's glow 0.18, for the state snapshot only
     let mut failures = Vec::new();
     let checked = |what: &str, before: &GlState, failures: &mut Vec<String>| {
@@ -590,6 +602,73 @@ fn retrofitted(
         }
     }
 
+    // A second frame through the other calls: begin_frame, the second
+    // layer lit into the crate's own target, and the forward target with
+    // no forward object drawn, which must leave the lit image as it was.
+    let frame_fbo = match msaa.begin_frame() {
+        Ok(f) => f,
+        Err(e) => {
+            failures.push(format!("begin_frame: {e}"));
+            msaa.framebuffer()
+        }
+    };
+    if frame_fbo != msaa.framebuffer() {
+        failures.push("begin_frame gave another framebuffer than framebuffer()".into());
+    }
+    host.geometry_pass(gl, glow017::NativeFramebuffer(frame_fbo));
+    let before = GlState::capture(state);
+    if let Err(e) = msaa.resolve(&Frame::from_matrix(projection())) {
+        failures.push(format!("second frame: resolve: {e}"));
+    }
+    checked("second frame: resolve", &before, &mut failures);
+    host.lighting_pass(gl);
+    let before = GlState::capture(state);
+    let own = msaa.begin_second_layer_own_target(output);
+    checked("begin_second_layer_own_target", &before, &mut failures);
+    match (layers, own) {
+        (1, Ok(None)) => {}
+        (2, Ok(Some(target))) => {
+            host.lighting_into(gl, glow017::NativeFramebuffer(target));
+            let before = GlState::capture(state);
+            if let Err(e) = msaa.finish_second_layer(output) {
+                failures.push(format!("second frame: finish_second_layer: {e}"));
+            }
+            checked("second frame: finish_second_layer", &before, &mut failures);
+        }
+        (_, Ok(own)) => failures.push(format!(
+            "begin_second_layer_own_target with {layers} layer(s) gave {own:?}"
+        )),
+        (_, Err(e)) => failures.push(format!("begin_second_layer_own_target: {e}")),
+    }
+    let own_image = host.read_lit(gl);
+    let before = GlState::capture(state);
+    let forward = msaa.begin_forward(output);
+    checked("begin_forward", &before, &mut failures);
+    match forward {
+        Ok(_) => {
+            let before = GlState::capture(state);
+            if let Err(e) = msaa.finish_forward(output) {
+                failures.push(format!("finish_forward: {e}"));
+            }
+            checked("finish_forward", &before, &mut failures);
+        }
+        Err(e) => failures.push(format!("begin_forward: {e}")),
+    }
+    let changed = own_image
+        .pixels()
+        .zip(host.read_lit(gl).pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    if changed != 0 {
+        failures.push(format!(
+            "the forward target with nothing drawn changed {changed} pixels of the lit image"
+        ));
+    }
+
+    // The end of the frame: the host binds its window's framebuffer (one
+    // of the crate's left bound would fall back to 0 when destroy frees it,
+    // as glDeleteFramebuffers does).
+    unsafe { gl.bind_framebuffer(glow017::FRAMEBUFFER, None) };
     let before = GlState::capture(state);
     msaa.destroy();
     checked("destroy", &before, &mut failures);
@@ -601,7 +680,7 @@ fn retrofitted(
         ));
     }
     host.destroy(gl);
-    (image, failures)
+    (image, own_image, failures)
 }
 
 #[test]
@@ -617,16 +696,24 @@ fn glow017_host_retrofits_through_the_foreign_entry_point() {
     let none = host_image(&gl, 1);
     let mut failures = Vec::new();
     let mut flips = Vec::new();
+    let mut own_flips = Vec::new();
     for layers in [1, 2] {
-        let (image, f) = retrofitted(&ctx, &gl, layers);
+        let (image, own_image, f) = retrofitted(&ctx, &gl, layers);
         failures.extend(f.into_iter().map(|f| format!("{layers} layer(s): {f}")));
         flips.push(flip(&reference, &image).expect("flip").mean);
+        own_flips.push(flip(&reference, &own_image).expect("flip").mean);
     }
     let flip_none = flip(&reference, &none).expect("flip").mean;
     println!(
-        "foreign: FLIP against the host's 16x image: none {flip_none:.4}, one layer {:.4}, two layers {:.4}",
-        flips[0], flips[1]
+        "foreign: FLIP against the host's 16x image: none {flip_none:.4}, one layer {:.4}, two layers {:.4}; second frame (the crate's own target): one layer {:.4}, two layers {:.4}",
+        flips[0], flips[1], own_flips[0], own_flips[1]
     );
+    if own_flips[1] >= own_flips[0] {
+        failures.push(format!(
+            "two layers lit into the crate's own target are no closer to the 16x image than one: {:.4} vs {:.4}",
+            own_flips[1], own_flips[0]
+        ));
+    }
     if flips[0] >= flip_none {
         failures.push(format!(
             "one layer is no closer to the 16x image than no MSAA: {:.4} vs {flip_none:.4}",

@@ -275,7 +275,9 @@ impl ForeignRetrofit {
 
     /// Free every GL object the retrofit made (never the host's), with the
     /// host's context current on the calling thread, and the function
-    /// table.
+    /// table. The host's state is kept, but for a binding of one of the
+    /// freed objects (the retrofit's framebuffer left bound), which falls
+    /// back to 0 as `glDelete*` makes it.
     pub fn destroy(self) {
         let ForeignRetrofit { gl, retrofit } = self;
         retrofit.destroy(&gl);
