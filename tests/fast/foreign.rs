@@ -18,6 +18,9 @@
 //!   the host's image without MSAA, and two layers closer than one (on
 //!   both frames).
 //!
+//! And a loader that lacks a function the crate calls is refused as
+//! `Error::Unsupported` naming it, with nothing made and no GL error.
+//!
 //! `cargo test --test fast foreign -- --nocapture` prints the FLIP figures.
 
 use crate::common;
@@ -731,4 +734,39 @@ fn glow017_host_retrofits_through_the_foreign_entry_point() {
         failures.push(format!("GL error 0x{error:04X} at the end"));
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn a_loader_without_a_function_the_crate_calls_is_refused_naming_it() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    // SAFETY: the context is current on this thread.
+    let gl = unsafe { glow017::Context::from_loader_function(|name| ctx.get_proc_address(name)) };
+    let host = Host017::new(&gl, W, H);
+    let live_before = deferred_msaa::gl::live_objects().total();
+    let missing = "glBlitFramebuffer";
+    assert!(deferred_msaa_lab::gl::REQUIRED_FUNCTIONS.contains(&missing));
+    let loader = |name: &str| {
+        if name == missing {
+            std::ptr::null()
+        } else {
+            ctx.get_proc_address(name)
+        }
+    };
+    // SAFETY: as above; the null entry is the point of the test.
+    let made = unsafe { ForeignRetrofit::new(loader, host.gbuffer.0, &RetrofitOptions::default()) };
+    match made {
+        Err(e @ deferred_msaa::Error::Unsupported { .. }) => {
+            assert!(e.to_string().contains(missing), "{e}")
+        }
+        Err(e) => panic!("refused, but not as Unsupported: {e}"),
+        Ok(m) => {
+            m.destroy();
+            panic!("a loader without {missing} was accepted");
+        }
+    }
+    assert_eq!(deferred_msaa::gl::live_objects().total(), live_before);
+    assert_eq!(unsafe { gl.get_error() }, glow017::NO_ERROR);
+    host.destroy(&gl);
 }
