@@ -99,7 +99,7 @@ typedef enum {
 
 // A host G-buffer retrofitted with MSAA: the multisampled twins, the
 // resolve's programs and the GL function table loaded through the host's
-// loader. It never owns a GL context. Opaque; made by
+// loader (a [`ForeignRetrofit`]). It never owns a GL context. Opaque; made by
 // [`dmsaa_retrofit_new`], freed by [`dmsaa_destroy`].
 typedef struct DmsaaRetrofit DmsaaRetrofit;
 

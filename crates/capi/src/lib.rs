@@ -31,11 +31,12 @@
 // guarantees only what the header says.
 #![allow(clippy::missing_safety_doc)]
 
+use deferred_msaa::foreign::ForeignRetrofit;
 use deferred_msaa::gbuffer::MemoryBudget;
 use deferred_msaa::resolve::{NormalEncoding, ResolveMethod, ResolveRule, StencilCopy, Window};
 use deferred_msaa::{
-    ColorAttachment, DepthMode, Error, FirstLayerRestore, Frame, LayerMix, MsaaRetrofit,
-    NormalAttachment, PositionSpace, RetrofitOptions, TwinClear,
+    ColorAttachment, DepthMode, Error, FirstLayerRestore, Frame, LayerMix, NormalAttachment,
+    PositionSpace, RetrofitOptions, TwinClear,
 };
 use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char, c_void};
@@ -303,11 +304,13 @@ pub struct DmsaaOptions {
 
 /// A host G-buffer retrofitted with MSAA: the multisampled twins, the
 /// resolve's programs and the GL function table loaded through the host's
-/// loader. It never owns a GL context. Opaque; made by
+/// loader (a [`ForeignRetrofit`]). It never owns a GL context. Opaque; made by
 /// [`dmsaa_retrofit_new`], freed by [`dmsaa_destroy`].
 pub struct DmsaaRetrofit {
-    gl: deferred_msaa::glow::Context,
-    retrofit: MsaaRetrofit,
+    /// The retrofit and the function table loaded through the host's
+    /// loader: the core's entry point for hosts that name GL objects by
+    /// number.
+    msaa: ForeignRetrofit,
     depth_mode: DepthMode,
     world_space: bool,
     /// The second layer's phase as the calls so far left it, to tell a
@@ -441,7 +444,7 @@ fn with_handle<T>(
     let result = match catch_unwind(AssertUnwindSafe(|| body(&mut *handle))) {
         Ok(result) => result,
         Err(payload) => {
-            let _ = deferred_msaa::gl::check_error(&handle.gl, "a panic");
+            let _ = deferred_msaa::gl::check_error(handle.msaa.parts_mut().0, "a panic");
             std::panic::resume_unwind(payload)
         }
     };
@@ -777,45 +780,14 @@ pub unsafe extern "C" fn dmsaa_retrofit_new(
             Ok(name) => unsafe { load(name.as_ptr(), user_data) },
             Err(_) => std::ptr::null(),
         };
-        // glow keeps a null pointer and panics only when it is called, in
-        // the middle of a pass: every function is checked first.
-        let missing = |name: &str| {
-            Failure::new(
-                DmsaaStatus::Unsupported,
-                format!(
-                    "{F}: the loader returns null for {name}, which the library calls; \
-                     nothing was made or changed"
-                ),
-            )
-        };
-        if let Some(name) = deferred_msaa::gl::first_missing_function(loader) {
-            return Err(missing(name));
-        }
         // SAFETY: the loader returns entry points of the context current
-        // on this thread, as the header requires.
-        let gl = unsafe {
-            deferred_msaa::glow::Context::from_loader_function_cstr(|name| {
-                load(name.as_ptr(), user_data)
-            })
-        };
-        if let Some(name) = deferred_msaa::gl::first_missing_conditional_function(&gl, loader) {
-            return Err(missing(name));
-        }
-        deferred_msaa::gl::load_state_functions(loader)?;
-        let host = deferred_msaa::glow::NativeFramebuffer(fbo);
-        // As in `with_handle`: no GL error left behind a panic either.
-        let retrofit = match catch_unwind(AssertUnwindSafe(|| {
-            MsaaRetrofit::new(&gl, host, &converted.options)
-        })) {
-            Ok(result) => result?,
-            Err(payload) => {
-                let _ = deferred_msaa::gl::check_error(&gl, "a panic");
-                std::panic::resume_unwind(payload)
-            }
-        };
+        // on this thread, as the header requires. Every function the
+        // library calls is asked for first (`DMSAA_STATUS_UNSUPPORTED`
+        // naming one the loader lacks), and a GL error left behind a panic
+        // is drained.
+        let msaa = unsafe { ForeignRetrofit::new(loader, fbo, &converted.options)? };
         let handle = Box::new(DmsaaRetrofit {
-            gl,
-            retrofit,
+            msaa,
             depth_mode: converted.depth_mode,
             world_space: converted.world_space,
             phase: Phase::Idle,
@@ -846,7 +818,7 @@ pub unsafe extern "C" fn dmsaa_framebuffer(
         if out_fbo.is_null() {
             return Err(Failure::null(F, "out_fbo"));
         }
-        let fbo = with_handle(F, retrofit, |h| Ok(h.retrofit.framebuffer().0.get()))?;
+        let fbo = with_handle(F, retrofit, |h| Ok(h.msaa.framebuffer().get()))?;
         // SAFETY: checked non-null; the header requires a writable pointer.
         unsafe { *out_fbo = fbo };
         Ok(())
@@ -877,10 +849,7 @@ pub unsafe extern "C" fn dmsaa_begin_frame(
         }
         // SAFETY: checked non-null; the header requires a writable pointer.
         unsafe { *out_fbo = 0 };
-        let fbo = with_handle(F, retrofit, |h| {
-            let gl = &h.gl;
-            Ok(h.retrofit.begin_frame(gl)?.0.get())
-        })?;
+        let fbo = with_handle(F, retrofit, |h| Ok(h.msaa.begin_frame()?.get()))?;
         // SAFETY: as above.
         unsafe { *out_fbo = fbo };
         Ok(())
@@ -902,7 +871,7 @@ pub unsafe extern "C" fn dmsaa_samples(
         if out_samples.is_null() {
             return Err(Failure::null(F, "out_samples"));
         }
-        let samples = with_handle(F, retrofit, |h| Ok(h.retrofit.samples()))?;
+        let samples = with_handle(F, retrofit, |h| Ok(h.msaa.samples()))?;
         // SAFETY: checked non-null; the header requires a writable pointer.
         unsafe { *out_samples = samples };
         Ok(())
@@ -947,9 +916,7 @@ pub unsafe extern "C" fn dmsaa_second_layer_selection(
             return Err(Failure::null(F, "out_texture"));
         }
         let texture = with_handle(F, retrofit, |h| {
-            Ok(h.retrofit
-                .second_layer_selection()
-                .map_or(0, |t| t.raw.0.get()))
+            Ok(h.msaa.second_layer_selection().map_or(0, NonZeroU32::get))
         })?;
         // SAFETY: checked non-null; the header requires a writable pointer.
         unsafe { *out_texture = texture };
@@ -1005,9 +972,7 @@ pub unsafe extern "C" fn dmsaa_resolve(
                 )?);
             }
             let out_of_order = matches!(h.phase, Phase::Lighting(_));
-            let gl = &h.gl;
-            let r = &mut h.retrofit;
-            match r.resolve(gl, &frame) {
+            match h.msaa.resolve(&frame) {
                 Ok(()) => {
                     h.phase = Phase::Resolved;
                     Ok(())
@@ -1055,10 +1020,8 @@ pub unsafe extern "C" fn dmsaa_begin_second_layer(
         unsafe { *run_lighting = false };
         let began = with_handle(F, retrofit, |h| {
             let out_of_order = h.phase != Phase::Resolved;
-            let gl = &h.gl;
-            let r = &mut h.retrofit;
-            let output = NonZeroU32::new(output_fbo).map(deferred_msaa::glow::NativeFramebuffer);
-            match r.begin_second_layer(gl, output) {
+            let output = NonZeroU32::new(output_fbo);
+            match h.msaa.begin_second_layer(output) {
                 Ok(true) => {
                     h.phase = Phase::Lighting(output_fbo);
                     Ok(true)
@@ -1109,13 +1072,11 @@ pub unsafe extern "C" fn dmsaa_begin_second_layer_own_target(
         unsafe { *out_fbo = 0 };
         let target = with_handle(F, retrofit, |h| {
             let out_of_order = h.phase != Phase::Resolved;
-            let gl = &h.gl;
-            let r = &mut h.retrofit;
-            let output = NonZeroU32::new(output_fbo).map(deferred_msaa::glow::NativeFramebuffer);
-            match r.begin_second_layer_own_target(gl, output) {
+            let output = NonZeroU32::new(output_fbo);
+            match h.msaa.begin_second_layer_own_target(output) {
                 Ok(Some(target)) => {
                     h.phase = Phase::Lighting(output_fbo);
-                    Ok(target.0.get())
+                    Ok(target.get())
                 }
                 Ok(None) => Ok(0),
                 Err(e) if out_of_order => Err(Failure::new(DmsaaStatus::OutOfOrder, e.to_string())),
@@ -1163,13 +1124,11 @@ pub unsafe extern "C" fn dmsaa_begin_forward(
         unsafe { *out_fbo = 0 };
         let target = with_handle(F, retrofit, |h| {
             let out_of_order = matches!(h.phase, Phase::Lighting(_)) || h.forward.is_some();
-            let gl = &h.gl;
-            let r = &mut h.retrofit;
-            let output = NonZeroU32::new(output_fbo).map(deferred_msaa::glow::NativeFramebuffer);
-            match r.begin_forward(gl, output) {
+            let output = NonZeroU32::new(output_fbo);
+            match h.msaa.begin_forward(output) {
                 Ok(target) => {
                     h.forward = Some(output_fbo);
-                    Ok(target.0.get())
+                    Ok(target.get())
                 }
                 Err(e) if out_of_order => Err(Failure::new(DmsaaStatus::OutOfOrder, e.to_string())),
                 Err(e) => Err(e.into()),
@@ -1202,10 +1161,8 @@ pub unsafe extern "C" fn dmsaa_finish_forward(
     entry(F, || {
         with_handle(F, retrofit, |h| {
             let begun = h.forward.take();
-            let gl = &h.gl;
-            let r = &mut h.retrofit;
-            let output = NonZeroU32::new(output_fbo).map(deferred_msaa::glow::NativeFramebuffer);
-            match r.finish_forward(gl, output) {
+            let output = NonZeroU32::new(output_fbo);
+            match h.msaa.finish_forward(output) {
                 Ok(()) => Ok(()),
                 Err(e) if begun.is_none() => {
                     Err(Failure::new(DmsaaStatus::OutOfOrder, e.to_string()))
@@ -1236,10 +1193,8 @@ pub unsafe extern "C" fn dmsaa_finish_second_layer(
     entry(F, || {
         with_handle(F, retrofit, |h| {
             let phase = h.phase;
-            let gl = &h.gl;
-            let r = &mut h.retrofit;
-            let output = NonZeroU32::new(output_fbo).map(deferred_msaa::glow::NativeFramebuffer);
-            let result = r.finish_second_layer(gl, output);
+            let output = NonZeroU32::new(output_fbo);
+            let result = h.msaa.finish_second_layer(output);
             match phase {
                 // The Rust side leaves the phase when the output matches,
                 // whatever the mix's result.
@@ -1259,8 +1214,8 @@ pub unsafe extern "C" fn dmsaa_finish_second_layer(
 
 /// What identifies the second layer's objects: they change when the twins
 /// are rebuilt (a rebuilt second layer starts a frame afresh).
-fn second_layer_identity(r: &MsaaRetrofit) -> Option<u32> {
-    r.second_layer_coverage().map(|t| t.raw.0.get())
+fn second_layer_identity(msaa: &ForeignRetrofit) -> Option<u32> {
+    msaa.second_layer_coverage().map(NonZeroU32::get)
 }
 
 /// Change the options. Only what they change is rebuilt; when the twins
@@ -1282,11 +1237,9 @@ pub unsafe extern "C" fn dmsaa_set_options(
     entry(F, || {
         with_handle(F, retrofit, |h| {
             let converted = read_options(F, options)?;
-            let gl = &h.gl;
-            let r = &mut h.retrofit;
-            let before = second_layer_identity(r);
-            r.set_options(gl, &converted.options)?;
-            if second_layer_identity(r) != before || before.is_none() {
+            let before = second_layer_identity(&h.msaa);
+            h.msaa.set_options(&converted.options)?;
+            if second_layer_identity(&h.msaa) != before || before.is_none() {
                 h.phase = Phase::Idle;
             }
             h.depth_mode = converted.depth_mode;
@@ -1309,8 +1262,7 @@ pub unsafe extern "C" fn dmsaa_refresh(retrofit: *mut DmsaaRetrofit) -> DmsaaSta
     const F: &str = "dmsaa_refresh";
     entry(F, || {
         with_handle(F, retrofit, |h| {
-            let gl = &h.gl;
-            h.retrofit.refresh(gl)?;
+            h.msaa.refresh()?;
             h.phase = Phase::Idle;
             Ok(())
         })
@@ -1331,8 +1283,7 @@ pub unsafe extern "C" fn dmsaa_destroy(retrofit: *mut DmsaaRetrofit) {
         // SAFETY: the header requires a handle from `dmsaa_retrofit_new`,
         // destroyed once.
         let handle = unsafe { Box::from_raw(retrofit) };
-        let DmsaaRetrofit { gl, retrofit, .. } = *handle;
-        retrofit.destroy(&gl);
+        handle.msaa.destroy();
         Ok(())
     });
 }

@@ -88,7 +88,9 @@
 //! This crate is the core a host links: [`gl`] (owned GL objects, freed by
 //! `destroy`, with live-object counters), [`gbuffer`] (layouts, twins, the
 //! memory budget), [`resolve`] (the pass and its f64 CPU reference),
-//! [`retrofit`] and [`readback`] (per-sample readback). It depends on glow,
+//! [`retrofit`] and [`readback`] (per-sample readback), and [`foreign`]
+//! (the retrofit for a Rust host on another glow version: made from the
+//! host's GL loader, raw GL names in and out). It depends on glow,
 //! thiserror, log and bytemuck only; `glam` (a [`Frame`] from a `glam`
 //! matrix) and `serde` are opt-in features. Headless contexts
 //! (`deferred-msaa-headless`) and the demo renderer, scenes, bench and CLI
@@ -96,6 +98,7 @@
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod foreign;
 pub mod forward;
 pub mod frame;
 pub mod gbuffer;
