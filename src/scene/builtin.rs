@@ -1163,8 +1163,12 @@ fn slats() -> Scene {
     ]);
     sb.object("far wall", wall, wall_mat, Mat4::IDENTITY);
     // Lights near the slats, out of the wall's reach.
-    for (x, y, c) in [(-3.0, 2.0, rgb(1.0, 0.95, 0.85)), (3.0, -1.5, rgb(0.8, 0.9, 1.0))] {
-        sb.lights.push(Light::point(Vec3::new(x, y, 3.0), c, 60.0, Some(20.0)));
+    for (x, y, c) in [
+        (-3.0, 2.0, rgb(1.0, 0.95, 0.85)),
+        (3.0, -1.5, rgb(0.8, 0.9, 1.0)),
+    ] {
+        sb.lights
+            .push(Light::point(Vec3::new(x, y, 3.0), c, 60.0, Some(20.0)));
     }
     sb.finish(Background::Black, |_| {
         Camera::look_at(

@@ -88,7 +88,10 @@ void main() {
     vec3 albedo = texelFetch(g_albedo, p, 0).rgb;
     vec3 n = normalize(texelFetch(g_normal, p, 0).xyz);
     float diffuse = max(dot(n, normalize(light_dir)), 0.0);
-    lit = vec4(albedo * (0.15 + 0.85 * diffuse), 1.0);
+    // The engine encodes for the screen in its shader; GL_FRAMEBUFFER_SRGB
+    // stays off.
+    vec3 c = clamp(albedo * (0.15 + 0.85 * diffuse), 0.0, 1.0);
+    lit = vec4(mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308))), 1.0);
 }
 "#;
 
@@ -506,16 +509,66 @@ fn host_image(gl: &glow017::Context, scale: i32) -> RgbaImage {
     let n = (scale * scale) as u32;
     let s = scale as u32;
     RgbaImage::from_fn(W as u32, H as u32, |x, y| {
-        let mut sum = [0u32; 4];
+        // In the light a screen emits for the engine's encoded values.
+        let mut sum = [0f64; 4];
         for dy in 0..s {
             for dx in 0..s {
                 let p = big.get_pixel(x * s + dx, y * s + dy);
                 for c in 0..4 {
-                    sum[c] += u32::from(p[c]);
+                    sum[c] += if c < 3 {
+                        common::srgb::decode(p[c])
+                    } else {
+                        f64::from(p[c]) / 255.0
+                    };
                 }
             }
         }
-        image::Rgba(sum.map(|v| ((v + n / 2) / n) as u8))
+        let mean = sum.map(|v| v / f64::from(n));
+        image::Rgba([
+            common::srgb::encode(mean[0]).round() as u8,
+            common::srgb::encode(mean[1]).round() as u8,
+            common::srgb::encode(mean[2]).round() as u8,
+            (mean[3] * 255.0).round() as u8,
+        ])
+    })
+}
+
+/// The edge pixels of the host's own frame: a 4-neighbour whose linear
+/// depth differs by more than 10 % (silhouettes and steps).
+fn edges(gl: &glow017::Context) -> image::GrayImage {
+    let host = Host017::new(gl, W, H);
+    host.geometry_pass(gl, host.gbuffer);
+    let mut depth = vec![0f32; (W * H) as usize];
+    unsafe {
+        gl.bind_framebuffer(glow017::READ_FRAMEBUFFER, Some(host.gbuffer));
+        gl.read_pixels(
+            0,
+            0,
+            W,
+            H,
+            glow017::DEPTH_COMPONENT,
+            glow017::FLOAT,
+            glow017::PixelPackData::Slice(Some(bytemuck::cast_slice_mut(&mut depth))),
+        );
+        gl.bind_framebuffer(glow017::READ_FRAMEBUFFER, None);
+    }
+    host.destroy(gl);
+    let linear = |d: f32| {
+        let z = 2.0 * d - 1.0;
+        2.0 * NEAR * FAR / (FAR + NEAR - z * (FAR - NEAR))
+    };
+    let at = |x: i32, y: i32| linear(depth[((H - 1 - y) * W + x) as usize]);
+    image::GrayImage::from_fn(W as u32, H as u32, |x, y| {
+        let (x, y) = (x as i32, y as i32);
+        let here = at(x, y);
+        let step = [(1, 0), (-1, 0), (0, 1), (0, -1)].iter().any(|&(dx, dy)| {
+            let (nx, ny) = (x + dx, y + dy);
+            nx >= 0 && ny >= 0 && nx < W && ny < H && {
+                let there = at(nx, ny);
+                (here - there).abs() > 0.1 * here.min(there)
+            }
+        });
+        image::Luma([if step { 255 } else { 0 }])
     })
 }
 
@@ -547,6 +600,8 @@ fn retrofitted(
             attachment: ColorAttachment(1),
             encoding: NormalEncoding::Xyz,
         }),
+        // As docs/hosts.md says for an engine encoding sRGB in its shader.
+        layer_mix: deferred_msaa::LayerMix::SrgbEncoded,
         ..RetrofitOptions::default()
     };
     options.resolve.layers = layers;
@@ -707,6 +762,35 @@ fn glow017_host_retrofits_through_the_foreign_entry_point() {
         own_flips.push(flip(&reference, &own_image).expect("flip").mean);
     }
     let flip_none = flip(&reference, &none).expect("flip").mean;
+    // Over the frame's edge pixels, two layers against no MSAA.
+    let mask = edges(&gl);
+    let (none_edges, two_edges) = {
+        let two = retrofitted(&ctx, &gl, 2).0;
+        let by = |i: &RgbaImage| {
+            deferred_msaa_lab::compare::flip_by_mask(&reference, i, &mask)
+                .expect("sizes")
+                .marked
+                .expect("edge pixels")
+        };
+        (by(&none), by(&two))
+    };
+    println!(
+        "foreign: over the edge pixels ({:.1} % of the frame): none {none_edges:.4}, two layers {two_edges:.4} ({:.2}x); whole frame {:.2}x",
+        100.0 * mask.pixels().filter(|p| p[0] != 0).count() as f64 / f64::from(W * H),
+        two_edges / none_edges,
+        flips[1] / flip_none
+    );
+    if flips[1] > 0.7 * flip_none {
+        failures.push(format!(
+            "two layers {:.4} above 0.7x no MSAA's {flip_none:.4}",
+            flips[1]
+        ));
+    }
+    if two_edges > 0.6 * none_edges {
+        failures.push(format!(
+            "two layers over edges {two_edges:.4} above 0.6x no MSAA's {none_edges:.4}"
+        ));
+    }
     println!(
         "foreign: FLIP against the host's 16x image: none {flip_none:.4}, one layer {:.4}, two layers {:.4}; second frame (the crate's own target): one layer {:.4}, two layers {:.4}",
         flips[0], flips[1], own_flips[0], own_flips[1]
@@ -769,4 +853,65 @@ fn a_loader_without_a_function_the_crate_calls_is_refused_naming_it() {
     assert_eq!(deferred_msaa::gl::live_objects().total(), live_before);
     assert_eq!(unsafe { gl.get_error() }, glow017::NO_ERROR);
     host.destroy(&gl);
+}
+
+/// The engine's render-target wrapper takes the framebuffer it is given
+/// and deletes it when dropped, as Rust engines' wrappers do: wrapping the
+/// crate's framebuffer that way deletes it. The next `begin_frame` and
+/// `resolve` return an error naming it, never a frame of stale samples;
+/// `refresh` makes new twins, and the frame after is resolved.
+#[test]
+fn a_wrapper_that_drops_the_crates_framebuffer_is_an_error_then_refresh() {
+    struct RenderTarget<'a> {
+        gl: &'a glow017::Context,
+        fbo: glow017::Framebuffer,
+    }
+    impl Drop for RenderTarget<'_> {
+        fn drop(&mut self) {
+            unsafe { self.gl.delete_framebuffer(self.fbo) };
+        }
+    }
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    // SAFETY: the context is current on this thread.
+    let gl = unsafe { glow017::Context::from_loader_function(|name| ctx.get_proc_address(name)) };
+    let host = Host017::new(&gl, W, H);
+    let options = RetrofitOptions::default();
+    // SAFETY: as above; the loader gives the context's entry points.
+    let mut msaa = unsafe {
+        ForeignRetrofit::new(|name| ctx.get_proc_address(name), host.gbuffer.0, &options)
+    }
+    .expect("the retrofit");
+    let frame = Frame::from_matrix(projection());
+    {
+        let target = RenderTarget {
+            gl: &gl,
+            fbo: glow017::NativeFramebuffer(msaa.begin_frame().expect("begin_frame")),
+        };
+        host.geometry_pass(&gl, target.fbo);
+        msaa.resolve(&frame).expect("the first frame");
+    }
+    unsafe { gl.bind_framebuffer(glow017::FRAMEBUFFER, None) };
+    let text = msaa
+        .begin_frame()
+        .expect_err("a deleted framebuffer")
+        .to_string();
+    assert!(
+        text.contains("was deleted") && text.contains("refresh"),
+        "{text}"
+    );
+    let text = msaa
+        .resolve(&frame)
+        .expect_err("a deleted framebuffer")
+        .to_string();
+    assert!(text.contains("was deleted"), "{text}");
+    msaa.refresh().expect("refresh");
+    let fbo = glow017::NativeFramebuffer(msaa.begin_frame().expect("begin_frame after refresh"));
+    host.geometry_pass(&gl, fbo);
+    msaa.resolve(&frame).expect("the frame after refresh");
+    assert_eq!(unsafe { gl.get_error() }, glow017::NO_ERROR);
+    msaa.destroy();
+    host.destroy(&gl);
+    assert_eq!(deferred_msaa::gl::live_objects().total(), 0);
 }
