@@ -1134,7 +1134,7 @@ fn lamps() -> Scene {
 /// Thin bright slats, boxes 0.05 deep turned 40 degrees about their long
 /// axis so that a side face shows as a sliver beside the front one,
 /// slanted in the image plane, in front of a dark wall 190 units behind
-/// them that no light reaches. At 640x360 a slat is 2 to 4 pixels wide.
+/// them that no light reaches. At 640x360 a slat is 2 to 6 pixels wide.
 fn slats() -> Scene {
     let mut sb = SceneBuilder::new("slats");
     let slat_mat = sb.material(Material::solid("slats", [0.85, 0.82, 0.76], 0.0, 0.6));
@@ -1142,13 +1142,14 @@ fn slats() -> Scene {
     // World units per pixel in z = 0 at 360 pixels high.
     let unit_per_px = 2.0 * 10.0 * (15f32.to_radians()).tan() / 360.0;
     let mut slats = MeshBuilder::default();
-    for k in 0..7 {
-        let (width_px, slant_deg) = (1.5 + 0.4 * k as f32, -35.0 + 11.0 * k as f32);
-        let centre = Vec3::new(-4.2 + 1.4 * k as f32, 0.3 * ((k % 3) as f32 - 1.0), 0.0);
+    for k in 0..13 {
+        let (width_px, slant_deg) = (2.0 + 0.3 * k as f32, -36.0 + 6.0 * k as f32);
+        let centre = Vec3::new(-4.5 + 0.75 * k as f32, 0.3 * ((k % 3) as f32 - 1.0), 0.0);
         let turn = Quat::from_rotation_z(slant_deg.to_radians()) * Quat::from_rotation_y(0.7);
+        // Long enough to run off the top and bottom of the view.
         slats.cuboid(
             centre,
-            Vec3::new(0.5 * width_px * unit_per_px, 2.2, 0.025),
+            Vec3::new(0.5 * width_px * unit_per_px, 3.2, 0.025),
             turn,
         );
     }

@@ -1542,3 +1542,99 @@ fn refusals_say_what_gl_shows_of_the_host_framebuffer() {
     }
     assert_eq!(live_objects(), before, "GL objects leaked");
 }
+
+/// Attachments the second layer need not carry
+/// (`RetrofitOptions::second_layer_omits`): a host of seven colour
+/// attachments and a depth-stencil texture whose lighting does not read two
+/// of them names them; the second resolve then fits one draw; during the
+/// second lighting the omitted ones hold the first layer's values and the
+/// carried ones the second layer's; naming an attachment the host lacks is
+/// refused in one line.
+#[test]
+fn the_second_layer_leaves_out_the_attachments_the_host_names() {
+    use deferred_msaa_testkit::host::Output;
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let outputs = [
+        (Output::Color, Format::Rgba16f),
+        (Output::Position, Format::Rgba32f),
+        (Output::Normal, Format::Rgba16f),
+        (Output::Specular, Format::Rgba8),
+        (Output::Emissive, Format::Rgba16f),
+        (Output::Material, Format::Rgba8),
+        (Output::Tint, Format::Rgba8),
+    ];
+    let mut host = Host::with_outputs(gl, W, H, &outputs, Format::Depth24Stencil8).unwrap();
+    host.set_triangles(gl, &triangles()).unwrap();
+    let mut options = RetrofitOptions {
+        position_attachment: Some(ColorAttachment(1)),
+        normal_attachment: Some(NormalAttachment {
+            attachment: ColorAttachment(2),
+            encoding: NormalEncoding::Xyz,
+        }),
+        second_layer_omits: vec![ColorAttachment(5), ColorAttachment(6)],
+        ..RetrofitOptions::default()
+    };
+    options.resolve.layers = 2;
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
+    let mut readback = Readback::new(gl).unwrap();
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    host.draw(gl, &projection(), false);
+    msaa.resolve(gl, &frame()).unwrap();
+    let first: Vec<_> = host
+        .colors
+        .iter()
+        .map(|(_, t)| readback.read(gl, TextureRef::from(t), 1).unwrap().data)
+        .collect();
+    let coverage = readback
+        .read(gl, msaa.second_layer_coverage().unwrap(), 1)
+        .unwrap();
+    let covered = coverage.data.chunks(4).filter(|p| p[0] > 0.0).count();
+    assert!(covered >= 20, "only {covered} pixels with a second layer");
+    let (output, fbo) = lit_output(gl, Format::Rgba16f);
+    host.light(gl, fbo.raw(), 1.0);
+    assert!(msaa.begin_second_layer(gl, Some(fbo.raw())).unwrap());
+    // The host's images as its second lighting sees them.
+    let during: Vec<_> = host
+        .colors
+        .iter()
+        .map(|(_, t)| readback.read(gl, TextureRef::from(t), 1).unwrap().data)
+        .collect();
+    for k in [5, 6] {
+        assert!(
+            during[k] == first[k],
+            "omitted attachment {k} does not hold the first layer during the second lighting"
+        );
+    }
+    assert!(
+        during[0] != first[0],
+        "a carried attachment holds the first layer during the second lighting"
+    );
+    host.light(gl, fbo.raw(), 1.0);
+    msaa.finish_second_layer(gl, Some(fbo.raw())).unwrap();
+    assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
+    msaa.destroy(gl);
+    // An attachment the host lacks.
+    let text = MsaaRetrofit::new(
+        gl,
+        host.fbo.raw(),
+        &RetrofitOptions {
+            second_layer_omits: vec![ColorAttachment(7)],
+            ..options.clone()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        text.contains("second_layer_omits") && text.contains("nothing is attached there"),
+        "{text}"
+    );
+    fbo.destroy(gl);
+    output.destroy(gl);
+    readback.destroy(gl);
+    host.destroy(gl);
+    assert_eq!(live_objects(), before, "GL objects leaked");
+}

@@ -216,6 +216,13 @@ typedef struct {
   float clear_depth;
   // With `clear_twins`: the stencil clear value (default 0).
   int32_t clear_stencil;
+  // With two layers: the colour attachments the second layer need not
+  // carry, as a bit mask (bit n: `GL_COLOR_ATTACHMENTn`; default 0):
+  // attachments the host's lighting does not read or reads the same for
+  // both surfaces (an object ID, velocity). Not resolved for the second
+  // layer; the host's image keeps the first layer's value there during
+  // the second lighting.
+  uint32_t second_layer_omits;
   // A limit on the twins' memory in bytes: `DMSAA_MEMORY_BUDGET_NONE`
   // (default), `DMSAA_MEMORY_BUDGET_DRIVER`, or a number of bytes. Over
   // it, the sample count steps down (or, strict, the call fails).

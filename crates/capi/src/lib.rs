@@ -291,6 +291,13 @@ pub struct DmsaaOptions {
     pub clear_depth: f32,
     /// With `clear_twins`: the stencil clear value (default 0).
     pub clear_stencil: i32,
+    /// With two layers: the colour attachments the second layer need not
+    /// carry, as a bit mask (bit n: `GL_COLOR_ATTACHMENTn`; default 0):
+    /// attachments the host's lighting does not read or reads the same for
+    /// both surfaces (an object ID, velocity). Not resolved for the second
+    /// layer; the host's image keeps the first layer's value there during
+    /// the second lighting.
+    pub second_layer_omits: u32,
     /// A limit on the twins' memory in bytes: `DMSAA_MEMORY_BUDGET_NONE`
     /// (default), `DMSAA_MEMORY_BUDGET_DRIVER`, or a number of bytes. Over
     /// it, the sample count steps down (or, strict, the call fails).
@@ -629,6 +636,10 @@ fn convert(o: &DmsaaOptions) -> Result<Converted, Failure> {
         ],
     )?;
     options.check_second_lighting = flag("check_second_lighting", o.check_second_lighting)?;
+    options.second_layer_omits = (0..32)
+        .filter(|n| o.second_layer_omits & (1 << n) != 0)
+        .map(ColorAttachment)
+        .collect();
     options.twin_clear = flag("clear_twins", o.clear_twins)?.then(|| TwinClear {
         colors: o
             .clear_colors
@@ -714,6 +725,7 @@ pub extern "C" fn dmsaa_options_default() -> DmsaaOptions {
         clear_colors: [[0.0; 4]; DMSAA_MAX_RULES],
         clear_depth: 1.0,
         clear_stencil: 0,
+        second_layer_omits: 0,
         memory_budget_bytes: DMSAA_MEMORY_BUDGET_NONE,
         memory_budget_strict: 0,
         depth_mode: DMSAA_DEPTH_STANDARD,

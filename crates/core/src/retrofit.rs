@@ -91,6 +91,13 @@ pub struct RetrofitOptions {
     /// never clears the twins: it declares its clear values here and calls
     /// `begin_frame` each frame.
     pub twin_clear: Option<TwinClear>,
+    /// With two layers: colour attachments the second layer need not
+    /// carry, because the host's lighting does not read them or reads the
+    /// same value for both surfaces (an object ID, velocity, a decal mask).
+    /// They are not resolved for the second layer (fewer draw buffers and
+    /// less work), and during the second lighting the host's image holds
+    /// the first layer's value there. Default: none.
+    pub second_layer_omits: Vec<ColorAttachment>,
 }
 
 /// The values a host clears its G-buffer to, for
@@ -184,6 +191,7 @@ impl Default for RetrofitOptions {
             restore_first_layer: FirstLayerRestore::Everything,
             check_second_lighting: true,
             twin_clear: None,
+            second_layer_omits: Vec::new(),
         }
     }
 }
@@ -791,12 +799,30 @@ impl MsaaRetrofit {
             let second = if options.resolve.layers == 2 {
                 // The seed sample, where the stencil copy reads indices.
                 let with_reference = stencil.as_ref().is_some_and(|s| s.reference.is_some());
+                let mut omitted = Vec::with_capacity(options.second_layer_omits.len());
+                for n in &options.second_layer_omits {
+                    let point = Attachment::from(*n);
+                    let k = host
+                        .colors
+                        .iter()
+                        .position(|a| a.point == point)
+                        .ok_or_else(|| Error::Retrofit {
+                            attachment: n.name(),
+                            reason: not_resolved(
+                                &host,
+                                point,
+                                "named in RetrofitOptions::second_layer_omits",
+                            ),
+                        })?;
+                    omitted.push(k);
+                }
                 Some(made.keep(SecondLayer::new(
                     gl,
                     &host,
                     &options.layer_mix,
                     with_reference,
                     options.check_second_lighting,
+                    &omitted,
                 )?))
             } else {
                 None
@@ -1542,6 +1568,7 @@ impl MsaaRetrofit {
             || options.normal_attachment != self.options.normal_attachment
             || options.layer_mix != self.options.layer_mix
             || options.check_second_lighting != self.options.check_second_lighting
+            || options.second_layer_omits != self.options.second_layer_omits
             || options.resolve.layers != self.options.resolve.layers;
         if twins_change {
             return self.rebuild(gl, options);

@@ -141,13 +141,14 @@ impl GlObject for ResolvePass {
     }
 }
 
-/// The host colours each draw of the second layer's resolve writes: the
-/// first draw also writes the coverage, the depth and (`with_reference`)
-/// the seed sample, so it takes as many colours as leave room for them in
-/// `draw_buffers`; each further draw takes up to `draw_buffers` colours.
-/// `None` where not even the first draw fits one colour.
+/// The host colours (of `carried`, in order) each draw of the second
+/// layer's resolve writes: the first draw also writes the coverage, the
+/// depth and (`with_reference`) the seed sample, so it takes as many
+/// colours as leave room for them in `draw_buffers`; each further draw
+/// takes up to `draw_buffers` colours. `None` where not even the first
+/// draw fits one colour.
 fn split_passes(
-    colours: usize,
+    carried: &[usize],
     draw_buffers: u32,
     with_reference: bool,
 ) -> Option<Vec<Vec<usize>>> {
@@ -155,13 +156,13 @@ fn split_passes(
     let buffers = draw_buffers as usize;
     let first = buffers
         .checked_sub(extras)
-        .filter(|&f| f >= 1 || colours == 0)?;
-    let mut passes = vec![(0..colours.min(first)).collect::<Vec<usize>>()];
-    let mut next = colours.min(first);
-    while next < colours {
-        let end = colours.min(next + buffers);
-        passes.push((next..end).collect());
-        next = end;
+        .filter(|&f| f >= 1 || carried.is_empty())?;
+    let (head, mut rest) = carried.split_at(carried.len().min(first));
+    let mut passes = vec![head.to_vec()];
+    while !rest.is_empty() {
+        let (chunk, tail) = rest.split_at(rest.len().min(buffers));
+        passes.push(chunk.to_vec());
+        rest = tail;
     }
     Some(passes)
 }
@@ -261,6 +262,11 @@ pub(crate) struct SecondLayer {
     /// buffers need: each with its colours, the first with the coverage,
     /// depth and seed sample, all with the selection stencil.
     passes: Vec<ResolvePass>,
+    /// The host colours the second layer does not carry
+    /// ([`RetrofitOptions::second_layer_omits`](crate::RetrofitOptions::second_layer_omits)):
+    /// not resolved, and the first layer's value in the host's image during
+    /// the second lighting.
+    omitted: Vec<usize>,
     /// Layer 2's colours at `Color(k)`, for the copies by blit.
     colours_fbo: Framebuffer,
     /// The first layer's outside flag (R8: a sample lies outside its
@@ -447,6 +453,7 @@ impl SecondLayer {
         mix: &LayerMix,
         with_reference: bool,
         check_lighting: bool,
+        omitted: &[usize],
     ) -> Result<Self> {
         let (w, h) = host.size();
         let n = host.colors.len() as u32;
@@ -456,7 +463,10 @@ impl SecondLayer {
         // The second resolve writes the host's colours, the coverage, the
         // depth and perhaps the seed sample: in as many draws as the draw
         // buffers need.
-        let split = split_passes(host.colors.len(), max_draw_buffers, with_reference).ok_or_else(
+        let carried: Vec<usize> = (0..host.colors.len())
+            .filter(|k| !omitted.contains(k))
+            .collect();
+        let split = split_passes(&carried, max_draw_buffers, with_reference).ok_or_else(
             || Error::Retrofit {
                 attachment: "GL_MAX_DRAW_BUFFERS".into(),
                 reason: format!(
@@ -604,6 +614,7 @@ impl SecondLayer {
                 reference,
                 stencil,
                 passes,
+                omitted: omitted.to_vec(),
                 colours_fbo,
                 flag,
                 saved,
@@ -845,6 +856,11 @@ impl SecondLayer {
             }
             // The second layer's depth comes through its own pass.
             if depth && (self.depth_bits == 0 || from == Set::Second || to == Set::Second) {
+                continue;
+            }
+            // An attachment the second layer does not carry keeps the first
+            // layer's value in the host's image.
+            if !depth && from == Set::Second && self.omitted.contains(&k) {
                 continue;
             }
             let image = |set: &Option<Vec<Option<CopyImage>>>| {
