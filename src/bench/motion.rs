@@ -271,6 +271,7 @@ pub(super) fn measures(track: &Track, frames: u32, px: f64) -> MotionMeasures {
         frames,
         px_per_frame: px,
         flip_mean: mean(&track.flips).unwrap_or(0.0),
+        flip_first: track.flips.first().copied().unwrap_or(0.0),
         flip_worst: worst.max(0.0),
         flip_worst_frame: worst_frame as u32,
         temporal_error: mean(&track.temporal).unwrap_or(0.0),
@@ -388,6 +389,7 @@ mod tests {
         let m = measures(&track, 3, 0.5);
         assert!((m.flip_mean - 0.2).abs() < 1e-12);
         assert_eq!((m.flip_worst, m.flip_worst_frame), (0.3, 2));
+        assert_eq!(m.flip_first, 0.2);
         assert!((m.temporal_error - 0.02).abs() < 1e-12);
         assert_eq!(m.sharpness, Some(1.0));
         let sd1 = (8.0f64 / 9.0).sqrt();

@@ -284,6 +284,10 @@ pub struct MotionMeasures {
     /// The mean over the frames of each frame's mean FLIP against that
     /// frame's reference.
     pub flip_mean: f64,
+    /// The first frame's mean FLIP (a temporal filter's, before it has a
+    /// history), against which a later frame's growth shows.
+    #[serde(default)]
+    pub flip_first: f64,
     /// The worst frame's mean FLIP, and its index from 0.
     pub flip_worst: f64,
     /// The index of that frame.
