@@ -1,22 +1,15 @@
-// Per-sample deferred lighting (methods `per-sample` and `complex`): every
-// sample of the multisampled G-buffer is lit on its own, with every light,
-// and the lit samples are averaged, so edges are anti-aliased in the lit
-// image rather than in the G-buffer.
+// Per-sample deferred lighting (methods `per-sample` and `complex`), first
+// pass: one sample of the multisampled G-buffer, u_sample, lit with one
+// batch of lights into that sample's own radiance target. The pass is drawn
+// once per sample and light batch, batches after the first added by
+// blending, exactly as the one-sample lighting pass (lighting.frag's main)
+// adds its batches into the HDR target: each sample's radiance is the sum
+// the one-sample pass would store for that G-buffer sample, rounded where
+// it rounds. sample_average.frag then tonemaps and averages the samples.
 //
-// Compiled after lighting.frag (with LIGHTING_FUNCTIONS_ONLY and LIGHT_BLOCK:
-// all lights in one uniform block, so one draw gives each sample its whole
-// radiance) and tonemap.frag (with TONEMAP_FUNCTIONS_ONLY). The lighting
-// math is lighting.frag's only: shade_surface() / shade_background().
-//
-// The average is taken as the tonemap pass will see it: the samples are
-// tonemapped (tonemap_linear), averaged, and mapped back to HDR
-// (tonemap_linear_inverse), so the tonemapped pixel is the box filter of its
-// tonemapped samples, as a supersampled image's is. A plain HDR average
-// would let one bright sample (a sky behind a thin wire) wash out the
-// others. Pixels whose samples all have the same radiance pass it through
-// unchanged (values beyond the tonemap's white stay as they are).
-// With more lights than one block holds, the pass draws once per block and
-// adds; the average is then linear (u_tonemapped_average = 0), which adds up.
+// Compiled after lighting.frag (with LIGHTING_FUNCTIONS_ONLY, the same
+// MAX_LIGHTS and light uniforms as the one-sample pass). The lighting math is
+// lighting.frag's only: shade_surface() / shade_background().
 
 uniform sampler2DMS u_color;
 uniform sampler2DMS u_position;
@@ -33,8 +26,7 @@ uniform sampler2DMS u_emissive;
 #endif
 uniform sampler2DMS u_depth;
 uniform float u_clear_depth;
-uniform int u_samples;              // samples 0 .. u_samples-1 are lit and averaged
-uniform int u_tonemapped_average;   // 1: average after the tonemap curve
+uniform int u_sample;               // the sample this draw lights
 
 out vec4 o_color;
 
@@ -56,35 +48,18 @@ vec3 sample_emissive(ivec2 pixel, int i, bool background) {
 #endif
 }
 
-vec3 shade_sample(ivec2 pixel, int i) {
+void main() {
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    int i = u_sample;
     if (texelFetch(u_depth, pixel, i).r == u_clear_depth) {
-        return shade_background(sample_emissive(pixel, i, true));
+        o_color = vec4(shade_background(sample_emissive(pixel, i, true)), 1.0);
+        return;
     }
-    return shade_surface(
+    vec3 radiance = shade_surface(
         texelFetch(u_color, pixel, i).rgb,
         texelFetch(u_position, pixel, i).xyz,
         texelFetch(u_normal, pixel, i),
         sample_specular(pixel, i),
         sample_emissive(pixel, i, false));
-}
-
-void main() {
-    ivec2 pixel = ivec2(gl_FragCoord.xy);
-    int n = max(u_samples, 1);
-    vec3 first = shade_sample(pixel, 0);
-    vec3 sum = u_tonemapped_average != 0 ? tonemap_linear(first) : first;
-    bool same = true;
-    for (int i = 1; i < n; ++i) {
-        vec3 radiance = shade_sample(pixel, i);
-        same = same && radiance == first;
-        sum += u_tonemapped_average != 0 ? tonemap_linear(radiance) : radiance;
-    }
-    vec3 average = sum / float(n);
-    if (same) {
-        o_color = vec4(first, 1.0);
-    } else if (u_tonemapped_average != 0) {
-        o_color = vec4(tonemap_linear_inverse(average), 1.0);
-    } else {
-        o_color = vec4(average, 1.0);
-    }
+    o_color = vec4(radiance, 1.0);
 }
