@@ -1,8 +1,10 @@
 // Per-sample deferred lighting (methods `per-sample` and `complex`), first
-// pass: one sample of the multisampled G-buffer, u_sample, lit with one
-// batch of lights into that sample's own radiance target. The pass is drawn
-// once per sample and light batch, batches after the first added by
-// blending, exactly as the one-sample lighting pass (lighting.frag's main)
+// pass: samples u_first_sample .. u_first_sample + u_sample_count - 1 of the
+// multisampled G-buffer, each lit with one batch of lights into its own
+// radiance target, o_color[k] for sample u_first_sample + k (outputs past
+// u_sample_count write zero, into no draw buffer). The pass is drawn once
+// per light batch (and group of SAMPLES_PER_DRAW samples), batches after the
+// first added by blending, exactly as the one-sample lighting pass (lighting.frag's main)
 // adds its batches into the HDR target: each sample's radiance is the sum
 // the one-sample pass would store for that G-buffer sample, rounded where
 // it rounds. sample_average.frag then tonemaps and averages the samples.
@@ -26,9 +28,10 @@ uniform sampler2DMS u_emissive;
 #endif
 uniform sampler2DMS u_depth;
 uniform float u_clear_depth;
-uniform int u_sample;               // the sample this draw lights
+uniform int u_first_sample;         // the sample o_color[0] lights
+uniform int u_sample_count;         // how many outputs are lit
 
-out vec4 o_color;
+out vec4 o_color[SAMPLES_PER_DRAW];
 
 // The attachments a scene-adaptive G-buffer may leave out, read as if there.
 vec4 sample_specular(ivec2 pixel, int i) {
@@ -48,18 +51,45 @@ vec3 sample_emissive(ivec2 pixel, int i, bool background) {
 #endif
 }
 
-void main() {
-    ivec2 pixel = ivec2(gl_FragCoord.xy);
-    int i = u_sample;
+vec3 shade_sample(ivec2 pixel, int i) {
     if (texelFetch(u_depth, pixel, i).r == u_clear_depth) {
-        o_color = vec4(shade_background(sample_emissive(pixel, i, true)), 1.0);
-        return;
+        return shade_background(sample_emissive(pixel, i, true));
     }
-    vec3 radiance = shade_surface(
+    return shade_surface(
         texelFetch(u_color, pixel, i).rgb,
         texelFetch(u_position, pixel, i).xyz,
         texelFetch(u_normal, pixel, i),
         sample_specular(pixel, i),
         sample_emissive(pixel, i, false));
-    o_color = vec4(radiance, 1.0);
+}
+
+// Output k (a constant index): sample u_first_sample + k, if lit.
+#define SHADE_OUTPUT(k) \
+    o_color[k] = k < u_sample_count \
+        ? vec4(shade_sample(pixel, u_first_sample + k), 1.0) : vec4(0.0);
+
+void main() {
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    SHADE_OUTPUT(0)
+#if SAMPLES_PER_DRAW > 1
+    SHADE_OUTPUT(1)
+#endif
+#if SAMPLES_PER_DRAW > 2
+    SHADE_OUTPUT(2)
+#endif
+#if SAMPLES_PER_DRAW > 3
+    SHADE_OUTPUT(3)
+#endif
+#if SAMPLES_PER_DRAW > 4
+    SHADE_OUTPUT(4)
+#endif
+#if SAMPLES_PER_DRAW > 5
+    SHADE_OUTPUT(5)
+#endif
+#if SAMPLES_PER_DRAW > 6
+    SHADE_OUTPUT(6)
+#endif
+#if SAMPLES_PER_DRAW > 7
+    SHADE_OUTPUT(7)
+#endif
 }

@@ -2,8 +2,9 @@
 //! [`AaMode::PerSample`](super::AaMode::PerSample) and
 //! [`AaMode::Complex`](super::AaMode::Complex): every sample of the
 //! multisampled G-buffer (the retrofit's twins) is lit with `texelFetch`
-//! into a radiance target of its own, one draw per sample and light batch,
-//! the batches added by blending as the one-sample lighting pass adds them
+//! into a radiance target of its own, one draw per light batch (writing up
+//! to [`SAMPLES_PER_DRAW`] samples' targets at once), the batches added by
+//! blending as the one-sample lighting pass adds them
 //! (`lighting_per_sample.frag`); then one pass tonemaps the samples,
 //! averages them and maps the average back to HDR (`sample_average.frag`).
 //! Each sample's radiance is thus the one-sample lighting's sum for that
@@ -30,6 +31,10 @@ use glow::HasContext;
 /// The per-sample lighting shader's body (compiled after `lighting.frag`
 /// with `LIGHTING_FUNCTIONS_ONLY`): one sample, one light batch.
 pub(crate) const LIGHTING_PER_SAMPLE_FRAG: &str = include_str!("lighting_per_sample.frag");
+
+/// Samples one draw of the per-sample lighting lights, one draw buffer
+/// each: GL 3.2's least `GL_MAX_DRAW_BUFFERS` and `GL_MAX_COLOR_ATTACHMENTS`.
+pub(crate) const SAMPLES_PER_DRAW: u32 = 8;
 
 /// The shader that tonemaps and averages the samples' radiance (compiled
 /// after `tonemap.frag` with `TONEMAP_FUNCTIONS_ONLY`).
@@ -155,12 +160,14 @@ impl LightBlock {
 
 /// Each sample's radiance: one single-sample layer per sample, in the HDR
 /// target's own format, so that adding light batches into a layer rounds as
-/// adding them into the HDR target does; and a framebuffer per layer, with
-/// the complex-pixel stencil attached for `complex`.
+/// adding them into the HDR target does; and a framebuffer per
+/// [`SAMPLES_PER_DRAW`] layers (layer `first + k` at colour attachment and
+/// draw buffer `k`), with the complex-pixel stencil attached for `complex`.
 #[derive(Debug)]
 pub(crate) struct SampleRadiance {
     texture: Texture2dArray,
-    layers: Vec<Framebuffer>,
+    /// Each framebuffer with its first layer.
+    groups: Vec<(Framebuffer, u32)>,
     stencil: Option<glow::Texture>,
 }
 
@@ -184,29 +191,37 @@ impl SampleRadiance {
                 samples.max(1),
                 None,
             )?);
-            let mut layers = Vec::new();
-            for layer in 0..texture.layers {
-                let mut attachments = vec![(Attachment::Color(0), TextureRef::from(&texture))];
+            let mut groups = Vec::new();
+            for first in (0..texture.layers).step_by(SAMPLES_PER_DRAW as usize) {
+                let count = (texture.layers - first).min(SAMPLES_PER_DRAW);
+                let mut attachments = Vec::new();
+                let mut images = Vec::new();
+                for k in 0..count {
+                    attachments.push((Attachment::Color(k), TextureRef::from(&texture)));
+                    images.push((
+                        Attachment::Color(k),
+                        HostImage::TextureLayer {
+                            texture: texture.raw(),
+                            layer: first + k,
+                        },
+                    ));
+                }
                 if let Some(s) = stencil {
                     attachments.push((Attachment::DepthStencil, TextureRef::from(s)));
                 }
-                layers.push(made.keep(Framebuffer::with_host_images(
+                let draw: Vec<Option<u32>> = (0..count).map(Some).collect();
+                let fbo = made.keep(Framebuffer::with_host_images(
                     gl,
-                    &format!("per-sample radiance, sample {layer}"),
+                    &format!("per-sample radiance, samples {first}.."),
                     &attachments,
-                    &[(
-                        Attachment::Color(0),
-                        HostImage::TextureLayer {
-                            texture: texture.raw(),
-                            layer,
-                        },
-                    )],
-                    &[Some(0)],
-                )?));
+                    &images,
+                    &draw,
+                )?);
+                groups.push((fbo, first));
             }
             Ok::<_, Error>(SampleRadiance {
                 texture,
-                layers,
+                groups,
                 stencil: stencil.map(Texture2d::raw),
             })
         })
@@ -223,7 +238,7 @@ impl SampleRadiance {
 
     /// Free the layers' framebuffers and the texture (not the stencil).
     pub(crate) fn destroy(self, gl: &glow::Context) {
-        for fbo in self.layers {
+        for (fbo, _) in self.groups {
             fbo.destroy(gl);
         }
         self.texture.destroy(gl);
@@ -299,6 +314,7 @@ impl PerSampleLightingPass {
     fn defines(slots: GBufferSlots) -> Vec<(String, String)> {
         let mut d = lighting_defines();
         d.push(("LIGHTING_FUNCTIONS_ONLY".into(), "1".into()));
+        d.push(("SAMPLES_PER_DRAW".into(), SAMPLES_PER_DRAW.to_string()));
         d.extend(slots.defines());
         d
     }
@@ -322,27 +338,36 @@ impl PerSampleLightingPass {
         Self::fragment(slots).text()
     }
 
-    /// Light sample `sample` of `inputs` with all of `batches` (one draw
-    /// each, later batches added by blending) into `target`, the pixels its
-    /// stencil selects.
+    /// Light samples `first .. first + count` of `inputs` (`count` at most
+    /// [`SAMPLES_PER_DRAW`]) with all of `batches` (one draw each, later
+    /// batches added by blending), sample `first + k` into draw buffer `k`
+    /// of `target`, the pixels its stencil selects.
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn light_sample(
+    pub(crate) fn light_samples(
         &self,
         gl: &glow::Context,
         target: LightTarget,
         vao: &VertexArray,
         inputs: &SampleInputs,
-        sample: u32,
+        (first, count): (u32, u32),
         batches: &[LightBatch],
         clear_depth: f32,
         stand_ins: StandIns<'_>,
     ) -> Result<()> {
+        let samples = inputs.samples.max(1);
+        if first + count > samples || count > SAMPLES_PER_DRAW {
+            return Err(Error::invalid(format!(
+                "per-sample lighting of samples {first}..{} of {samples}, {SAMPLES_PER_DRAW} at a time",
+                first + count
+            )));
+        }
         target.bind(gl);
         let p = &self.program;
         p.bind(gl);
         let units = self.bind_inputs(gl, inputs, stand_ins);
         p.set_f32(gl, "u_clear_depth", clear_depth);
-        p.set_i32(gl, "u_sample", sample.min(inputs.samples.max(1) - 1) as i32);
+        p.set_i32(gl, "u_first_sample", first as i32);
+        p.set_i32(gl, "u_sample_count", count as i32);
         for (index, batch) in batches.iter().enumerate() {
             set_batch_blend(gl, index, false);
             batch.apply(gl, p, index == 0);
@@ -379,10 +404,10 @@ impl PerSampleLightingPass {
         stand_ins: StandIns<'_>,
     ) -> Result<Option<u64>> {
         let samples = inputs.samples.max(1);
-        if radiance.layers.len() != samples as usize {
+        if radiance.texture.layers != samples {
             return Err(Error::invalid(format!(
                 "the per-sample radiance has {} layers for {samples} samples",
-                radiance.layers.len()
+                radiance.texture.layers
             )));
         }
         if stencil != StencilSelect::All && radiance.stencil.is_none() {
@@ -390,19 +415,20 @@ impl PerSampleLightingPass {
                 "the per-sample radiance has no stencil to select pixels by",
             ));
         }
-        for (sample, fbo) in radiance.layers.iter().enumerate() {
-            let layer = LightTarget {
+        for (fbo, first) in &radiance.groups {
+            let layers = LightTarget {
                 fbo: fbo.raw(),
                 width: fbo.width,
                 height: fbo.height,
                 stencil,
             };
-            self.light_sample(
+            let count = (samples - first).min(SAMPLES_PER_DRAW);
+            self.light_samples(
                 gl,
-                layer,
+                layers,
                 vao,
                 inputs,
-                sample as u32,
+                (*first, count),
                 batches,
                 clear_depth,
                 stand_ins,

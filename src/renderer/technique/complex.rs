@@ -271,12 +271,12 @@ impl Technique for Complex {
             stencil: StencilSelect::Equal(value),
         };
         // Simple pixels: once, from sample 0, as the one-sample lighting does.
-        pass.light_sample(
+        pass.light_samples(
             gl,
             select(complex_mask::SIMPLE),
             step.fullscreen,
             &inputs,
-            0,
+            (0, 1),
             step.batches,
             step.clear_depth,
             step.stand_ins,
