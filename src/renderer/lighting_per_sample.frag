@@ -1,22 +1,17 @@
-// Per-sample deferred lighting (methods `per-sample` and `complex`): every
-// sample of the multisampled G-buffer is lit on its own, with every light,
-// and the lit samples are averaged, so edges are anti-aliased in the lit
-// image rather than in the G-buffer.
+// Per-sample deferred lighting (methods `per-sample` and `complex`), first
+// pass: samples u_first_sample .. u_first_sample + u_sample_count - 1 of the
+// multisampled G-buffer, each lit with one batch of lights into its own
+// radiance target, o_color[k] for sample u_first_sample + k (outputs past
+// u_sample_count write zero, into no draw buffer). The pass is drawn once
+// per light batch (and group of SAMPLES_PER_DRAW samples), batches after the
+// first added by blending, exactly as the one-sample lighting pass (lighting.frag's main)
+// adds its batches into the HDR target: each sample's radiance is the sum
+// the one-sample pass would store for that G-buffer sample, rounded where
+// it rounds. sample_average.frag then tonemaps and averages the samples.
 //
-// Compiled after lighting.frag (with LIGHTING_FUNCTIONS_ONLY and LIGHT_BLOCK:
-// all lights in one uniform block, so one draw gives each sample its whole
-// radiance) and tonemap.frag (with TONEMAP_FUNCTIONS_ONLY). The lighting
-// math is lighting.frag's only: shade_surface() / shade_background().
-//
-// The average is taken as the tonemap pass will see it: the samples are
-// tonemapped (tonemap_linear), averaged, and mapped back to HDR
-// (tonemap_linear_inverse), so the tonemapped pixel is the box filter of its
-// tonemapped samples, as a supersampled image's is. A plain HDR average
-// would let one bright sample (a sky behind a thin wire) wash out the
-// others. Pixels whose samples all have the same radiance pass it through
-// unchanged (values beyond the tonemap's white stay as they are).
-// With more lights than one block holds, the pass draws once per block and
-// adds; the average is then linear (u_tonemapped_average = 0), which adds up.
+// Compiled after lighting.frag (with LIGHTING_FUNCTIONS_ONLY, the same
+// MAX_LIGHTS and light uniforms as the one-sample pass). The lighting math is
+// lighting.frag's only: shade_surface() / shade_background().
 
 uniform sampler2DMS u_color;
 uniform sampler2DMS u_position;
@@ -33,10 +28,10 @@ uniform sampler2DMS u_emissive;
 #endif
 uniform sampler2DMS u_depth;
 uniform float u_clear_depth;
-uniform int u_samples;              // samples 0 .. u_samples-1 are lit and averaged
-uniform int u_tonemapped_average;   // 1: average after the tonemap curve
+uniform int u_first_sample;         // the sample o_color[0] lights
+uniform int u_sample_count;         // how many outputs are lit
 
-out vec4 o_color;
+out vec4 o_color[SAMPLES_PER_DRAW];
 
 // The attachments a scene-adaptive G-buffer may leave out, read as if there.
 vec4 sample_specular(ivec2 pixel, int i) {
@@ -68,23 +63,33 @@ vec3 shade_sample(ivec2 pixel, int i) {
         sample_emissive(pixel, i, false));
 }
 
+// Output k (a constant index): sample u_first_sample + k, if lit.
+#define SHADE_OUTPUT(k) \
+    o_color[k] = k < u_sample_count \
+        ? vec4(shade_sample(pixel, u_first_sample + k), 1.0) : vec4(0.0);
+
 void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
-    int n = max(u_samples, 1);
-    vec3 first = shade_sample(pixel, 0);
-    vec3 sum = u_tonemapped_average != 0 ? tonemap_linear(first) : first;
-    bool same = true;
-    for (int i = 1; i < n; ++i) {
-        vec3 radiance = shade_sample(pixel, i);
-        same = same && radiance == first;
-        sum += u_tonemapped_average != 0 ? tonemap_linear(radiance) : radiance;
-    }
-    vec3 average = sum / float(n);
-    if (same) {
-        o_color = vec4(first, 1.0);
-    } else if (u_tonemapped_average != 0) {
-        o_color = vec4(tonemap_linear_inverse(average), 1.0);
-    } else {
-        o_color = vec4(average, 1.0);
-    }
+    SHADE_OUTPUT(0)
+#if SAMPLES_PER_DRAW > 1
+    SHADE_OUTPUT(1)
+#endif
+#if SAMPLES_PER_DRAW > 2
+    SHADE_OUTPUT(2)
+#endif
+#if SAMPLES_PER_DRAW > 3
+    SHADE_OUTPUT(3)
+#endif
+#if SAMPLES_PER_DRAW > 4
+    SHADE_OUTPUT(4)
+#endif
+#if SAMPLES_PER_DRAW > 5
+    SHADE_OUTPUT(5)
+#endif
+#if SAMPLES_PER_DRAW > 6
+    SHADE_OUTPUT(6)
+#endif
+#if SAMPLES_PER_DRAW > 7
+    SHADE_OUTPUT(7)
+#endif
 }

@@ -1,27 +1,44 @@
-//! The per-sample lighting pass (`lighting_per_sample.frag`) of
-//! methods [`AaMode::PerSample`](super::AaMode::PerSample) and
+//! The per-sample lighting passes of methods
+//! [`AaMode::PerSample`](super::AaMode::PerSample) and
 //! [`AaMode::Complex`](super::AaMode::Complex): every sample of the
-//! multisampled G-buffer (the retrofit's twins) is lit with `texelFetch` and
-//! the lit samples are averaged as the tonemap will see them (see the
-//! shader's header). The lights, the BRDF and the shading of one G-buffer
-//! sample are `lighting.frag`'s, compiled in front of it with all lights in
-//! one uniform block; the tonemap curve and its inverse are `tonemap.frag`'s.
+//! multisampled G-buffer (the retrofit's twins) is lit with `texelFetch`
+//! into a radiance target of its own, one draw per light batch (writing up
+//! to [`SAMPLES_PER_DRAW`] samples' targets at once), the batches added by
+//! blending as the one-sample lighting pass adds them
+//! (`lighting_per_sample.frag`); then one pass tonemaps the samples,
+//! averages them and maps the average back to HDR (`sample_average.frag`).
+//! Each sample's radiance is thus the one-sample lighting's sum for that
+//! G-buffer sample, rounded where that sum is rounded, at any light count,
+//! and the average is the one the tonemap will see. The lights, the BRDF and
+//! the shading of one G-buffer sample are `lighting.frag`'s, with its own
+//! batches and uniforms; the tonemap curve and its inverse are
+//! `tonemap.frag`'s.
 
 use super::GBufferSlots;
-use super::lighting::{AMBIENT, LIGHTING_FRAG, LightBatch, StandIns, set_batch_blend};
-use super::pass::{LightTarget, draw_fullscreen};
+use super::lighting::{
+    AMBIENT, LIGHTING_FRAG, LightBatch, StandIns, lighting_defines, set_batch_blend,
+};
+use super::pass::{LightTarget, StencilSelect, draw_fullscreen};
 use super::tonemap::{EXPOSURE, TONEMAP_FRAG, WHITE};
 use crate::gl::{
-    Buffer, FullscreenPass, Made, Program, SamplesPassedQuery, ShaderSource, TextureRef,
-    VertexArray, check_error,
+    Attachment, Buffer, Framebuffer, FullscreenPass, HostImage, Made, Program, SamplesPassedQuery,
+    ShaderSource, Texture2d, Texture2dArray, TextureRef, VertexArray, check_error,
 };
 use crate::retrofit::MsaaRetrofit;
 use crate::{Error, Result};
 use glow::HasContext;
 
 /// The per-sample lighting shader's body (compiled after `lighting.frag`
-/// with `LIGHTING_FUNCTIONS_ONLY`).
+/// with `LIGHTING_FUNCTIONS_ONLY`): one sample, one light batch.
 pub(crate) const LIGHTING_PER_SAMPLE_FRAG: &str = include_str!("lighting_per_sample.frag");
+
+/// Samples one draw of the per-sample lighting lights, one draw buffer
+/// each: GL 3.2's least `GL_MAX_DRAW_BUFFERS` and `GL_MAX_COLOR_ATTACHMENTS`.
+pub(crate) const SAMPLES_PER_DRAW: u32 = 8;
+
+/// The shader that tonemaps and averages the samples' radiance (compiled
+/// after `tonemap.frag` with `TONEMAP_FUNCTIONS_ONLY`).
+pub(crate) const SAMPLE_AVERAGE_FRAG: &str = include_str!("sample_average.frag");
 
 /// The multisampled G-buffer the per-sample passes read: the retrofit's
 /// twins of the renderer's attachments.
@@ -69,9 +86,9 @@ impl SampleInputs {
     }
 }
 
-/// Lights in one draw of the per-sample pass: four `vec4` arrays in a
-/// std140 uniform block of 16 KiB, the least every GL 3.1+ context allows
-/// (`GL_MAX_UNIFORM_BLOCK_SIZE`).
+/// Lights in one draw of the passes that light with all lights per draw
+/// (`sparse`'s): four `vec4` arrays in a std140 uniform block of 16 KiB,
+/// the least every GL 3.1+ context allows (`GL_MAX_UNIFORM_BLOCK_SIZE`).
 pub(crate) const LIGHTS_PER_DRAW: usize = 256;
 
 /// The uniform block's binding point.
@@ -141,19 +158,124 @@ impl LightBlock {
     }
 }
 
-/// The per-sample lighting program, its light block, and the occlusion
-/// query that counts the pixels it lights.
+/// Each sample's radiance: one single-sample layer per sample, in the HDR
+/// target's own format, so that adding light batches into a layer rounds as
+/// adding them into the HDR target does; and a framebuffer per
+/// [`SAMPLES_PER_DRAW`] layers (layer `first + k` at colour attachment and
+/// draw buffer `k`), with the complex-pixel stencil attached for `complex`.
+#[derive(Debug)]
+pub(crate) struct SampleRadiance {
+    texture: Texture2dArray,
+    /// Each framebuffer with its first layer.
+    groups: Vec<(Framebuffer, u32)>,
+    stencil: Option<glow::Texture>,
+}
+
+impl SampleRadiance {
+    /// Allocate `samples` layers the size and format of `hdr`, each layer's
+    /// framebuffer with `stencil` (a depth-stencil texture the size of
+    /// `hdr`) attached when given. On failure nothing is left allocated.
+    pub(crate) fn new(
+        gl: &glow::Context,
+        hdr: &Texture2d,
+        samples: u32,
+        stencil: Option<&Texture2d>,
+    ) -> Result<Self> {
+        Made::build(gl, |made| {
+            let texture = made.keep(Texture2dArray::new(
+                gl,
+                "per-sample radiance",
+                hdr.format,
+                hdr.width,
+                hdr.height,
+                samples.max(1),
+                None,
+            )?);
+            let mut groups = Vec::new();
+            for first in (0..texture.layers).step_by(SAMPLES_PER_DRAW as usize) {
+                let count = (texture.layers - first).min(SAMPLES_PER_DRAW);
+                let mut attachments = Vec::new();
+                let mut images = Vec::new();
+                for k in 0..count {
+                    attachments.push((Attachment::Color(k), TextureRef::from(&texture)));
+                    images.push((
+                        Attachment::Color(k),
+                        HostImage::TextureLayer {
+                            texture: texture.raw(),
+                            layer: first + k,
+                        },
+                    ));
+                }
+                if let Some(s) = stencil {
+                    attachments.push((Attachment::DepthStencil, TextureRef::from(s)));
+                }
+                let draw: Vec<Option<u32>> = (0..count).map(Some).collect();
+                let fbo = made.keep(Framebuffer::with_host_images(
+                    gl,
+                    &format!("per-sample radiance, samples {first}.."),
+                    &attachments,
+                    &images,
+                    &draw,
+                )?);
+                groups.push((fbo, first));
+            }
+            Ok::<_, Error>(SampleRadiance {
+                texture,
+                groups,
+                stencil: stencil.map(Texture2d::raw),
+            })
+        })
+    }
+
+    /// Whether these layers are what [`SampleRadiance::new`] would make for
+    /// the same arguments.
+    pub(crate) fn fits(&self, hdr: &Texture2d, samples: u32, stencil: Option<&Texture2d>) -> bool {
+        let t = &self.texture;
+        (t.width, t.height, t.format, t.layers)
+            == (hdr.width, hdr.height, hdr.format, samples.max(1))
+            && self.stencil == stencil.map(Texture2d::raw)
+    }
+
+    /// Free the layers' framebuffers and the texture (not the stencil).
+    pub(crate) fn destroy(self, gl: &glow::Context) {
+        for (fbo, _) in self.groups {
+            fbo.destroy(gl);
+        }
+        self.texture.destroy(gl);
+    }
+}
+
+/// Make `slot` hold layers fitting `hdr`, `samples` and `stencil`,
+/// replacing what is there unless it fits.
+pub(crate) fn prepare_radiance(
+    slot: &mut Option<SampleRadiance>,
+    gl: &glow::Context,
+    hdr: &Texture2d,
+    samples: u32,
+    stencil: Option<&Texture2d>,
+) -> Result<()> {
+    if !slot.as_ref().is_some_and(|r| r.fits(hdr, samples, stencil)) {
+        let fresh = SampleRadiance::new(gl, hdr, samples, stencil)?;
+        if let Some(old) = slot.replace(fresh) {
+            old.destroy(gl);
+        }
+    }
+    Ok(())
+}
+
+/// The per-sample lighting program, the averaging program, and the
+/// occlusion query that counts the pixels averaged.
 #[derive(Debug)]
 pub(crate) struct PerSampleLightingPass {
     program: Program,
+    average: Program,
     slots: GBufferSlots,
-    lights: LightBlock,
     query: Option<SamplesPassedQuery>,
 }
 
 impl PerSampleLightingPass {
-    /// Build the program and the light block's buffer (and the
-    /// `GL_SAMPLES_PASSED` query; without one the pass still runs, uncounted).
+    /// Build both programs (and the `GL_SAMPLES_PASSED` query; without one
+    /// the pass still runs, uncounted).
     pub(crate) fn new(gl: &glow::Context, slots: GBufferSlots) -> Result<Self> {
         Made::build(gl, |made| {
             let program = made.keep(
@@ -165,24 +287,34 @@ impl PerSampleLightingPass {
                 )?
                 .into_program(),
             );
-            let lights = LightBlock::new(gl, &program, "per-sample lighting")?;
+            let average = made.keep(
+                FullscreenPass::new(
+                    gl,
+                    "per-sample average",
+                    &ShaderSource::new()
+                        .defines(&[("TONEMAP_FUNCTIONS_ONLY".into(), "1".into())])
+                        .part("tonemap.frag", TONEMAP_FRAG)
+                        .part("sample_average.frag", SAMPLE_AVERAGE_FRAG),
+                    &[("o_color", 0)],
+                )?
+                .into_program(),
+            );
             let query = SamplesPassedQuery::new(gl).ok();
-            Ok(PerSampleLightingPass {
+            Ok::<_, Error>(PerSampleLightingPass {
                 program,
+                average,
                 slots,
-                lights,
                 query,
             })
         })
     }
 
+    /// `lighting.frag`'s defines (its batch size), the function-only
+    /// switch, and the attachment set's.
     fn defines(slots: GBufferSlots) -> Vec<(String, String)> {
-        let mut d: Vec<(String, String)> = vec![
-            ("MAX_LIGHTS".into(), LIGHTS_PER_DRAW.to_string()),
-            ("LIGHT_BLOCK".into(), "1".into()),
-            ("LIGHTING_FUNCTIONS_ONLY".into(), "1".into()),
-            ("TONEMAP_FUNCTIONS_ONLY".into(), "1".into()),
-        ];
+        let mut d = lighting_defines();
+        d.push(("LIGHTING_FUNCTIONS_ONLY".into(), "1".into()));
+        d.push(("SAMPLES_PER_DRAW".into(), SAMPLES_PER_DRAW.to_string()));
         d.extend(slots.defines());
         d
     }
@@ -192,50 +324,151 @@ impl PerSampleLightingPass {
         self.slots
     }
 
-    /// `lighting.frag`'s shared part, `tonemap.frag`'s, then this pass's
-    /// `main()`, each numbered as its own file.
+    /// `lighting.frag`'s shared part, then this pass's `main()`, each
+    /// numbered as its own file.
     fn fragment(slots: GBufferSlots) -> ShaderSource {
         ShaderSource::new()
             .defines(&Self::defines(slots))
             .part("lighting.frag", LIGHTING_FRAG)
-            .part("tonemap.frag", TONEMAP_FRAG)
             .part("lighting_per_sample.frag", LIGHTING_PER_SAMPLE_FRAG)
     }
 
-    /// The fragment shader's full source as compiled: header, defines, parts.
+    /// The lighting shader's full source as compiled: header, defines, parts.
     pub(crate) fn source(slots: GBufferSlots) -> String {
         Self::fragment(slots).text()
     }
 
-    /// Light samples `0..samples` of `inputs` (every sample: `inputs.samples`;
-    /// sample 0 alone: 1) into `target` (the pixels its stencil selects)
-    /// with all of `batches`' lights and average (after the tonemap curve
-    /// when one draw holds every light), one draw per [`LIGHTS_PER_DRAW`]
-    /// lights. With `count`, the first draw is wrapped
-    /// in a `GL_SAMPLES_PASSED` query and the number of pixels it lit is
-    /// returned (`None` without a query object).
+    /// Light samples `first .. first + count` of `inputs` (`count` at most
+    /// [`SAMPLES_PER_DRAW`]) with all of `batches` (one draw each, later
+    /// batches added by blending), sample `first + k` into draw buffer `k`
+    /// of `target`, the pixels its stencil selects.
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn draw(
+    pub(crate) fn light_samples(
         &self,
         gl: &glow::Context,
         target: LightTarget,
         vao: &VertexArray,
         inputs: &SampleInputs,
-        samples: u32,
+        (first, count): (u32, u32),
+        batches: &[LightBatch],
+        clear_depth: f32,
+        stand_ins: StandIns<'_>,
+    ) -> Result<()> {
+        let samples = inputs.samples.max(1);
+        if first + count > samples || count > SAMPLES_PER_DRAW {
+            return Err(Error::invalid(format!(
+                "per-sample lighting of samples {first}..{} of {samples}, {SAMPLES_PER_DRAW} at a time",
+                first + count
+            )));
+        }
+        target.bind(gl);
+        let p = &self.program;
+        p.bind(gl);
+        let units = self.bind_inputs(gl, inputs, stand_ins);
+        p.set_f32(gl, "u_clear_depth", clear_depth);
+        p.set_i32(gl, "u_first_sample", first as i32);
+        p.set_i32(gl, "u_sample_count", count as i32);
+        for (index, batch) in batches.iter().enumerate() {
+            set_batch_blend(gl, index, false);
+            batch.apply(gl, p, index == 0);
+            draw_fullscreen(gl, vao);
+        }
+        unbind_units(gl, units);
+        unsafe {
+            gl.disable(glow::BLEND);
+            gl.disable(glow::STENCIL_TEST);
+        }
+        check_error(gl, "the per-sample lighting pass")?;
+        Ok(())
+    }
+
+    /// Light every sample of `inputs` into its layer of `radiance` (the
+    /// pixels `stencil` selects there: `radiance` must carry a stencil for
+    /// anything but [`StencilSelect::All`]), then tonemap, average and map
+    /// back into `target` (the pixels its own stencil selects). With
+    /// `count`, the average is wrapped in a `GL_SAMPLES_PASSED` query and
+    /// the number of pixels it wrote is returned (`None` without a query
+    /// object).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn draw(
+        &self,
+        gl: &glow::Context,
+        target: LightTarget,
+        radiance: &SampleRadiance,
+        stencil: StencilSelect,
+        vao: &VertexArray,
+        inputs: &SampleInputs,
         batches: &[LightBatch],
         clear_depth: f32,
         count: bool,
         stand_ins: StandIns<'_>,
     ) -> Result<Option<u64>> {
-        let lights: Vec<[[f32; 4]; 4]> = batches.iter().flat_map(LightBatch::lights).collect();
-        let blocks: Vec<&[[[f32; 4]; 4]]> = if lights.is_empty() {
-            vec![&[]]
-        } else {
-            lights.chunks(LIGHTS_PER_DRAW).collect()
-        };
+        let samples = inputs.samples.max(1);
+        if radiance.texture.layers != samples {
+            return Err(Error::invalid(format!(
+                "the per-sample radiance has {} layers for {samples} samples",
+                radiance.texture.layers
+            )));
+        }
+        if stencil != StencilSelect::All && radiance.stencil.is_none() {
+            return Err(Error::invalid(
+                "the per-sample radiance has no stencil to select pixels by",
+            ));
+        }
+        for (fbo, first) in &radiance.groups {
+            let layers = LightTarget {
+                fbo: fbo.raw(),
+                width: fbo.width,
+                height: fbo.height,
+                stencil,
+            };
+            let count = (samples - first).min(SAMPLES_PER_DRAW);
+            self.light_samples(
+                gl,
+                layers,
+                vao,
+                inputs,
+                (*first, count),
+                batches,
+                clear_depth,
+                stand_ins,
+            )?;
+        }
         target.bind(gl);
-        let p = &self.program;
+        let p = &self.average;
         p.bind(gl);
+        TextureRef::from(&radiance.texture).bind(gl, 0);
+        p.set_i32(gl, "u_radiance", 0);
+        p.set_i32(gl, "u_samples", samples as i32);
+        p.set_f32(gl, "u_exposure", EXPOSURE);
+        p.set_f32(gl, "u_white", WHITE);
+        let query = self.query.as_ref().filter(|_| count);
+        if let Some(q) = query {
+            q.begin(gl);
+        }
+        draw_fullscreen(gl, vao);
+        if let Some(q) = query {
+            q.end(gl);
+        }
+        unsafe {
+            gl.active_texture(glow::TEXTURE0);
+            gl.bind_texture(glow::TEXTURE_2D_ARRAY, None);
+            gl.disable(glow::STENCIL_TEST);
+        }
+        check_error(gl, "the per-sample average")?;
+        Ok(query.map(|q| q.result(gl)))
+    }
+
+    /// Bind the G-buffer samples (and the stand-ins) of the bound lighting
+    /// program to texture units 0.., set their samplers and the stand-in
+    /// specular; the number of units used.
+    fn bind_inputs(
+        &self,
+        gl: &glow::Context,
+        inputs: &SampleInputs,
+        stand_ins: StandIns<'_>,
+    ) -> u32 {
+        let p = &self.program;
         let mut textures = vec![
             ("u_color", inputs.color),
             ("u_position", inputs.position),
@@ -250,50 +483,31 @@ impl PerSampleLightingPass {
             None => ("u_background", TextureRef::from(stand_ins.background)),
         });
         p.set_vec4(gl, "u_specular_constant", stand_ins.specular);
+        p.set_vec3(gl, "u_ambient", AMBIENT);
         for (unit, (name, texture)) in textures.iter().enumerate() {
             texture.bind(gl, unit as u32);
             p.set_i32(gl, name, unit as i32);
         }
-        p.set_f32(gl, "u_clear_depth", clear_depth);
-        p.set_i32(gl, "u_samples", samples.clamp(1, inputs.samples) as i32);
-        p.set_i32(gl, "u_tonemapped_average", i32::from(blocks.len() == 1));
-        p.set_f32(gl, "u_exposure", EXPOSURE);
-        p.set_f32(gl, "u_white", WHITE);
-        p.set_vec3(gl, "u_ambient", AMBIENT);
-        self.lights.bind(gl);
-        let query = self.query.as_ref().filter(|_| count);
-        for (index, block) in blocks.iter().enumerate() {
-            self.lights.upload(gl, block);
-            set_batch_blend(gl, index, false);
-            p.set_i32(gl, "u_light_count", block.len() as i32);
-            p.set_i32(gl, "u_first_batch", i32::from(index == 0));
-            let counted = query.filter(|_| index == 0);
-            if let Some(q) = counted {
-                q.begin(gl);
-            }
-            draw_fullscreen(gl, vao);
-            if let Some(q) = counted {
-                q.end(gl);
-            }
-        }
-        LightBlock::unbind(gl);
-        unsafe {
-            for unit in 0..textures.len() as u32 {
-                gl.active_texture(glow::TEXTURE0 + unit);
-                gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
-                gl.bind_texture(glow::TEXTURE_2D, None);
-            }
-        }
-        check_error(gl, "the per-sample lighting pass")?;
-        Ok(query.map(|q| q.result(gl)))
+        textures.len() as u32
     }
 
-    /// Free the program, the buffer and the query.
+    /// Free the programs and the query.
     pub(crate) fn destroy(self, gl: &glow::Context) {
         self.program.destroy(gl);
-        self.lights.destroy(gl);
+        self.average.destroy(gl);
         if let Some(q) = self.query {
             q.destroy(gl);
+        }
+    }
+}
+
+/// Unbind texture units `0..units` (both targets the passes bind).
+fn unbind_units(gl: &glow::Context, units: u32) {
+    unsafe {
+        for unit in 0..units {
+            gl.active_texture(glow::TEXTURE0 + unit);
+            gl.bind_texture(glow::TEXTURE_2D_MULTISAMPLE, None);
+            gl.bind_texture(glow::TEXTURE_2D, None);
         }
     }
 }

@@ -29,14 +29,16 @@
 //!    into an RGBA16F HDR target; background pixels (depth = clear depth)
 //!    get their emissive value only. With [`AaMode::PerSample`] the lighting
 //!    pass (`lighting_per_sample.frag`, which calls `lighting.frag`'s
-//!    shading with every light in one uniform block) lights every sample of
-//!    the multisampled twins instead and averages them as the tonemap will
-//!    see them. With [`AaMode::Complex`] (whose G-buffer pass also records
-//!    coverage flags, `geometry_coverage.frag`) a detection pass
-//!    (`complex_mask.frag`) marks complex pixels in a stencil mask on the
-//!    HDR target, then two stencil-masked passes of
-//!    `lighting_per_sample.frag` light simple pixels once, from sample 0,
-//!    and complex pixels per sample.
+//!    shading with its light batches) lights every sample of the
+//!    multisampled twins instead, each into a radiance layer of its own,
+//!    the batches added as this pass adds them, and `sample_average.frag`
+//!    averages the samples as the tonemap will see them. With
+//!    [`AaMode::Complex`] (whose G-buffer pass also records coverage flags,
+//!    `geometry_coverage.frag`) a detection pass (`complex_mask.frag`)
+//!    marks complex pixels in a stencil mask on the HDR target, then
+//!    stencil-masked passes of `lighting_per_sample.frag` light simple
+//!    pixels once, from sample 0, and complex pixels per sample, averaged
+//!    by `sample_average.frag`.
 //! 7. **Transparent objects** (`transparent.frag`), forward, single-sampled,
 //!    alpha-blended, depth-tested against the resolved depth without writing it.
 //! 8. **Tonemap** (`tonemap.frag`) into an RGBA8 sRGB-encoded image.
@@ -1382,7 +1384,7 @@ impl Renderer {
     /// The fragment shader of [`AaMode::PerSample`] and [`AaMode::Complex`]'s
     /// per-sample lighting exactly as compiled: `lighting.frag` (its lights,
     /// BRDF and sample shading, with `LIGHTING_FUNCTIONS_ONLY`), then
-    /// `lighting_per_sample.frag`'s loop over the samples. The per-pixel
+    /// `lighting_per_sample.frag`'s reading of one sample. The per-pixel
     /// [`Renderer::lighting_program_source`] is not changed by these modes.
     pub fn per_sample_lighting_program_source(&self) -> String {
         PerSampleLightingPass::source(self.passes.geometry.slots())

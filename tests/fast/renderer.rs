@@ -20,7 +20,7 @@ use deferred_msaa_lab::renderer::technique::Complex;
 use deferred_msaa_lab::renderer::{AaMode, DecalTarget, DepthMode, RenderOptions, Renderer};
 use deferred_msaa_lab::resolve::{ResolveMethod, ResolveRule, ResolveSettings};
 use deferred_msaa_lab::retrofit::FirstLayerRestore;
-use deferred_msaa_lab::scene::Scene;
+use deferred_msaa_lab::scene::{Aabb, Background, Camera, Light, Material, Object, Scene};
 use glow::HasContext;
 
 const W: u32 = 128;
@@ -1036,6 +1036,172 @@ fn per_sample_and_complex_render_every_builtin_scene() {
         renderer.destroy(gl);
     }
     assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
+}
+
+/// One triangle far larger than the view, facing the camera 4 units away,
+/// lit by `n` point lights spread in front of it: every sample of every
+/// pixel sees the same surface at the same point.
+fn one_surface_scene(n: usize) -> Scene {
+    let z = -4.0;
+    let wall = Object {
+        name: "wall".into(),
+        positions: vec![[-40.0, -20.0, z], [40.0, -20.0, z], [0.0, 60.0, z]],
+        normals: vec![[0.0, 0.0, 1.0]; 3],
+        uvs: vec![[0.0, 0.0]; 3],
+        indices: vec![0, 1, 2],
+        material: 0,
+        transform: glam::Mat4::IDENTITY,
+        antialias: true,
+    };
+    let palette = [
+        glam::Vec3::new(1.0, 0.8, 0.6),
+        glam::Vec3::new(0.6, 0.8, 1.0),
+        glam::Vec3::new(1.0, 0.6, 0.8),
+        glam::Vec3::new(0.8, 1.0, 0.7),
+    ];
+    // Spread over the view (about ±3.4 by ±1.9 on the wall), 0.4 to 1.2 in
+    // front of it; together about as bright at any count.
+    let lights = (0..n)
+        .map(|i| {
+            let t = i as f32;
+            let x = ((t * 0.618_034 + 0.1).fract() - 0.5) * 6.4;
+            let y = ((t * 0.414_214 + 0.3).fract() - 0.5) * 3.6;
+            Light::point(
+                glam::Vec3::new(x, y, z + 0.4 + 0.2 * (i % 5) as f32),
+                palette[i % palette.len()],
+                4.0 / n as f32,
+                Some(3.0),
+            )
+        })
+        .collect();
+    let mut scene = Scene {
+        name: format!("one surface, {n} lights"),
+        objects: vec![wall],
+        materials: vec![Material::solid("wall", [0.6, 0.55, 0.5], 0.0, 0.4)],
+        textures: Vec::new(),
+        lights,
+        camera: Camera::look_at(glam::Vec3::ZERO, glam::Vec3::NEG_Z, 0.9, 0.1, Some(50.0)),
+        background: Background::Black,
+        warnings: Vec::new(),
+        bounds: Aabb::EMPTY,
+        bars: Vec::new(),
+    };
+    scene.recompute_bounds();
+    scene
+}
+
+/// The HDR target after one frame of `scene` with `aa`.
+fn hdr_of(
+    gl: &glow::Context,
+    ctx: &HeadlessContext,
+    scene: &Scene,
+    aa: AaMode,
+    what: &str,
+) -> Vec<f32> {
+    let mut r = renderer(ctx, scene, &options(aa));
+    render_checked(gl, &mut r, what);
+    let mut readback = Readback::new(gl).expect("readback");
+    let hdr = readback
+        .read(gl, r.hdr_texture(), 1)
+        .expect("reading the HDR target");
+    readback.destroy(gl);
+    r.destroy(gl);
+    hdr.data
+}
+
+/// Where every sample of a pixel sees the same surface, lighting every
+/// sample and averaging is lighting the pixel once: `per-sample` and
+/// `complex` store the HDR values `none` stores, at one light and at
+/// several batches of them (20 and 48 lights are more than one
+/// [`LIGHTS_PER_BATCH`](deferred_msaa_lab::renderer::shaders::LIGHTS_PER_BATCH)).
+#[test]
+fn per_sample_equals_one_sample_lighting_where_each_pixel_holds_one_surface() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let counts = [1, 8, 20, 48];
+    assert!(
+        counts
+            .iter()
+            .any(|&n| n > 2 * deferred_msaa_lab::renderer::shaders::LIGHTS_PER_BATCH)
+    );
+    for n in counts {
+        let scene = one_surface_scene(n);
+        let none = hdr_of(gl, &ctx, &scene, AaMode::None, &format!("{n} lights, none"));
+        let lit = none.chunks(4).filter(|p| p[0] + p[1] + p[2] > 0.05).count();
+        assert!(
+            lit > none.len() / 4 / 2,
+            "{n} lights: the wall is mostly unlit ({lit} pixels)"
+        );
+        for (method, aa) in [
+            ("per-sample", AaMode::PerSample),
+            ("complex", AaMode::Complex),
+        ] {
+            let other = hdr_of(gl, &ctx, &scene, aa, &format!("{n} lights, {method}"));
+            // The same float operations on the same G-buffer values, stored
+            // in the same half floats: a quarter of a half float's spacing
+            // (2^-10 of the value at most) lets no stored value change.
+            let worst = none
+                .iter()
+                .zip(&other)
+                .map(|(a, b)| (a - b).abs() / a.abs().max(1e-3))
+                .fold(0.0f32, f32::max);
+            let differ = none.iter().zip(&other).filter(|(a, b)| a != b).count();
+            eprintln!(
+                "{n} lights, {method}: {differ} HDR values differ from none's, worst relative difference {worst:e}"
+            );
+            assert!(
+                worst <= 2f32.powi(-12),
+                "{n} lights: {method} differs from one-sample lighting by {worst:e} (relative), {differ} values"
+            );
+        }
+    }
+    assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
+}
+
+/// The ground truth holds at any light count: on `builtin:halo` (point
+/// lights just behind a box's edges), `per-sample`'s FLIP against the
+/// supersampled reference stays at or below `none`'s, over the edge pixels
+/// and over the interior, with the scene's own lights and with 8, 20 and
+/// 48 more.
+#[test]
+fn per_sample_stays_at_or_below_none_against_the_reference_as_lights_are_added() {
+    if common::egl_context().is_none() {
+        return;
+    }
+    for lights in [0, 8, 20, 48] {
+        let config = bench::BenchConfig {
+            scenes: vec!["builtin:halo".into()],
+            width: 160,
+            height: 90,
+            methods: bench::parse_methods("none,per-sample").expect("methods"),
+            lights,
+            frames: 1,
+            warmup: 0,
+            ..bench::BenchConfig::default()
+        };
+        let out = bench::run(&config).expect("bench runs");
+        let run = |m: &str| {
+            out.report
+                .runs
+                .iter()
+                .find(|r| r.method == m)
+                .unwrap_or_else(|| panic!("no `{m}` run"))
+        };
+        let (none, per_sample) = (run("none"), run("per-sample"));
+        for (part, a, b) in [
+            ("edges", per_sample.flip_edges, none.flip_edges),
+            ("interior", per_sample.flip_interior, none.flip_interior),
+        ] {
+            let (a, b) = (a.expect("per-sample FLIP"), b.expect("none FLIP"));
+            eprintln!("{lights} more lights, {part}: per-sample {a:.5}, none {b:.5}");
+            assert!(
+                a <= b,
+                "{lights} more lights: per-sample's FLIP over the {part} ({a}) is above none's ({b})"
+            );
+        }
+    }
 }
 
 #[test]

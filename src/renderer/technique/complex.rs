@@ -2,8 +2,10 @@
 //! pixels only. The G-buffer pass also records coverage flags where the
 //! context has `gl_SampleMaskIn` (`geometry_coverage.frag`), a detection
 //! pass (`complex_mask.frag`) marks complex pixels in a stencil mask on the
-//! HDR target, and two stencil-masked passes of `lighting_per_sample.frag`
-//! light simple pixels once, from sample 0, and complex pixels per sample.
+//! HDR target, and stencil-masked passes of `lighting_per_sample.frag`
+//! light simple pixels once, from sample 0, into the HDR target, and complex
+//! pixels per sample, into radiance layers with the same stencil, which
+//! `sample_average.frag` averages into the HDR target.
 
 use super::per_sample::{per_sample_inputs, prepare_lighting};
 use super::{
@@ -15,7 +17,9 @@ use crate::gl::{GpuTimer, TextureRef};
 use crate::renderer::complex_mask::{self, ComplexMaskPass, MaskTarget};
 use crate::renderer::frame_pass::Pass;
 use crate::renderer::geometry_coverage::CoverageGeometryPass;
-use crate::renderer::lighting_per_sample::PerSampleLightingPass;
+use crate::renderer::lighting_per_sample::{
+    PerSampleLightingPass, SampleRadiance, prepare_radiance,
+};
 use crate::renderer::pass::{LightTarget, StencilSelect};
 use crate::renderer::targets::ComplexTargets;
 use crate::renderer::{AaMode, GBufferSlots};
@@ -38,6 +42,8 @@ pub struct Complex {
     /// The stencil mask and coverage flags, allocated by the first frame
     /// after a change of options (they refer to the twins and the HDR target).
     targets: Option<ComplexTargets>,
+    /// Each sample's radiance, with the stencil mask of `targets`.
+    radiance: Option<SampleRadiance>,
     /// Pixels the last frame's per-sample pass lit (`GL_SAMPLES_PASSED`).
     lit_pixels: Option<u64>,
     /// The last frame's image size.
@@ -134,24 +140,37 @@ impl Complex {
             .targets
             .as_ref()
             .is_some_and(|c| c.coverage.is_some() == coverage_slot.is_some());
-        if current {
-            return Ok(());
-        }
         let retrofit = frame.retrofit.ok_or_else(|| {
             Error::invalid("method `complex` needs the multisampled G-buffer, which is missing")
         })?;
-        let targets = ComplexTargets::new(
+        if !current {
+            // The layers refer to the old stencil.
+            if let Some(r) = self.radiance.take() {
+                r.destroy(gl);
+            }
+            let targets = ComplexTargets::new(
+                gl,
+                &frame.targets.hdr.texture,
+                coverage_slot.map(|slot| (retrofit, slot)),
+            )?;
+            if let Some(old) = self.targets.replace(targets) {
+                old.destroy(gl);
+            }
+        }
+        let stencil = self.targets.as_ref().map(|t| &t.stencil);
+        prepare_radiance(
+            &mut self.radiance,
             gl,
             &frame.targets.hdr.texture,
-            coverage_slot.map(|slot| (retrofit, slot)),
-        )?;
-        if let Some(old) = self.targets.replace(targets) {
-            old.destroy(gl);
-        }
-        Ok(())
+            retrofit.samples(),
+            stencil,
+        )
     }
 
     fn free_targets(&mut self, gl: &glow::Context) {
+        if let Some(r) = self.radiance.take() {
+            r.destroy(gl);
+        }
         if let Some(t) = self.targets.take() {
             t.destroy(gl);
         }
@@ -220,9 +239,13 @@ impl Technique for Complex {
 
     fn light(&mut self, gl: &glow::Context, step: &LightingStep<'_>) -> Result<()> {
         let (pass, inputs) = per_sample_inputs(self.lighting.as_ref(), &step.frame, step.slots)?;
-        let (Some(mask), Some(c)) = (self.mask.as_ref(), self.targets.as_ref()) else {
+        let (Some(mask), Some(c), Some(radiance)) = (
+            self.mask.as_ref(),
+            self.targets.as_ref(),
+            self.radiance.as_ref(),
+        ) else {
             return Err(Error::invalid(
-                "method `complex` has no mask pass or stencil target (not prepared)",
+                "method `complex` has no mask pass, stencil target or per-sample radiance (not prepared)",
             ));
         };
         let (width, height) = step.size();
@@ -247,25 +270,25 @@ impl Technique for Complex {
             height,
             stencil: StencilSelect::Equal(value),
         };
-        // Simple pixels: once, from sample 0.
-        pass.draw(
+        // Simple pixels: once, from sample 0, as the one-sample lighting does.
+        pass.light_samples(
             gl,
             select(complex_mask::SIMPLE),
             step.fullscreen,
             &inputs,
-            1,
+            (0, 1),
             step.batches,
             step.clear_depth,
-            false,
             step.stand_ins,
         )?;
         // Complex pixels: every sample, averaged.
         self.lit_pixels = pass.draw(
             gl,
             select(complex_mask::COMPLEX),
+            radiance,
+            StencilSelect::Equal(complex_mask::COMPLEX),
             step.fullscreen,
             &inputs,
-            inputs.samples,
             step.batches,
             step.clear_depth,
             true,

@@ -1,13 +1,16 @@
 //! Method `per-sample` ([`AaMode::PerSample`]): the G-buffer is resolved
 //! for the decal hook and transparent objects, but lighting reads every
-//! sample of the multisampled twins (`lighting_per_sample.frag`) and
-//! averages them as the tonemap will see them.
+//! sample of the multisampled twins into a radiance layer of its own
+//! (`lighting_per_sample.frag`) and averages the samples as the tonemap
+//! will see them (`sample_average.frag`).
 
 use super::{ComplexPixelsInput, FrameParts, LightingStep, Setup, Technique, resolve_twins};
 use crate::frame::Frame as ResolveFrame;
 use crate::gl::GpuTimer;
 use crate::renderer::frame_pass::Pass;
-use crate::renderer::lighting_per_sample::{PerSampleLightingPass, SampleInputs};
+use crate::renderer::lighting_per_sample::{
+    PerSampleLightingPass, SampleInputs, SampleRadiance, prepare_radiance,
+};
 use crate::renderer::pass::{LightTarget, StencilSelect};
 use crate::renderer::{AaMode, GBufferSlots};
 use crate::retrofit::MsaaRetrofit;
@@ -19,6 +22,9 @@ use std::any::Any;
 pub(crate) struct PerSample {
     /// Built when the method is first used, and kept.
     lighting: Option<PerSampleLightingPass>,
+    /// Each sample's radiance, allocated by the first frame after a change
+    /// of options.
+    radiance: Option<SampleRadiance>,
     /// Pixels the last frame's lighting pass lit (`GL_SAMPLES_PASSED`).
     lit_pixels: Option<u64>,
 }
@@ -70,14 +76,26 @@ impl Technique for PerSample {
         setup: &Setup<'_>,
         frame: Option<FrameParts<'_>>,
     ) -> Result<()> {
-        if frame.is_some() {
+        prepare_lighting(&mut self.lighting, gl, setup.slots)?;
+        if let Some(frame) = frame {
             // A new frame: nothing is lit yet.
             self.lit_pixels = None;
+            let samples = frame.retrofit.map_or(1, MsaaRetrofit::samples);
+            prepare_radiance(
+                &mut self.radiance,
+                gl,
+                &frame.targets.hdr.texture,
+                samples,
+                None,
+            )?;
         }
-        prepare_lighting(&mut self.lighting, gl, setup.slots)
+        Ok(())
     }
 
-    fn options_changed(&mut self, _gl: &glow::Context, _active: bool) {
+    fn options_changed(&mut self, gl: &glow::Context, _active: bool) {
+        if let Some(r) = self.radiance.take() {
+            r.destroy(gl);
+        }
         self.lit_pixels = None;
     }
 
@@ -94,6 +112,9 @@ impl Technique for PerSample {
 
     fn light(&mut self, gl: &glow::Context, step: &LightingStep<'_>) -> Result<()> {
         let (pass, inputs) = per_sample_inputs(self.lighting.as_ref(), &step.frame, step.slots)?;
+        let radiance = self.radiance.as_ref().ok_or_else(|| {
+            Error::invalid("method `per-sample` has no per-sample radiance (not prepared)")
+        })?;
         let (width, height) = step.size();
         let hdr = LightTarget {
             fbo: step.frame.targets.hdr.fbo.raw(),
@@ -104,9 +125,10 @@ impl Technique for PerSample {
         self.lit_pixels = pass.draw(
             gl,
             hdr,
+            radiance,
+            StencilSelect::All,
             step.fullscreen,
             &inputs,
-            inputs.samples,
             step.batches,
             step.clear_depth,
             true,
@@ -135,6 +157,9 @@ impl Technique for PerSample {
     fn destroy(self: Box<Self>, gl: &glow::Context) {
         if let Some(p) = self.lighting {
             p.destroy(gl);
+        }
+        if let Some(r) = self.radiance {
+            r.destroy(gl);
         }
     }
 }
