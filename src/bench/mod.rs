@@ -653,8 +653,9 @@ fn render_reference(
 /// by all its runs. Both come from one frame of `median:layers=2` (clusters
 /// by depth window and normal) at the first requested sample count: two or
 /// more where the second layer covers any of the pixel; three or more where
-/// the resolve's CPU reference, over the frame's samples read back, leaves
-/// samples outside both kept clusters. `None` when that count gives no
+/// the resolve's CPU reference, over the frame's samples read back, finds
+/// samples of neither kept cluster (its `joined`: the resolve's own
+/// clusters, by depth window and normal test). `None` when that count gives no
 /// multisampling.
 fn cluster_masks(
     ctx: &HeadlessContext,
@@ -699,16 +700,9 @@ fn cluster_masks(
                     .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
                     .collect(),
             };
-            let first = cpu.resolve_pixel(&px);
-            let second = cpu.resolve_second_layer_at(&px, None);
-            let kept = |weights: &[f64]| weights.iter().filter(|&&w| w > 0.0).count();
-            let in_first = if first.complex {
-                kept(&first.weights)
-            } else {
-                n as usize
-            };
-            let outside = (n as usize).saturating_sub(in_first + kept(&second.weights));
-            image::Luma([if outside > 0 { 255 } else { 0 }])
+            // Samples of neither kept cluster, each joined to one of them.
+            let joined = cpu.resolve_second_layer_at(&px, None).joined;
+            image::Luma([if joined[0] + joined[1] > 0 { 255 } else { 0 }])
         });
         // Two clusters or more: the second layer covers some of the pixel.
         let mut two = coverage;

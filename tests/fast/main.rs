@@ -35,4 +35,5 @@ mod sparse;
 mod stability;
 mod standalone;
 mod taa;
+mod three_surfaces;
 mod zoo;

@@ -91,9 +91,13 @@ pub struct SecondLayerPixel {
     pub reference: Option<usize>,
     /// Weights per sample (0 outside the second cluster).
     pub weights: Vec<f64>,
-    /// `n2 / (n1 + n2)`: the second cluster's share of the two kept clusters'
-    /// samples (0 without one).
+    /// The second layer's share of the pixel, `(n2 + j2) / N`: its
+    /// cluster's samples and the samples of no kept cluster that join it
+    /// (0 without a second cluster).
     pub coverage: f64,
+    /// Samples in neither kept cluster (a pixel of three surfaces or more),
+    /// counted by the layer each joins: `[j1, j2]`.
+    pub joined: [usize; 2],
     /// `f32` may decide a membership differently: compare loosely.
     pub ambiguous: bool,
 }
@@ -501,6 +505,63 @@ impl CpuResolve {
         (cos >= t, (cos - t).abs() <= 1e-5)
     }
 
+    /// Whether sample `j`, in neither kept cluster, joins the second layer
+    /// (seeded by `s`) rather than the first (whose reference is `r`): the
+    /// nearer in depth (background samples are at no distance from each
+    /// other and infinitely far from geometry), on a tie the closer in
+    /// orientation (the larger cosine, with a normal attachment and
+    /// geometry throughout), else the first. The second value: `f32` may
+    /// decide differently.
+    fn joins_second(
+        &self,
+        px: &PixelSamples,
+        keys: &Keys,
+        j: usize,
+        r: usize,
+        s: usize,
+    ) -> (bool, bool) {
+        let near_first = keys.bg[j] == keys.bg[r];
+        let near_second = keys.bg[j] == keys.bg[s];
+        if near_first != near_second {
+            return (near_second, false);
+        }
+        if near_first && !keys.bg[j] {
+            let (d1, d2) = ((keys.z[j] - keys.z[r]).abs(), (keys.z[j] - keys.z[s]).abs());
+            if d1 != d2 {
+                // Close distances may come out in either order in f32, unless
+                // the keys are the stored f32 values (a view-space position's
+                // z) and f32 subtracts them exactly, as it does keys within a
+                // factor of two of each other: then the shader's distances
+                // are these.
+                let scale = keys.z[j].abs().max(keys.z[r].abs()).max(keys.z[s].abs());
+                let exact = |a: f64, b: f64| f64::from(a as f32 - b as f32) == a - b;
+                let stored = matches!(self.key_source, CpuKeySource::Position(_))
+                    && exact(keys.z[j], keys.z[r])
+                    && exact(keys.z[j], keys.z[s]);
+                return (d2 < d1, !stored && (d1 - d2).abs() <= 1e-6 * scale);
+            }
+        }
+        let Some((k, encoding)) = self.splits_by_normal() else {
+            return (false, false);
+        };
+        if keys.bg[j] || keys.bg[r] || keys.bg[s] {
+            return (false, false);
+        }
+        let cosine = |a: [f64; 3], b: [f64; 3]| {
+            let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+            let la = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+            let lb = (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]).sqrt();
+            dot / (la * lb)
+        };
+        let n = |i: usize| encoding.decode(px.attachments[k][i]);
+        let (c1, c2) = (cosine(n(j), n(r)), cosine(n(j), n(s)));
+        // A NaN (a zero-length normal) compares false: the first.
+        (
+            c2 > c1,
+            (c2 - c1).abs() <= 1e-5 || c1.is_nan() || c2.is_nan(),
+        )
+    }
+
     /// Sample `j` belongs to the cluster seeded by `s`: within its window and
     /// of its orientation. The second value: `f32` may decide differently.
     fn member(&self, px: &PixelSamples, keys: &Keys, j: usize, s: usize) -> (bool, bool) {
@@ -509,13 +570,18 @@ impl CpuResolve {
         (w > 0.0 && same, near_edge || (w > 0.0 && near_threshold))
     }
 
-    /// The second layer of one pixel (see [`SecondLayerPixel`]): the samples
-    /// outside the first layer's cluster (weight 0 there), the largest
-    /// cluster among them (each candidate seed's cluster is the samples
-    /// within its window and of its orientation; ties to the nearer seed,
-    /// then the lower index), resolved by the attachments' rules with the
-    /// seed as reference. A pixel that takes one sample has none; without
-    /// one its attachments are zeros and its depth the clear depth.
+    /// The second layer of one pixel (see [`SecondLayerPixel`]): of the
+    /// samples outside the first layer's cluster (weight 0 there), a seed
+    /// outside the first reference's depth window (another surface in depth)
+    /// before one inside it (the same depth, another orientation: a crease,
+    /// a box's side face), then the largest cluster (each candidate seed's
+    /// cluster is the outside samples within its window and of its
+    /// orientation), ties to the nearer seed, then the lower index; resolved
+    /// by the attachments' rules with the seed as reference. Samples in neither kept cluster join the layer
+    /// [`joins_second`](Self::joins_second) says, for the coverage only:
+    /// no sample's share of the pixel is lost, and no layer's values blend
+    /// surfaces the clusters split. A pixel that takes one sample has none;
+    /// without one its attachments are zeros and its depth the clear depth.
     pub fn resolve_second_layer_at(
         &self,
         px: &PixelSamples,
@@ -529,6 +595,7 @@ impl CpuResolve {
             reference: None,
             weights: vec![0.0; n],
             coverage: 0.0,
+            joined: [0, 0],
             ambiguous,
         };
         if self.settings.layers != 2 || !first.complex {
@@ -537,7 +604,9 @@ impl CpuResolve {
         let keys = self.keys(px);
         let outside: Vec<bool> = first.weights.iter().map(|&w| w == 0.0).collect();
         let mut ambiguous = first.ambiguous;
-        let mut seed: Option<(usize, usize)> = None; // (sample, cluster size)
+        let r = first.reference;
+        // (sample, outside the reference's depth window, cluster size)
+        let mut seed: Option<(usize, bool, usize)> = None;
         for s in (0..n).filter(|&s| outside[s]) {
             let mut size = 0;
             for j in (0..n).filter(|&j| outside[j]) {
@@ -545,15 +614,21 @@ impl CpuResolve {
                 size += usize::from(inside);
                 ambiguous |= unsure;
             }
+            let (w, near_edge) = self.closeness(&keys, s, r);
+            let apart = w == 0.0;
+            ambiguous |= near_edge;
             let better = match seed {
                 None => true,
-                Some((b, best)) => size > best || (size == best && keys.less(s, b)),
+                Some((b, b_apart, best)) => {
+                    (apart && !b_apart)
+                        || (apart == b_apart && (size > best || (size == best && keys.less(s, b))))
+                }
             };
             if better {
-                seed = Some((s, size));
+                seed = Some((s, apart, size));
             }
         }
-        let Some((s, n2)) = seed else {
+        let Some((s, _, n2)) = seed else {
             return none(ambiguous);
         };
         let weights: Vec<f64> = (0..n)
@@ -565,7 +640,12 @@ impl CpuResolve {
                 }
             })
             .collect();
-        let n1 = n - outside.iter().filter(|&&o| o).count();
+        let mut joined = [0, 0];
+        for j in (0..n).filter(|&j| outside[j] && !self.member(px, &keys, j, s).0) {
+            let (second, unsure) = self.joins_second(px, &keys, j, r, s);
+            joined[usize::from(second)] += 1;
+            ambiguous |= unsure;
+        }
         let attachments = px
             .attachments
             .iter()
@@ -588,7 +668,8 @@ impl CpuResolve {
             depth,
             reference: Some(s),
             weights,
-            coverage: n2 as f64 / (n1 + n2) as f64,
+            coverage: (n2 + joined[1]) as f64 / n as f64,
+            joined,
             ambiguous,
         }
     }
@@ -901,8 +982,15 @@ mod tests {
         assert_eq!(first.weights, vec![0.0, 1.0, 1.0, 0.0]);
         let out = cpu.resolve_second_layer_at(&px, None);
         assert_eq!(out.reference, Some(0));
-        // The two kept clusters share the pixel: 1 / (2 + 1).
-        assert!((out.coverage - 1.0 / 3.0).abs() < 1e-12);
+        // Sample 3 (200) is in neither: it joins the nearer in depth, the
+        // first (50 is 150 away, 10 is 190), so the second keeps 1 of 4.
+        assert_eq!((out.coverage, out.joined), (0.25, [1, 0]));
+        // A third cluster nearer the second (12 beside 10): it joins the
+        // second, which then holds 2 of 4.
+        let out = cpu.resolve_second_layer_at(&pixel(&[10.0, 12.0, 50.0, 50.0]), None);
+        assert_eq!(out.reference, Some(0));
+        assert_eq!(out.weights, vec![1.0, 0.0, 0.0, 0.0]);
+        assert_eq!((out.coverage, out.joined), (0.5, [0, 1]));
         // One cluster: no second layer, sample 0's values at the clear depth.
         let out = cpu.resolve_second_layer_at(&pixel(&[10.0, 10.01, 10.0, 10.02]), None);
         assert_eq!((out.reference, out.coverage, out.depth), (None, 0.0, 1.0));
@@ -931,6 +1019,47 @@ mod tests {
         let second = cpu.resolve_second_layer_at(&px, None);
         assert_eq!(second.reference, Some(2));
         assert_eq!(second.coverage, 0.5);
+    }
+
+    #[test]
+    fn a_side_sliver_joins_its_front_face_not_the_wall() {
+        // A thin box's silhouette pixel: its front face (+z, sample 0), its
+        // side face 0.06 behind it (+x, sample 1), a far wall (samples 2, 3).
+        let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
+        cpu.settings.layers = 2;
+        cpu.normal = Some((0, NormalEncoding::Xyz));
+        let mut px = pixel(&[10.0, 10.06, 200.0, 200.0]);
+        px.attachments[0] = vec![
+            [0.0, 0.0, 1.0, 0.0],
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ];
+        // The median is the wall; the front face and the side are two
+        // clusters of one sample, of which the nearer is the second layer.
+        assert_eq!(cpu.resolve_pixel(&px).weights, vec![0.0, 0.0, 1.0, 1.0]);
+        let second = cpu.resolve_second_layer_at(&px, None);
+        assert_eq!(second.reference, Some(0));
+        assert_eq!(second.weights, vec![1.0, 0.0, 0.0, 0.0]);
+        // The side joins the front face (0.06 away, the wall 189.94): the
+        // box keeps its two samples' share, and its layer the front
+        // face's values alone.
+        assert_eq!((second.coverage, second.joined), (0.5, [0, 1]));
+        // Equal distances go by orientation: a sample midway in depth that
+        // faces like the wall joins the first layer, like the bar the
+        // second.
+        let mut px = pixel(&[10.0, 105.0, 200.0, 200.0]);
+        px.attachments[0] = vec![
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.6, 0.8, 0.0],
+            [0.0, 0.8, 0.6, 0.0],
+            [0.0, 0.8, 0.6, 0.0],
+        ];
+        let out = cpu.resolve_second_layer_at(&px, None);
+        assert_eq!((out.reference, out.joined), (Some(0), [1, 0]));
+        px.attachments[0][1] = [0.0, 0.28, 0.96, 0.0];
+        let out = cpu.resolve_second_layer_at(&px, None);
+        assert_eq!((out.reference, out.joined), (Some(0), [0, 1]));
     }
 
     #[test]

@@ -676,7 +676,7 @@ impl Resolver {
     /// outside the first layer's; see the README's "second layer") into
     /// `target` (a depth-stencil attachment is used for `stencil` alone): colour attachment `k`
     /// receives input `k` (0 where a pixel has one cluster), colour
-    /// attachment `colors.len()` the coverage `n2 / (n1 + n2)` (0 where a
+    /// attachment `colors.len()` the coverage `(n2 + j2) / N` (0 where a
     /// pixel has one cluster), `colors.len() + 1` the second cluster's
     /// depth-buffer value (a float target; the clear depth where there is
     /// none) and, with `reference_output`, `colors.len() + 2` the second

@@ -335,6 +335,31 @@ bool same_normal(vec3 a, vec3 b, bool bg_a, bool bg_b) {
 #endif
 }
 
+#ifdef SECOND_LAYER_OUTPUT
+// A sample of neither kept cluster joins the second layer (seeded at z_s)
+// rather than the first (reference at z_r): the nearer in depth, background
+// at no distance from background and infinitely far from geometry; on a
+// tie the closer in orientation, with normals and geometry throughout;
+// else the first (cpu.rs's joins_second).
+bool joins_second(float z, bool bg, vec3 n, float z_r, bool bg_r, vec3 n_r,
+                  float z_s, bool bg_s, vec3 n_s) {
+    bool near_first = bg == bg_r;
+    bool near_second = bg == bg_s;
+    float d_first = abs(z - z_r);
+    float d_second = abs(z - z_s);
+    bool by_depth = near_first != near_second || (near_first && !bg && d_first != d_second);
+    bool second_by_depth = near_first != near_second ? near_second : d_second < d_first;
+#ifdef CLUSTER_NORMALS
+    float c_first = dot(n, n_r) / (length(n) * length(n_r));
+    float c_second = dot(n, n_s) / (length(n) * length(n_s));
+    bool second_by_normal = !bg && !bg_r && !bg_s && c_second > c_first;
+#else
+    bool second_by_normal = false;
+#endif
+    return by_depth ? second_by_depth : second_by_normal;
+}
+#endif
+
 float max3(vec3 v) {
     return max(v.x, max(v.y, v.z));
 }
@@ -650,12 +675,16 @@ void main() {
     int first_size = 0;
     for (int k = 0; k < NUM_SAMPLES; ++k) first_size += in_first[k] ? 1 : 0;
     bool one_cluster = g_one || first_size == NUM_SAMPLES;
-    // The seed of the largest cluster outside it: each candidate's cluster
-    // is the outside samples within its window and of its orientation; ties
-    // go to the nearer seed (candidates come in index order).
+    // The second layer's seed, outside it: one outside the reference's
+    // depth window (another surface in depth) before one inside it (another
+    // orientation at its depth: a crease, a box's side face), then the
+    // largest cluster (each candidate's is the outside samples within its
+    // window and of its orientation), ties to the nearer seed (candidates
+    // come in index order).
     int seed = -1;
     int second_size = 0;
     float seed_sort = 0.0;
+    bool seed_apart = false;
     for (int s = g_zero; s < NUM_SAMPLES; ++s) {
         if (one_cluster) break;
         bool in_s;
@@ -674,13 +703,34 @@ void main() {
                 && same_normal(normals[j], n_s, g_bg[j], bg_s);
             size += member ? 1 : 0;
         }
-        bool better = !in_s && (seed < 0 || size > second_size || (size == second_size && sort_s < seed_sort));
+        bool apart = !(closeness(z_s, bg_s, s == r, z_r, bg_r) > 0.0);
+        bool better = !in_s && (seed < 0 || (apart && !seed_apart) || (apart == seed_apart && (size > second_size || (size == second_size && sort_s < seed_sort))));
+        seed_apart = better ? apart : seed_apart;
         seed = better ? s : seed;
         second_size = better ? size : second_size;
         seed_sort = better ? sort_s : seed_sort;
     }
     bool has_second = seed >= 0 && !one_cluster;
-    float coverage = has_second ? float(second_size) / float(first_size + second_size) : 0.0;
+    // The samples of neither kept cluster (three surfaces or more) join the
+    // nearer layer: no sample's share of the pixel is lost.
+    float z_s = 0.0;
+    bool bg_s = false;
+    vec3 n_s = vec3(0.0);
+    for (int i = 0; i < NUM_SAMPLES; ++i) {
+        z_s = i == seed ? g_key[i] : z_s;
+        bg_s = i == seed ? g_bg[i] : bg_s;
+        n_s = i == seed ? normals[i] : n_s;
+    }
+    int joined_second = 0;
+    for (int j = g_zero; j < NUM_SAMPLES; ++j) {
+        if (one_cluster) break;
+        bool in_second = closeness(g_key[j], g_bg[j], j == seed, z_s, bg_s) > 0.0
+            && same_normal(normals[j], n_s, g_bg[j], bg_s);
+        bool joins = !in_first[j] && !in_second
+            && joins_second(g_key[j], g_bg[j], normals[j], z_r, bg_r, n_r, z_s, bg_s, n_s);
+        joined_second += joins ? 1 : 0;
+    }
+    float coverage = has_second ? float(second_size + joined_second) / float(NUM_SAMPLES) : 0.0;
     // From here on the seed is the reference; a pixel without a second
     // cluster writes sample 0's values, as a one-sample pixel does.
     r = has_second ? seed : 0;
