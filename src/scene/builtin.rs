@@ -1131,10 +1131,12 @@ fn lamps() -> Scene {
     })
 }
 
-/// Thin bright slats, boxes 0.05 deep turned 40 degrees about their long
-/// axis so that a side face shows as a sliver beside the front one,
-/// slanted in the image plane, in front of a dark wall 190 units behind
-/// them that no light reaches. At 640x360 a slat is 2 to 6 pixels wide.
+/// Thin bright slats, boxes turned 40 degrees about their long axis so
+/// that a side face shows as a sliver beside the front one, slanted in the
+/// image plane, in front of a dark wall 190 units behind them that no light
+/// reaches. At 640x360 a slat's front face is 1.5 to 4.5 pixels wide and its
+/// side face 0.3 to 0.9 of a pixel (a sub-pixel sliver: its pixels hold the
+/// front face, the side and the wall).
 fn slats() -> Scene {
     let mut sb = SceneBuilder::new("slats");
     let slat_mat = sb.material(Material::solid("slats", [0.85, 0.82, 0.76], 0.0, 0.6));
@@ -1144,12 +1146,16 @@ fn slats() -> Scene {
     let mut slats = MeshBuilder::default();
     for k in 0..13 {
         let (width_px, slant_deg) = (2.0 + 0.3 * k as f32, -36.0 + 6.0 * k as f32);
+        // The side face's width in the image is the box's depth times the
+        // sine of the turn.
+        let side_px = 0.3 + 0.05 * k as f32;
+        let depth = side_px * unit_per_px / 0.7f32.sin();
         let centre = Vec3::new(-4.5 + 0.75 * k as f32, 0.3 * ((k % 3) as f32 - 1.0), 0.0);
         let turn = Quat::from_rotation_z(slant_deg.to_radians()) * Quat::from_rotation_y(0.7);
         // Long enough to run off the top and bottom of the view.
         slats.cuboid(
             centre,
-            Vec3::new(0.5 * width_px * unit_per_px, 3.2, 0.025),
+            Vec3::new(0.5 * width_px * unit_per_px, 3.2, 0.5 * depth),
             turn,
         );
     }
