@@ -1134,7 +1134,7 @@ fn lamps() -> Scene {
 /// Thin bright slats, boxes turned 40 degrees about their long axis so
 /// that a side face shows as a sliver beside the front one, slanted in the
 /// image plane, in front of a dark wall 190 units behind them that no light
-/// reaches. At 640x360 a slat's front face is 1.5 to 4.5 pixels wide and its
+/// reaches. At 640x360 a slat's front face is 1.5 to 4.3 pixels wide and its
 /// side face 0.3 to 0.9 of a pixel (a sub-pixel sliver: its pixels hold the
 /// front face, the side and the wall).
 fn slats() -> Scene {
@@ -1144,13 +1144,13 @@ fn slats() -> Scene {
     // World units per pixel in z = 0 at 360 pixels high.
     let unit_per_px = 2.0 * 10.0 * (15f32.to_radians()).tan() / 360.0;
     let mut slats = MeshBuilder::default();
-    for k in 0..13 {
-        let (width_px, slant_deg) = (2.0 + 0.3 * k as f32, -36.0 + 6.0 * k as f32);
+    for k in 0..25 {
+        let (width_px, slant_deg) = (2.0 + 0.15 * k as f32, -36.0 + 3.0 * k as f32);
         // The side face's width in the image is the box's depth times the
         // sine of the turn.
-        let side_px = 0.3 + 0.05 * k as f32;
+        let side_px = 0.3 + 0.025 * k as f32;
         let depth = side_px * unit_per_px / 0.7f32.sin();
-        let centre = Vec3::new(-4.5 + 0.75 * k as f32, 0.3 * ((k % 3) as f32 - 1.0), 0.0);
+        let centre = Vec3::new(-4.5 + 0.375 * k as f32, 0.3 * ((k % 3) as f32 - 1.0), 0.0);
         let turn = Quat::from_rotation_z(slant_deg.to_radians()) * Quat::from_rotation_y(0.7);
         // Long enough to run off the top and bottom of the view.
         slats.cuboid(

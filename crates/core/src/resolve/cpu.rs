@@ -423,9 +423,9 @@ impl CpuResolve {
             };
         }
 
-        let r = self.reference(&keys);
+        let (r, mut ambiguous) = self.majority_reference(px, &keys, self.reference(&keys));
+        ambiguous |= selection_ambiguous;
         let mut weights = Vec::with_capacity(n);
-        let mut ambiguous = selection_ambiguous;
         for i in 0..n {
             let (w, near_edge) = self.closeness(&keys, i, r);
             // With a normal attachment a sample of another orientation is another surface.
@@ -560,6 +560,44 @@ impl CpuResolve {
             c2 > c1,
             (c2 - c1).abs() <= 1e-5 || c1.is_nan() || c2.is_nan(),
         )
+    }
+
+    /// With two layers and a normal attachment (any method but `Average`),
+    /// the reference `r` moves to the sample within its depth window whose
+    /// cluster (the samples within its window and of its orientation) is
+    /// the largest, if larger than its own: the first of those in index
+    /// order. A crease, or a box's side face just behind its front face, can
+    /// put the median on the smaller face; the larger's samples would then
+    /// join it and be lit as it. The second value: `f32` may decide
+    /// differently.
+    fn majority_reference(&self, px: &PixelSamples, keys: &Keys, r: usize) -> (usize, bool) {
+        if self.settings.layers != 2
+            || self.splits_by_normal().is_none()
+            || self.settings.method == ResolveMethod::Average
+        {
+            return (r, false);
+        }
+        let n = px.depth.len();
+        let mut ambiguous = false;
+        let mut size = |s: usize| {
+            let mut count = 0;
+            for j in 0..n {
+                let (inside, unsure) = self.member(px, keys, j, s);
+                count += usize::from(inside);
+                ambiguous |= unsure;
+            }
+            count
+        };
+        let sizes: Vec<usize> = (0..n).map(&mut size).collect();
+        let mut best = r;
+        for s in 0..n {
+            let (w, near_edge) = self.closeness(keys, s, r);
+            ambiguous |= near_edge;
+            if w > 0.0 && sizes[s] > sizes[best] {
+                best = s;
+            }
+        }
+        (best, ambiguous)
     }
 
     /// Sample `j` belongs to the cluster seeded by `s`: within its window and
@@ -1060,6 +1098,34 @@ mod tests {
         px.attachments[0][1] = [0.0, 0.28, 0.96, 0.0];
         let out = cpu.resolve_second_layer_at(&px, None);
         assert_eq!((out.reference, out.joined), (Some(0), [0, 1]));
+    }
+
+    #[test]
+    fn with_two_layers_the_reference_moves_to_the_larger_face() {
+        // Front face twice, the side just behind it once, the wall: the
+        // median is the side (the 3rd of 4 by depth).
+        let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
+        cpu.normal = Some((0, NormalEncoding::Xyz));
+        let mut px = pixel(&[10.0, 10.0, 10.001, 200.0]);
+        px.attachments[0] = vec![
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ];
+        // One layer keeps the median's face.
+        assert_eq!(cpu.resolve_pixel(&px).reference, 2);
+        // Two: the front face, which two samples share, is the first layer,
+        // the wall (another depth) the second, and the side joins the first.
+        cpu.settings.layers = 2;
+        let first = cpu.resolve_pixel(&px);
+        assert_eq!(
+            (first.reference, first.weights),
+            (0, vec![1.0, 1.0, 0.0, 0.0])
+        );
+        let second = cpu.resolve_second_layer_at(&px, None);
+        assert_eq!(second.reference, Some(3));
+        assert_eq!((second.coverage, second.joined), (0.25, [1, 0]));
     }
 
     #[test]

@@ -121,6 +121,10 @@ pub(crate) struct ResolveProgramKey {
     /// The normal attachment's slot and encoding, whose test splits
     /// clusters (one layer or two).
     pub normal: Option<(ResolveSlot, NormalEncoding)>,
+    /// Two layers with a normal attachment (and a method with a reference):
+    /// the reference moves to the orientation most samples within its depth
+    /// window share, in both layers' passes.
+    pub majority_reference: bool,
     /// Write the second layer and its coverage instead of the first.
     pub second_layer_output: bool,
     /// The colour attachments written (bit k: attachment k), to
@@ -357,6 +361,9 @@ impl ResolveProgramKey {
                 NormalEncoding::OctahedralUnorm => "NORMAL_OCTAHEDRAL_UNORM",
             };
             def("NORMAL_ENCODING", encoding.into());
+        }
+        if self.majority_reference {
+            def("MAJORITY_REFERENCE", "1".into());
         }
         if self.second_layer_output {
             def("SECOND_LAYER_OUTPUT", "1".into());
@@ -611,6 +618,9 @@ impl Resolver {
             outside_output: extra.outside,
             reference_output: extra.reference,
             selection: SelectionKey::of(&s.selection, inputs)?,
+            majority_reference: s.layers == 2
+                && normal.is_some()
+                && s.method != ResolveMethod::Average,
             normal,
             second_layer_output,
             written,

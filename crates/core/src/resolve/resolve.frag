@@ -40,6 +40,9 @@
 //                          a normal attachment (one layer or two): samples whose
 //                          normals' cosine is below u_normal_threshold are
 //                          different surfaces (cpu.rs's same_normal)
+//   MAJORITY_REFERENCE     two layers with a normal attachment: the reference
+//                          moves to the orientation most samples within its
+//                          depth window share (cpu.rs's majority_reference)
 //   SECOND_LAYER_OUTPUT    write the second layer (cpu.rs's
 //                          resolve_second_layer_at), its coverage to
 //                          o_coverage and its depth to o_layer_depth, instead
@@ -641,6 +644,58 @@ void main() {
     vec3 n_r = decode_normal(vec4(FETCH(NORMAL_SAMPLER, p, r)));
 #else
     vec3 n_r = vec3(0.0);
+#endif
+#ifdef MAJORITY_REFERENCE
+    // Two layers: the reference moves to the orientation most samples within
+    // its depth window share (cpu.rs's majority_reference). A crease, or a
+    // box's side face behind its front face, can put the median on the
+    // smaller of two faces, which the larger's samples would then join, lit
+    // as it; ties keep the reference.
+    {
+        vec3 ns[NUM_SAMPLES];
+        for (int k = 0; k < NUM_SAMPLES; ++k) ns[k] = n_r;
+        for (int i = g_zero; i < NUM_SAMPLES; ++i) {
+            if (g_one) break;
+            vec3 n_i = decode_normal(vec4(FETCH(NORMAL_SAMPLER, p, i)));
+            for (int k = 0; k < NUM_SAMPLES; ++k) ns[k] = k == i ? n_i : ns[k];
+        }
+        // Each candidate's cluster size: the samples within its window and
+        // of its orientation.
+        int sizes[NUM_SAMPLES];
+        for (int k = 0; k < NUM_SAMPLES; ++k) sizes[k] = 0;
+        for (int s = g_zero; s < NUM_SAMPLES; ++s) {
+            if (g_one) break;
+            int size = 0;
+            for (int j = 0; j < NUM_SAMPLES; ++j) {
+                bool member = closeness(g_key[j], g_bg[j], j == s, g_key[s], g_bg[s]) > 0.0
+                    && same_normal(ns[j], ns[s], g_bg[j], g_bg[s]);
+                size += member ? 1 : 0;
+            }
+            for (int k = 0; k < NUM_SAMPLES; ++k) sizes[k] = k == s ? size : sizes[k];
+        }
+        int best = r;
+        int best_size;
+        PICK(best_size, sizes, r)
+        float z_best = z_r;
+        bool bg_best = bg_r;
+        vec3 n_best = n_r;
+        for (int s = g_zero; s < NUM_SAMPLES; ++s) {
+            if (g_one) break;
+            bool near = closeness(g_key[s], g_bg[s], s == r, z_r, bg_r) > 0.0;
+            bool better = near && sizes[s] > best_size;
+            best = better ? s : best;
+            best_size = better ? sizes[s] : best_size;
+            z_best = better ? g_key[s] : z_best;
+            bg_best = better ? g_bg[s] : bg_best;
+            n_best = better ? ns[s] : n_best;
+        }
+        for (int i = 0; i < NUM_SAMPLES; ++i)
+            reference_depth = i == best ? g_raw_depth[i] : reference_depth;
+        r = best;
+        z_r = z_best;
+        bg_r = bg_best;
+        n_r = n_best;
+    }
 #endif
 
 #ifdef SECOND_LAYER_OUTPUT
