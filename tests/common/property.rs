@@ -544,6 +544,12 @@ struct Geometry {
     triangle: [[f32; 2]; 3],
 }
 
+/// How far the front triangle's side face reaches out from its first edge,
+/// in pixels: a sliver that a pixel's samples meet now and then, so that
+/// pixels of three surfaces (the front face, its side, the back face) occur
+/// as a thin box's silhouette has them.
+const SIDE_PX: f32 = 0.35;
+
 /// The value a face writes to attachment `k` (as a GLSL expression).
 fn face_value(seed: u64, k: usize, face: u32, kind: ValueKind) -> String {
     let mut rng = Rng::new(seed.wrapping_mul(1_000_003) ^ (k as u64 * 131 + face as u64 * 7 + 1));
@@ -617,6 +623,29 @@ impl Geometry {
         for p in triangle {
             let q = ndc(p);
             vertices.extend([q[0], q[1], -0.25]);
+        }
+        // The side face: a quad along the first edge, receding from the
+        // front face's depth outwards by SIDE_PX pixels. It writes the front
+        // face's values (one object's material), at other depths.
+        // At the larger of the host's two sizes (it is resized once): no
+        // wider than SIDE_PX at either.
+        let w = host.width.max(spec.resized.0) as f32;
+        let h = host.height.max(spec.resized.1) as f32;
+        let centre = [0, 1].map(|c| (triangle[0][c] + triangle[1][c] + triangle[2][c]) / 3.0);
+        let (a, b) = (triangle[0], triangle[1]);
+        let (dx, dy) = ((b[0] - a[0]) * w, (b[1] - a[1]) * h);
+        let len = (dx * dx + dy * dy).sqrt().max(1e-6);
+        let mut out = [dy / len, -dx / len];
+        let away = [(a[0] - centre[0]) * w, (a[1] - centre[1]) * h];
+        if out[0] * away[0] + out[1] * away[1] < 0.0 {
+            out = [-out[0], -out[1]];
+        }
+        let shifted = |p: [f32; 2]| [p[0] + out[0] * SIDE_PX / w, p[1] + out[1] * SIDE_PX / h];
+        let side = [(a, -0.25), (b, -0.25), (shifted(b), -0.15)];
+        let side2 = [(a, -0.25), (shifted(b), -0.15), (shifted(a), -0.15)];
+        for (p, z) in side.into_iter().chain(side2) {
+            let q = ndc(p);
+            vertices.extend([q[0], q[1], z]);
         }
         unsafe {
             let program = gl.create_program().unwrap();
@@ -706,10 +735,11 @@ impl Geometry {
             gl.stencil_op(glow::KEEP, glow::KEEP, glow::REPLACE);
             gl.use_program(Some(self.program));
             gl.bind_vertex_array(Some(self.vao));
-            for (face, reference) in [(0, 0x5A), (1, 0xA5)] {
+            // The back face, then the front triangle with its side face.
+            for (face, reference, first, count) in [(0, 0x5A, 0, 3), (1, 0xA5, 3, 9)] {
                 gl.stencil_func(glow::ALWAYS, reference, 0xFF);
                 gl.uniform_1_i32(self.face.as_ref(), face);
-                gl.draw_arrays(glow::TRIANGLES, face * 3, 3);
+                gl.draw_arrays(glow::TRIANGLES, first, count);
             }
             gl.disable(glow::STENCIL_TEST);
         }
@@ -733,8 +763,9 @@ impl Geometry {
             let d = sign * (dx * (c[1] - a[1]) - dy * (c[0] - a[0])) / len;
             min = min.min(d);
         }
-        // Half a pixel's diagonal, with room for rounding.
-        let margin = 0.75;
+        // Half a pixel's diagonal, with room for rounding, and the side
+        // face beyond the first edge.
+        let margin = 0.75 + SIDE_PX;
         if min > margin {
             Some(1)
         } else if min < -margin {
