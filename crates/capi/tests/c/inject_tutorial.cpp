@@ -1,0 +1,173 @@
+// The LearnOpenGL "Deferred Shading" chapter's program as its readers
+// write it (tutorial_program.hpp), run as a render loop: a GLFW window,
+// each frame the geometry pass into the G-buffer, the lighting quad into
+// framebuffer 0, the G-buffer's depth blitted to it, the light cubes drawn
+// forward, and the swap. Built two ways from this one source:
+//
+//   without DMSAA_IN_SOURCE  no line of the retrofit: what
+//                            `deferred-msaa inject` is run on;
+//   with -DDMSAA_IN_SOURCE   the retrofit added in the source as
+//                            docs/capi.md says (dmsaa_framebuffer for the
+//                            geometry pass, dmsaa_resolve after it), made
+//                            before the first frame.
+//
+// It draws FRAMES frames and writes the last one, read back from the back
+// buffer before its swap, as raw RGBA8 (rows bottom-up) into OUT_FILE.
+// Exit status non-zero, with a line saying why, on a GL error or a failed
+// call.
+//
+// Usage: inject_tutorial OUT_FILE [--egl] [--tutorial-options]
+//   --egl               the context through EGL (GLFW_EGL_CONTEXT_API)
+//   --tutorial-options  (in-source build) the options
+//                       crates/inject/profiles/tutorial.toml declares,
+//                       rather than dmsaa_options_default()
+#include "tutorial_program.hpp"
+
+#ifdef DMSAA_IN_SOURCE
+#include "deferred_msaa.h"
+#endif
+
+static const int WIDTH = 160;
+static const int HEIGHT = 120;
+// The injected program is retrofitted from its second frame on (the
+// G-buffer is known once the first frame's lighting has read it); the
+// last frame is the third in both builds.
+static const int FRAMES = 3;
+
+#ifdef DMSAA_IN_SOURCE
+static const void *loadForLibrary(const char *name, void *)
+{
+    return reinterpret_cast<const void *>(glfwGetProcAddress(name));
+}
+
+static bool ok(DmsaaStatus status, const char *call)
+{
+    if (status != DMSAA_STATUS_OK) {
+        std::fprintf(stderr, "%s: status %d: %s\n", call, static_cast<int>(status), dmsaa_last_error());
+        failures++;
+        return false;
+    }
+    return true;
+}
+#endif
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options]\n", argv[0]);
+        return 2;
+    }
+    bool egl = false, tutorialOptions = false;
+    for (int i = 2; i < argc; i++) {
+        if (std::strcmp(argv[i], "--egl") == 0)
+            egl = true;
+        else if (std::strcmp(argv[i], "--tutorial-options") == 0)
+            tutorialOptions = true;
+        else {
+            std::fprintf(stderr, "unknown argument %s\n", argv[i]);
+            return 2;
+        }
+    }
+    glfwInit();
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 2);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GL_TRUE);
+    glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
+    if (egl)
+        glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_EGL_CONTEXT_API);
+    GLFWwindow *window = glfwCreateWindow(WIDTH, HEIGHT, "LearnOpenGL", NULL, NULL);
+    if (window == NULL) {
+        const char *why = nullptr;
+        glfwGetError(&why);
+        std::fprintf(stderr, "Failed to create GLFW window: %s\n", why ? why : "?");
+        glfwTerminate();
+        return 3;
+    }
+    glfwMakeContextCurrent(window);
+    if (!loadGL()) {
+        std::fprintf(stderr, "Failed to initialize GLAD\n");
+        return 3;
+    }
+    GLint major = 0, minor = 0;
+    glGetIntegerv(GL_MAJOR_VERSION, &major);
+    glGetIntegerv(GL_MINOR_VERSION, &minor);
+    if (major * 10 + minor < 33)
+        glslVersion = "#version 150 core\n#extension GL_ARB_explicit_attrib_location : require\n";
+    std::printf("GL %s through %s\n", reinterpret_cast<const char *>(glGetString(GL_VERSION)), egl ? "EGL" : "GLX");
+    glViewport(0, 0, WIDTH, HEIGHT);
+
+    Engine e;
+    engineInit(e, WIDTH, HEIGHT, false);
+#ifdef DMSAA_IN_SOURCE
+    DmsaaOptions options = dmsaa_options_default();
+    if (tutorialOptions) {
+        // What crates/inject/profiles/tutorial.toml declares.
+        options.position_attachment = 0;
+        options.world_space_position = 1;
+        options.normal_attachment = 1;
+        options.normal_encoding = DMSAA_NORMAL_XYZ;
+        options.rules[1] = DMSAA_RULE_SELECT;
+        options.layer_mix = DMSAA_LAYER_MIX_SRGB_ENCODED;
+    }
+    DmsaaRetrofit *msaa = nullptr;
+    if (!ok(dmsaa_retrofit_new(loadForLibrary, nullptr, e.gBuffer, &options, &msaa), "dmsaa_retrofit_new"))
+        return 1;
+#else
+    (void)tutorialOptions;
+#endif
+
+    std::vector<unsigned char> pixels(static_cast<size_t>(WIDTH) * HEIGHT * 4);
+    glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+    for (int frame = 0; frame < FRAMES; frame++) {
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+
+        // 1. geometry pass
+        GLuint geometryTarget = e.gBuffer;
+#ifdef DMSAA_IN_SOURCE
+        ok(dmsaa_framebuffer(msaa, &geometryTarget), "dmsaa_framebuffer");
+#endif
+        geometryPass(e, geometryTarget);
+#ifdef DMSAA_IN_SOURCE
+        ok(dmsaa_resolve(msaa, e.projection.m.data(), e.view.m.data()), "dmsaa_resolve");
+#endif
+
+        // 2. lighting pass, 2.5 the depth copy, 3. the light cubes
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        lightingQuad(e);
+        blitDepth(e, 0);
+        lightCubes(e);
+        checkGlErrors("a frame");
+
+        if (frame == FRAMES - 1) {
+            glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+            glReadBuffer(GL_BACK);
+            glPixelStorei(GL_PACK_ALIGNMENT, 1);
+            glReadPixels(0, 0, WIDTH, HEIGHT, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+            glPixelStorei(GL_PACK_ALIGNMENT, 4);
+        }
+        glfwSwapBuffers(window);
+        glfwPollEvents();
+    }
+#ifdef DMSAA_IN_SOURCE
+    dmsaa_destroy(msaa);
+#endif
+    engineFree(e);
+    checkGlErrors("the end");
+
+    FILE *f = std::fopen(argv[1], "wb");
+    CHECK(f != nullptr, "cannot write %s", argv[1]);
+    if (f) {
+        std::fwrite(pixels.data(), 1, pixels.size(), f);
+        std::fclose(f);
+    }
+    glfwTerminate();
+    if (failures) {
+        std::fprintf(stderr, "%d check(s) failed\n", failures);
+        return 1;
+    }
+    std::printf("ok\n");
+    return 0;
+}

@@ -1,0 +1,993 @@
+//! What the library keeps per GL context, and what each watched call does:
+//! find the G-buffer, bind the retrofit's framebuffer in its place, resolve
+//! when the program leaves it.
+//!
+//! The G-buffer, without a profile: a complete single-sample framebuffer
+//! with at least two colour textures and a depth attachment, drawn into,
+//! two or more of whose colour textures are bound at once for a draw into
+//! another framebuffer (a lighting pass reads them together; a bloom
+//! program's blur and composite read one at a time). With a profile, a
+//! drawn framebuffer matching its signature. Anything less sure leaves the
+//! program untouched and says so once.
+
+use crate::check;
+use crate::hooks::{self, Api, real_type};
+use crate::profile::Profile;
+use deferred_msaa_capi as capi;
+use glow::HasContext;
+use std::collections::{HashMap, HashSet};
+use std::ffi::{CStr, c_void};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::{Mutex, OnceLock};
+
+const GL_FRAMEBUFFER: u32 = 0x8D40;
+const GL_READ_FRAMEBUFFER: u32 = 0x8CA8;
+const GL_DRAW_FRAMEBUFFER: u32 = 0x8CA9;
+const GL_DRAW_FRAMEBUFFER_BINDING: u32 = 0x8CA6;
+const GL_READ_FRAMEBUFFER_BINDING: u32 = 0x8CAA;
+const GL_TEXTURE0: u32 = 0x84C0;
+const GL_TEXTURE_2D: u32 = 0x0DE1;
+
+/// How the run is set up: from the environment `deferred-msaa inject` sets.
+pub(crate) struct Settings {
+    /// `DMSAA_INJECT_CHECK=1`: the state and error checks around every call.
+    pub(crate) check: bool,
+    /// `DMSAA_INJECT_PROFILE`: the profile, read.
+    pub(crate) profile: Option<Profile>,
+    /// `DMSAA_INJECT_LEARN`: where to write a first profile (and retrofit
+    /// nothing).
+    pub(crate) learn: Option<std::path::PathBuf>,
+    /// Why the retrofit is off from the start (a profile that did not
+    /// load).
+    pub(crate) off: Option<String>,
+}
+
+/// The run's settings, read once.
+pub(crate) fn settings() -> &'static Settings {
+    static SETTINGS: OnceLock<Settings> = OnceLock::new();
+    SETTINGS.get_or_init(|| {
+        let check = std::env::var("DMSAA_INJECT_CHECK").is_ok_and(|v| v == "1");
+        let learn = std::env::var_os("DMSAA_INJECT_LEARN").map(Into::into);
+        let (profile, off) = match std::env::var_os("DMSAA_INJECT_PROFILE") {
+            None => (None, None),
+            Some(path) => match Profile::load(std::path::Path::new(&path)) {
+                Ok(p) => (Some(p), None),
+                Err(e) => (None, Some(e.to_string())),
+            },
+        };
+        if check {
+            // SAFETY: a plain extern "C" function with no arguments.
+            unsafe { libc::atexit(print_check_totals) };
+        }
+        Settings {
+            check,
+            profile,
+            learn,
+            off,
+        }
+    })
+}
+
+/// Say `message` on stderr, once per run for each `key`.
+pub(crate) fn say_once(key: &str, message: &str) {
+    static SAID: Mutex<Option<HashSet<String>>> = Mutex::new(None);
+    let mut said = SAID.lock().unwrap_or_else(|e| e.into_inner());
+    if said
+        .get_or_insert_with(HashSet::new)
+        .insert(key.to_string())
+    {
+        eprintln!("deferred-msaa inject: {message}");
+    }
+}
+
+extern "C" fn print_check_totals() {
+    let t = check::TOTALS.lock().unwrap_or_else(|e| e.into_inner());
+    let resolves = RESOLVES.load(std::sync::atomic::Ordering::Relaxed);
+    eprintln!(
+        "deferred-msaa inject: check: {} calls into the library, {} GL state values compared around each, \
+         {} changed, {} GL errors left by the library, {} left pending by the program; {} frames resolved",
+        t.calls, t.values, t.changed, t.errors, t.program_errors, resolves
+    );
+}
+
+/// Frames resolved over the run, every context.
+static RESOLVES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// What the inspection of a framebuffer found.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Framebuffer {
+    pub(crate) complete: bool,
+    pub(crate) samples: i32,
+    /// Colour attachment number → texture name, for texture attachments.
+    pub(crate) colour_textures: Vec<(u32, u32)>,
+    /// Colour attachments of any kind.
+    pub(crate) colour_attachments: u32,
+    /// Each colour attachment's component type and size (`float16`…).
+    pub(crate) formats: Vec<String>,
+    pub(crate) depth: bool,
+    /// Drawn into since it was inspected.
+    pub(crate) drawn: bool,
+    /// Its attachments changed since it was inspected.
+    pub(crate) stale: bool,
+}
+
+impl Framebuffer {
+    /// The heuristic's shape of a G-buffer.
+    fn looks_like_gbuffer(&self) -> bool {
+        self.complete && self.samples == 0 && self.colour_textures.len() >= 2 && self.depth
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "{} colour textures ({}){}",
+            self.colour_textures.len(),
+            self.formats.join(", "),
+            if self.depth { " + depth" } else { "" }
+        )
+    }
+}
+
+/// The retrofit made for a context's G-buffer.
+struct Retrofit {
+    handle: *mut capi::DmsaaRetrofit,
+    world_space: bool,
+}
+
+// SAFETY: the handle is used only under the state's lock, with the
+// context it was made on current (the state is kept per context).
+unsafe impl Send for Retrofit {}
+
+/// A pass the program drew in one frame (for `--learn`).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Pass {
+    pub(crate) framebuffer: u32,
+    pub(crate) program: u32,
+    pub(crate) draws: u32,
+}
+
+/// One GL context's view of the program, and its retrofit.
+pub(crate) struct Context {
+    api: Api,
+    gl: Option<glow::Context>,
+    /// The framebuffers bound for drawing and reading, as the program
+    /// sees them (the G-buffer, never the twin).
+    draw_fbo: u32,
+    read_fbo: u32,
+    program: u32,
+    active_unit: u32,
+    unit_textures: HashMap<u32, u32>,
+    /// (program, location) → "projection" or "view".
+    matrix_uniforms: HashMap<(u32, i32), bool>,
+    /// (program, location) → uniform name, for `--learn`.
+    pub(crate) uniform_names: HashMap<(u32, i32), String>,
+    pub(crate) matrices_set: Vec<String>,
+    projection: Option<[f32; 16]>,
+    view: Option<[f32; 16]>,
+    pub(crate) framebuffers: HashMap<u32, Framebuffer>,
+    pub(crate) gbuffer: Option<u32>,
+    retrofit: Option<Retrofit>,
+    needs_refresh: bool,
+    twin_bound: bool,
+    twin_drawn: bool,
+    off: bool,
+    frames: u64,
+    pub(crate) passes: Vec<Pass>,
+    pub(crate) last_frame: Vec<Pass>,
+}
+
+impl Context {
+    fn new(api: Api) -> Self {
+        let (projection, view) = settings()
+            .profile
+            .as_ref()
+            .map(Profile::fixed_matrices)
+            .unwrap_or((None, None));
+        let off = if let Some(why) = &settings().off {
+            say_once("profile", &format!("{why}; leaving the program untouched"));
+            true
+        } else {
+            false
+        };
+        Context {
+            api,
+            gl: None,
+            draw_fbo: 0,
+            read_fbo: 0,
+            program: 0,
+            active_unit: 0,
+            unit_textures: HashMap::new(),
+            matrix_uniforms: HashMap::new(),
+            uniform_names: HashMap::new(),
+            matrices_set: Vec::new(),
+            projection,
+            view,
+            framebuffers: HashMap::new(),
+            gbuffer: None,
+            retrofit: None,
+            needs_refresh: false,
+            twin_bound: false,
+            twin_drawn: false,
+            off,
+            frames: 0,
+            passes: Vec::new(),
+            last_frame: Vec::new(),
+        }
+    }
+
+    /// The context's real GL, for the library's own queries.
+    fn gl(&mut self) -> &glow::Context {
+        let api = self.api;
+        self.gl.get_or_insert_with(|| {
+            // SAFETY: this context is current; the loader gives its real
+            // entry points.
+            unsafe {
+                glow::Context::from_loader_function_cstr(|name: &CStr| hooks::load_real(api, name))
+            }
+        })
+    }
+
+    fn learning(&self) -> bool {
+        settings().learn.is_some()
+    }
+
+    /// `call` into the library; in `--check` mode with the state read
+    /// before and after and the errors it leaves counted.
+    fn checked(&mut self, call: &str, f: impl FnOnce() -> capi::DmsaaStatus) -> capi::DmsaaStatus {
+        if !settings().check {
+            return f();
+        }
+        let gl = self.gl();
+        let pending = check::drain_errors(gl);
+        let before = check::snapshot(gl);
+        let status = f();
+        let after = check::snapshot(gl);
+        let errors = check::drain_errors(gl);
+        let changed = check::differences(&before, &after);
+        for c in &changed {
+            eprintln!("deferred-msaa inject: check: {call} changed {c}");
+        }
+        for e in &errors {
+            eprintln!("deferred-msaa inject: check: {call} left GL error 0x{e:04x}");
+        }
+        if !pending.is_empty() {
+            say_once(
+                "pending",
+                &format!(
+                    "check: the program left GL error(s) {pending:04x?} pending before {call} (read, so cleared, by the check)"
+                ),
+            );
+        }
+        let mut t = check::TOTALS.lock().unwrap_or_else(|e| e.into_inner());
+        t.calls += 1;
+        t.values = before.len();
+        t.changed += changed.len() as u64;
+        t.errors += errors.len() as u64;
+        t.program_errors += pending.len() as u64;
+        status
+    }
+
+    /// A library error: say it, free the retrofit, and leave the program
+    /// alone for the rest of the run.
+    fn fail(&mut self, call: &str) {
+        // SAFETY: the C API's message, a C string valid until its next call.
+        let message = unsafe { CStr::from_ptr(capi::dmsaa_last_error()) }
+            .to_string_lossy()
+            .into_owned();
+        say_once(
+            "failed",
+            &format!("{call} failed ({message}); the retrofit is off for the rest of the run"),
+        );
+        self.give_up();
+    }
+
+    /// Free the retrofit; a twin still bound is replaced by the G-buffer,
+    /// so the program goes on drawing into its own framebuffer.
+    fn give_up(&mut self) {
+        self.off = true;
+        if self.twin_bound {
+            if let Some(g) = self.gbuffer {
+                real_bind(GL_DRAW_FRAMEBUFFER, g);
+                if self.read_fbo == g {
+                    real_bind(GL_READ_FRAMEBUFFER, g);
+                }
+            }
+            self.twin_bound = false;
+        }
+        self.twin_drawn = false;
+        if let Some(r) = self.retrofit.take() {
+            // SAFETY: a handle the C API made, on its context.
+            self.checked("dmsaa_destroy", || {
+                unsafe { capi::dmsaa_destroy(r.handle) };
+                capi::DmsaaStatus::Ok
+            });
+        }
+    }
+
+    /// The framebuffer to bind in the G-buffer's place this frame, making
+    /// the retrofit first if it is not made yet.
+    fn twin(&mut self) -> Option<u32> {
+        if self.off || self.learning() {
+            return None;
+        }
+        let g = self.gbuffer?;
+        if self.retrofit.is_none() {
+            self.make(g)?;
+        }
+        let handle = self.retrofit.as_ref()?.handle;
+        if self.needs_refresh {
+            self.needs_refresh = false;
+            // SAFETY: a live handle; this context current.
+            let status = self.checked("dmsaa_refresh", || unsafe { capi::dmsaa_refresh(handle) });
+            if status != capi::DmsaaStatus::Ok {
+                self.fail("dmsaa_refresh");
+                return None;
+            }
+        }
+        let mut twin = 0u32;
+        // SAFETY: a live handle and a writable u32.
+        let status = self.checked("dmsaa_framebuffer", || unsafe {
+            capi::dmsaa_framebuffer(handle, &mut twin)
+        });
+        if status != capi::DmsaaStatus::Ok || twin == 0 {
+            self.fail("dmsaa_framebuffer");
+            return None;
+        }
+        Some(twin)
+    }
+
+    /// Make the retrofit of framebuffer `g`.
+    fn make(&mut self, g: u32) -> Option<()> {
+        let profile = settings().profile.as_ref();
+        let options = match profile {
+            Some(p) => p.options("the profile").ok()?,
+            None => capi::dmsaa_options_default(),
+        };
+        let world_space = options.world_space_position == 1;
+        if self.projection.is_none() {
+            say_once(
+                "projection",
+                &format!(
+                    "found the G-buffer (framebuffer {g}) but no projection matrix: no uniform named {:?} was set; \
+                     leaving the program untouched (a profile names the uniform or gives the matrix)",
+                    profile
+                        .and_then(|p| p.projection_uniform())
+                        .unwrap_or("projection")
+                ),
+            );
+            self.off = true;
+            return None;
+        }
+        if world_space && self.view.is_none() {
+            say_once(
+                "view",
+                "the profile declares world-space positions but no view matrix was seen; leaving the program untouched",
+            );
+            self.off = true;
+            return None;
+        }
+        let user: *mut c_void = match self.api {
+            Api::Glx => std::ptr::null_mut(),
+            Api::Egl => std::ptr::dangling_mut::<u8>().cast(),
+        };
+        let mut handle = std::ptr::null_mut();
+        // SAFETY: the loader gives this context's real entry points; the
+        // options and the out pointer live across the call.
+        let status = self.checked("dmsaa_retrofit_new", || unsafe {
+            capi::dmsaa_retrofit_new(Some(hooks::library_loader), user, g, &options, &mut handle)
+        });
+        if status != capi::DmsaaStatus::Ok || handle.is_null() {
+            self.fail("dmsaa_retrofit_new");
+            return None;
+        }
+        let mut samples = 0;
+        // SAFETY: a live handle and a writable u32.
+        unsafe { capi::dmsaa_samples(handle, &mut samples) };
+        let shape = self
+            .framebuffers
+            .get(&g)
+            .map(Framebuffer::describe)
+            .unwrap_or_default();
+        say_once(
+            "made",
+            &format!(
+                "retrofitting framebuffer {g} ({shape}) with {samples}x MSAA, {} layer(s), {}",
+                options.layers,
+                if profile.is_some() {
+                    "options from the profile"
+                } else {
+                    "default options"
+                }
+            ),
+        );
+        self.retrofit = Some(Retrofit {
+            handle,
+            world_space,
+        });
+        Some(())
+    }
+
+    fn resolve(&mut self) {
+        self.twin_drawn = false;
+        let Some(r) = self.retrofit.as_ref() else {
+            return;
+        };
+        let (handle, world_space) = (r.handle, r.world_space);
+        let (Some(projection), view) = (self.projection, self.view) else {
+            return;
+        };
+        let view_ptr = match (world_space, view.as_ref()) {
+            (true, Some(v)) => v.as_ptr(),
+            _ => std::ptr::null(),
+        };
+        // SAFETY: a live handle; 16 floats each, alive across the call.
+        let status = self.checked("dmsaa_resolve", || unsafe {
+            capi::dmsaa_resolve(handle, projection.as_ptr(), view_ptr)
+        });
+        if status == capi::DmsaaStatus::Ok {
+            RESOLVES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        } else {
+            self.fail("dmsaa_resolve");
+        }
+    }
+
+    fn bind_framebuffer(&mut self, target: u32, name: u32, real: &dyn Fn(u32, u32)) {
+        let draw = target == GL_FRAMEBUFFER || target == GL_DRAW_FRAMEBUFFER;
+        let read = target == GL_FRAMEBUFFER || target == GL_READ_FRAMEBUFFER;
+        let is_gbuffer = name != 0 && self.gbuffer == Some(name);
+        if draw && is_gbuffer {
+            if let Some(twin) = self.twin() {
+                real(target, twin);
+                self.twin_bound = true;
+                self.draw_fbo = name;
+                if read {
+                    self.read_fbo = name;
+                }
+                return;
+            }
+        }
+        real(target, name);
+        let left_twin = draw && self.twin_bound;
+        if draw {
+            self.draw_fbo = name;
+            self.twin_bound = false;
+        }
+        if read {
+            self.read_fbo = name;
+        }
+        // The resolve at the first bind that leaves the twin after drawing,
+        // or at a read of the G-buffer before that.
+        if self.twin_drawn && (left_twin || (read && is_gbuffer)) {
+            self.resolve();
+        }
+    }
+
+    /// Before a draw call: the twin is drawn; otherwise the framebuffer
+    /// drawn into is inspected, and the G-buffer looked for.
+    fn before_draw(&mut self) {
+        if self.twin_bound {
+            self.twin_drawn = true;
+            return;
+        }
+        let d = self.draw_fbo;
+        if self.learning() {
+            match self.passes.last_mut() {
+                Some(p) if p.framebuffer == d && p.program == self.program => p.draws += 1,
+                _ => self.passes.push(Pass {
+                    framebuffer: d,
+                    program: self.program,
+                    draws: 1,
+                }),
+            }
+        }
+        if self.off {
+            return;
+        }
+        if d != 0 {
+            let fresh = self.framebuffers.get(&d).is_none_or(|f| f.stale);
+            if fresh {
+                let info = self.inspect();
+                self.framebuffers.insert(d, info);
+            }
+            if let Some(f) = self.framebuffers.get_mut(&d) {
+                f.drawn = true;
+            }
+        }
+        if self.gbuffer.is_none() {
+            self.find_gbuffer(d);
+        }
+    }
+
+    /// The bound draw framebuffer's attachments, read from GL.
+    fn inspect(&mut self) -> Framebuffer {
+        let gl = self.gl();
+        let mut f = Framebuffer::default();
+        // SAFETY: queries of the bound draw framebuffer, a user one.
+        unsafe {
+            f.complete =
+                gl.check_framebuffer_status(GL_DRAW_FRAMEBUFFER) == glow::FRAMEBUFFER_COMPLETE;
+            f.samples = gl.get_parameter_i32(glow::SAMPLES);
+            let max = gl
+                .get_parameter_i32(glow::MAX_COLOR_ATTACHMENTS)
+                .clamp(0, 8) as u32;
+            for k in 0..max {
+                let attachment = glow::COLOR_ATTACHMENT0 + k;
+                let param = |p| {
+                    gl.get_framebuffer_attachment_parameter_i32(GL_DRAW_FRAMEBUFFER, attachment, p)
+                };
+                let kind = param(glow::FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE) as u32;
+                if kind == glow::NONE {
+                    continue;
+                }
+                f.colour_attachments += 1;
+                let component = match param(glow::FRAMEBUFFER_ATTACHMENT_COMPONENT_TYPE) as u32 {
+                    glow::FLOAT => "float",
+                    glow::INT => "int",
+                    glow::UNSIGNED_INT => "uint",
+                    glow::SIGNED_NORMALIZED => "snorm",
+                    _ => "unorm",
+                };
+                let bits = param(glow::FRAMEBUFFER_ATTACHMENT_RED_SIZE);
+                f.formats.push(format!("{component}{bits}"));
+                if kind == glow::TEXTURE {
+                    let texture = param(glow::FRAMEBUFFER_ATTACHMENT_OBJECT_NAME) as u32;
+                    f.colour_textures.push((k, texture));
+                }
+            }
+            f.depth = gl.get_framebuffer_attachment_parameter_i32(
+                GL_DRAW_FRAMEBUFFER,
+                glow::DEPTH_ATTACHMENT,
+                glow::FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE,
+            ) as u32
+                != glow::NONE;
+        }
+        f
+    }
+
+    /// Whether framebuffer `f` is the one the profile names.
+    fn matches_profile(profile: &Profile, f: &Framebuffer) -> bool {
+        let Some(m) = &profile.framebuffer else {
+            return false;
+        };
+        f.complete
+            && f.samples == 0
+            && f.colour_textures.len() as u32 == m.colour_textures
+            && f.depth == m.depth
+            && (m.formats.is_empty() || m.formats == f.formats)
+    }
+
+    /// Look for the G-buffer at a draw into framebuffer `draw`.
+    fn find_gbuffer(&mut self, draw: u32) {
+        let profile = settings().profile.as_ref();
+        if let Some(p) = profile.filter(|p| p.framebuffer.is_some()) {
+            if let Some(f) = self.framebuffers.get(&draw)
+                && Self::matches_profile(p, f)
+            {
+                self.gbuffer = Some(draw);
+            }
+            return;
+        }
+        let bound: HashSet<u32> = self
+            .unit_textures
+            .values()
+            .copied()
+            .filter(|&t| t != 0)
+            .collect();
+        if bound.len() < 2 {
+            return;
+        }
+        let found: Vec<u32> = self
+            .framebuffers
+            .iter()
+            .filter(|(name, f)| {
+                **name != draw
+                    && f.drawn
+                    && f.looks_like_gbuffer()
+                    && f.colour_textures
+                        .iter()
+                        .filter(|(_, t)| bound.contains(t))
+                        .count()
+                        >= 2
+            })
+            .map(|(name, _)| *name)
+            .collect();
+        match found.as_slice() {
+            [] => {}
+            [g] => self.gbuffer = Some(*g),
+            many => {
+                say_once(
+                    "ambiguous",
+                    &format!(
+                        "framebuffers {many:?} all look like G-buffers; leaving the program untouched (a profile names which)"
+                    ),
+                );
+                self.off = true;
+            }
+        }
+    }
+
+    /// At a swap: the last resort's resolve, the frame's passes kept for
+    /// `--learn`, and the one line for a program left alone.
+    fn end_frame(&mut self) {
+        if self.twin_drawn {
+            self.resolve();
+        }
+        self.frames += 1;
+        self.last_frame = std::mem::take(&mut self.passes);
+        if self.learning() {
+            crate::learn::after_frame(self);
+            return;
+        }
+        if self.frames == 2 && self.gbuffer.is_none() && !self.off {
+            let unsure: Vec<u32> = self
+                .framebuffers
+                .iter()
+                .filter(|(_, f)| f.drawn && f.looks_like_gbuffer())
+                .map(|(n, _)| *n)
+                .collect();
+            let message = if unsure.is_empty() {
+                "no G-buffer found (no complete single-sample framebuffer with two or more colour textures and \
+                 depth was drawn into); leaving the program untouched"
+                    .to_string()
+            } else {
+                format!(
+                    "framebuffer(s) {unsure:?} have the shape of a G-buffer, but no later pass read two of their \
+                     colour textures together; not sure it is one, so leaving the program untouched (a profile \
+                     can name it)"
+                )
+            };
+            say_once("none", &message);
+        }
+    }
+
+    fn delete_framebuffers(&mut self, names: &[u32]) {
+        for name in names {
+            self.framebuffers.remove(name);
+            if self.gbuffer == Some(*name) {
+                // GL unbinds a deleted framebuffer: the twin goes too.
+                if self.twin_bound {
+                    real_bind(GL_DRAW_FRAMEBUFFER, 0);
+                    if self.read_fbo == *name {
+                        real_bind(GL_READ_FRAMEBUFFER, 0);
+                    }
+                    self.twin_bound = false;
+                }
+                self.twin_drawn = false;
+                if let Some(r) = self.retrofit.take() {
+                    // SAFETY: a handle the C API made, on its context.
+                    self.checked("dmsaa_destroy", || {
+                        unsafe { capi::dmsaa_destroy(r.handle) };
+                        capi::DmsaaStatus::Ok
+                    });
+                }
+                // A new G-buffer is looked for as at the start.
+                self.gbuffer = None;
+            }
+        }
+    }
+
+    /// Before an attachment of the framebuffer bound at `target` changes.
+    fn attachment_changes(&mut self, target: u32) {
+        let bound = if target == GL_READ_FRAMEBUFFER {
+            self.read_fbo
+        } else {
+            self.draw_fbo
+        };
+        if let Some(f) = self.framebuffers.get_mut(&bound) {
+            f.stale = true;
+        }
+        if self.gbuffer == Some(bound) && bound != 0 {
+            if self.twin_bound && target != GL_READ_FRAMEBUFFER {
+                // The change would go to the twin: put the G-buffer back
+                // under it first, and leave the retrofit off.
+                say_once(
+                    "reattach",
+                    "the program changed its G-buffer's attachments while drawing into it; the retrofit is off for the rest of the run",
+                );
+                self.give_up();
+            } else {
+                self.needs_refresh = true;
+            }
+        }
+    }
+}
+
+/// The real `glBindFramebuffer`, for the library's own binds.
+fn real_bind(target: u32, name: u32) {
+    if let Some(p) = hooks::real::glBindFramebuffer.get() {
+        // SAFETY: the driver's glBindFramebuffer.
+        unsafe { std::mem::transmute::<usize, real_type::glBindFramebuffer>(p)(target, name) };
+    }
+}
+
+static CONTEXTS: Mutex<Option<HashMap<usize, Context>>> = Mutex::new(None);
+
+/// `f` on the current context's state, or `None` (the call passes through
+/// untouched) where there is no current context, another thread holds the
+/// state, or a panic turned the library off.
+fn with_context<R>(f: impl FnOnce(&mut Context) -> R) -> Option<R> {
+    let (api, id) = hooks::current_context()?;
+    let mut guard = CONTEXTS.try_lock().ok()?;
+    let context = guard
+        .get_or_insert_with(HashMap::new)
+        .entry(id)
+        .or_insert_with(|| Context::new(api));
+    match catch_unwind(AssertUnwindSafe(|| f(context))) {
+        Ok(r) => Some(r),
+        Err(_) => {
+            say_once(
+                "panic",
+                "internal error; the retrofit is off for the rest of the run",
+            );
+            context.off = true;
+            None
+        }
+    }
+}
+
+/// What each watched GL function does around its real call (the wrappers
+/// in [`crate::hooks`] call these).
+#[allow(non_snake_case)]
+pub(crate) mod handlers {
+    use super::*;
+    use std::ffi::{c_char, c_ulong};
+
+    pub(crate) fn glBindFramebuffer(real: real_type::glBindFramebuffer, target: u32, name: u32) {
+        // SAFETY (all handlers): the driver's function, with the program's
+        // arguments or the library's own framebuffer name.
+        let call = |t: u32, n: u32| unsafe { real(t, n) };
+        if with_context(|cx| cx.bind_framebuffer(target, name, &call)).is_none() {
+            call(target, name);
+        }
+    }
+
+    pub(crate) fn glDeleteFramebuffers(
+        real: real_type::glDeleteFramebuffers,
+        count: i32,
+        names: *const u32,
+    ) {
+        if count > 0 && !names.is_null() {
+            // SAFETY: GL's contract: `count` names.
+            let list = unsafe { std::slice::from_raw_parts(names, count as usize) };
+            with_context(|cx| cx.delete_framebuffers(list));
+        }
+        unsafe { real(count, names) }
+    }
+
+    pub(crate) fn glFramebufferTexture(
+        real: real_type::glFramebufferTexture,
+        t: u32,
+        a: u32,
+        tex: u32,
+        l: i32,
+    ) {
+        with_context(|cx| cx.attachment_changes(t));
+        unsafe { real(t, a, tex, l) }
+    }
+
+    pub(crate) fn glFramebufferTexture2D(
+        real: real_type::glFramebufferTexture2D,
+        t: u32,
+        a: u32,
+        tt: u32,
+        tex: u32,
+        l: i32,
+    ) {
+        with_context(|cx| cx.attachment_changes(t));
+        unsafe { real(t, a, tt, tex, l) }
+    }
+
+    pub(crate) fn glFramebufferRenderbuffer(
+        real: real_type::glFramebufferRenderbuffer,
+        t: u32,
+        a: u32,
+        rt: u32,
+        rb: u32,
+    ) {
+        with_context(|cx| cx.attachment_changes(t));
+        unsafe { real(t, a, rt, rb) }
+    }
+
+    pub(crate) fn glActiveTexture(real: real_type::glActiveTexture, unit: u32) {
+        unsafe { real(unit) };
+        with_context(|cx| cx.active_unit = unit.wrapping_sub(GL_TEXTURE0));
+    }
+
+    pub(crate) fn glBindTexture(real: real_type::glBindTexture, target: u32, texture: u32) {
+        unsafe { real(target, texture) };
+        if target == GL_TEXTURE_2D {
+            with_context(|cx| {
+                cx.unit_textures.insert(cx.active_unit, texture);
+            });
+        }
+    }
+
+    pub(crate) fn glUseProgram(real: real_type::glUseProgram, program: u32) {
+        unsafe { real(program) };
+        with_context(|cx| cx.program = program);
+    }
+
+    pub(crate) fn glGetUniformLocation(
+        real: real_type::glGetUniformLocation,
+        program: u32,
+        name: *const c_char,
+    ) -> i32 {
+        let location = unsafe { real(program, name) };
+        if location >= 0 && !name.is_null() {
+            // SAFETY: GL's contract: a C string.
+            let name = unsafe { CStr::from_ptr(name) }.to_string_lossy();
+            with_context(|cx| {
+                let profile = settings().profile.as_ref();
+                let projection = profile.map_or(Some("projection"), |p| p.projection_uniform());
+                let view = profile.map_or(Some("view"), |p| p.view_uniform());
+                if projection == Some(&*name) {
+                    cx.matrix_uniforms.insert((program, location), true);
+                } else if view == Some(&*name) {
+                    cx.matrix_uniforms.insert((program, location), false);
+                }
+                if cx.learning() {
+                    cx.uniform_names
+                        .insert((program, location), name.to_string());
+                }
+            });
+        }
+        location
+    }
+
+    pub(crate) fn glUniformMatrix4fv(
+        real: real_type::glUniformMatrix4fv,
+        location: i32,
+        count: i32,
+        transpose: u8,
+        value: *const f32,
+    ) {
+        unsafe { real(location, count, transpose, value) };
+        if count < 1 || value.is_null() {
+            return;
+        }
+        with_context(|cx| {
+            let key = (cx.program, location);
+            if cx.learning()
+                && let Some(name) = cx.uniform_names.get(&key)
+                && !cx.matrices_set.contains(name)
+            {
+                let name = name.clone();
+                cx.matrices_set.push(name);
+            }
+            let Some(&is_projection) = cx.matrix_uniforms.get(&key) else {
+                return;
+            };
+            let mut m = [0f32; 16];
+            // SAFETY: GL's contract: 16 floats per matrix.
+            m.copy_from_slice(unsafe { std::slice::from_raw_parts(value, 16) });
+            if transpose != 0 {
+                let t = m;
+                for c in 0..4 {
+                    for r in 0..4 {
+                        m[c * 4 + r] = t[r * 4 + c];
+                    }
+                }
+            }
+            if is_projection {
+                cx.projection = Some(m);
+            } else {
+                cx.view = Some(m);
+            }
+        });
+    }
+
+    pub(crate) fn glGetIntegerv(real: real_type::glGetIntegerv, pname: u32, data: *mut i32) {
+        unsafe { real(pname, data) };
+        if data.is_null()
+            || (pname != GL_DRAW_FRAMEBUFFER_BINDING && pname != GL_READ_FRAMEBUFFER_BINDING)
+        {
+            return;
+        }
+        // The program asks what it bound: the G-buffer, not the twin.
+        with_context(|cx| {
+            if cx.twin_bound
+                && let Some(g) = cx.gbuffer
+            {
+                let seen = if pname == GL_DRAW_FRAMEBUFFER_BINDING {
+                    cx.draw_fbo
+                } else {
+                    cx.read_fbo
+                };
+                if seen == g {
+                    // SAFETY: GL wrote one integer there.
+                    unsafe { *data = g as i32 };
+                }
+            }
+        });
+    }
+
+    pub(crate) fn glClear(real: real_type::glClear, mask: u32) {
+        with_context(|cx| {
+            if cx.twin_bound {
+                cx.twin_drawn = true;
+            }
+        });
+        unsafe { real(mask) }
+    }
+
+    pub(crate) fn glDrawArrays(real: real_type::glDrawArrays, mode: u32, first: i32, count: i32) {
+        with_context(Context::before_draw);
+        unsafe { real(mode, first, count) }
+    }
+
+    pub(crate) fn glDrawArraysInstanced(
+        real: real_type::glDrawArraysInstanced,
+        m: u32,
+        f: i32,
+        c: i32,
+        i: i32,
+    ) {
+        with_context(Context::before_draw);
+        unsafe { real(m, f, c, i) }
+    }
+
+    pub(crate) fn glDrawElements(
+        real: real_type::glDrawElements,
+        m: u32,
+        c: i32,
+        k: u32,
+        p: *const c_void,
+    ) {
+        with_context(Context::before_draw);
+        unsafe { real(m, c, k, p) }
+    }
+
+    pub(crate) fn glDrawElementsInstanced(
+        real: real_type::glDrawElementsInstanced,
+        m: u32,
+        c: i32,
+        k: u32,
+        p: *const c_void,
+        i: i32,
+    ) {
+        with_context(Context::before_draw);
+        unsafe { real(m, c, k, p, i) }
+    }
+
+    pub(crate) fn glDrawElementsBaseVertex(
+        real: real_type::glDrawElementsBaseVertex,
+        m: u32,
+        c: i32,
+        k: u32,
+        p: *const c_void,
+        b: i32,
+    ) {
+        with_context(Context::before_draw);
+        unsafe { real(m, c, k, p, b) }
+    }
+
+    pub(crate) fn glDrawRangeElements(
+        real: real_type::glDrawRangeElements,
+        m: u32,
+        s: u32,
+        e: u32,
+        c: i32,
+        k: u32,
+        p: *const c_void,
+    ) {
+        with_context(Context::before_draw);
+        unsafe { real(m, s, e, c, k, p) }
+    }
+
+    pub(crate) fn glXSwapBuffers(
+        real: real_type::glXSwapBuffers,
+        display: *mut c_void,
+        drawable: c_ulong,
+    ) {
+        with_context(Context::end_frame);
+        unsafe { real(display, drawable) }
+    }
+
+    pub(crate) fn eglSwapBuffers(
+        real: real_type::eglSwapBuffers,
+        display: *mut c_void,
+        surface: *mut c_void,
+    ) -> u32 {
+        with_context(Context::end_frame);
+        unsafe { real(display, surface) }
+    }
+}
