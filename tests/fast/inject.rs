@@ -6,10 +6,12 @@
 //! (the retrofit in its source, against the installed static library) and
 //! without (no retrofit line, not linked with the library). The second,
 //! run by the `deferred-msaa` binary's `inject --check`, draws the first's
-//! last frame bit for bit, through GLX and EGL, with the default options
-//! and with the shipped tutorial profile; the library's check finds no GL
-//! state value changed and no GL error around any of its calls, and the
-//! frame differs from the program's own without MSAA.
+//! last frame bit for bit, through GLX and EGL, with the default options,
+//! with the shipped tutorial profile, and with that profile at two layers
+//! (the lighting pass recorded and replayed); the library's check finds no
+//! GL state value changed and no GL error around any of its calls, and the
+//! frame differs from the program's own without MSAA (and two layers from
+//! one).
 
 use super::capi;
 use crate::common;
@@ -93,6 +95,17 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
     let (in_source, plain) = build_tutorial(&build, &prefix);
     let library = capi::built("libdeferred_msaa_inject", "so");
     let profile = capi::root().join("crates/inject/profiles/tutorial.toml");
+    let text = std::fs::read_to_string(&profile).expect("the shipped tutorial profile");
+    assert!(
+        text.contains("\nlayers = 1\n"),
+        "the tutorial profile no longer sets layers = 1"
+    );
+    let two_layers = build.join("tutorial-two-layers.toml");
+    std::fs::write(
+        &two_layers,
+        text.replace("\nlayers = 1\n", "\nlayers = 2\n"),
+    )
+    .expect("writing the two-layer profile");
     let out = build.join("frames");
     std::fs::create_dir_all(&out).expect("making the frame folder");
     for api in ["GLX", "EGL"] {
@@ -105,7 +118,16 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
                 .env("DISPLAY", xvfb.display()),
             &format!("the program as it is, {api}"),
         );
-        for (options, profile) in [("default", None), ("tutorial", Some(&profile))] {
+        let variants: [(&str, Option<&PathBuf>, &[&str]); 3] = [
+            ("default", None, &[]),
+            ("tutorial", Some(&profile), &["--tutorial-options"]),
+            (
+                "tutorial-two-layers",
+                Some(&two_layers),
+                &["--tutorial-options", "--two-layers"],
+            ),
+        ];
+        for (options, profile, in_source_args) in variants {
             let what = format!("{api}, {options} options");
             let expected = out.join(format!("{api}-{options}-in-source.rgba"));
             let mut command = Command::new(&in_source);
@@ -113,9 +135,7 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
                 .arg(&expected)
                 .args(api_args)
                 .env("DISPLAY", xvfb.display());
-            if profile.is_some() {
-                command.arg("--tutorial-options");
-            }
+            command.args(in_source_args);
             capi::run(
                 &mut command,
                 &format!("the program retrofitted in its source, {what}"),
@@ -167,6 +187,13 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
                 frame(&injected) != frame(&own),
                 "{what}: the injected frame is the program's own (no MSAA)"
             );
+            if options == "tutorial-two-layers" {
+                let one = out.join(format!("{api}-tutorial-injected.rgba"));
+                assert!(
+                    frame(&injected) != frame(&one),
+                    "{what}: two layers drew the one-layer frame"
+                );
+            }
         }
     }
 }

@@ -20,6 +20,7 @@ mod check;
 pub mod hooks;
 mod learn;
 pub mod profile;
+mod replay;
 mod state;
 
 use std::ffi::{CStr, c_char};

@@ -13,6 +13,7 @@
 use crate::check;
 use crate::hooks::{self, Api, real_type};
 use crate::profile::Profile;
+use crate::replay::{self, DrawCall, RecordedDraw, Recording};
 use deferred_msaa_capi as capi;
 use glow::HasContext;
 use std::collections::{HashMap, HashSet};
@@ -131,6 +132,7 @@ impl Framebuffer {
 struct Retrofit {
     handle: *mut capi::DmsaaRetrofit,
     world_space: bool,
+    layers: u32,
 }
 
 // SAFETY: the handle is used only under the state's lock, with the
@@ -173,6 +175,8 @@ pub(crate) struct Context {
     frames: u64,
     pub(crate) passes: Vec<Pass>,
     pub(crate) last_frame: Vec<Pass>,
+    /// With two layers: the draws after this frame's resolve.
+    recording: Option<Recording>,
 }
 
 impl Context {
@@ -211,6 +215,7 @@ impl Context {
             frames: 0,
             passes: Vec::new(),
             last_frame: Vec::new(),
+            recording: None,
         }
     }
 
@@ -232,14 +237,18 @@ impl Context {
 
     /// `call` into the library; in `--check` mode with the state read
     /// before and after and the errors it leaves counted.
-    fn checked(&mut self, call: &str, f: impl FnOnce() -> capi::DmsaaStatus) -> capi::DmsaaStatus {
-        if !settings().check {
-            return f();
-        }
+    fn checked(
+        &mut self,
+        call: &str,
+        f: impl FnOnce(&glow::Context) -> capi::DmsaaStatus,
+    ) -> capi::DmsaaStatus {
         let gl = self.gl();
+        if !settings().check {
+            return f(gl);
+        }
         let pending = check::drain_errors(gl);
         let before = check::snapshot(gl);
-        let status = f();
+        let status = f(gl);
         let after = check::snapshot(gl);
         let errors = check::drain_errors(gl);
         let changed = check::differences(&before, &after);
@@ -296,7 +305,7 @@ impl Context {
         self.twin_drawn = false;
         if let Some(r) = self.retrofit.take() {
             // SAFETY: a handle the C API made, on its context.
-            self.checked("dmsaa_destroy", || {
+            self.checked("dmsaa_destroy", |_| {
                 unsafe { capi::dmsaa_destroy(r.handle) };
                 capi::DmsaaStatus::Ok
             });
@@ -317,7 +326,7 @@ impl Context {
         if self.needs_refresh {
             self.needs_refresh = false;
             // SAFETY: a live handle; this context current.
-            let status = self.checked("dmsaa_refresh", || unsafe { capi::dmsaa_refresh(handle) });
+            let status = self.checked("dmsaa_refresh", |_| unsafe { capi::dmsaa_refresh(handle) });
             if status != capi::DmsaaStatus::Ok {
                 self.fail("dmsaa_refresh");
                 return None;
@@ -325,7 +334,7 @@ impl Context {
         }
         let mut twin = 0u32;
         // SAFETY: a live handle and a writable u32.
-        let status = self.checked("dmsaa_framebuffer", || unsafe {
+        let status = self.checked("dmsaa_framebuffer", |_| unsafe {
             capi::dmsaa_framebuffer(handle, &mut twin)
         });
         if status != capi::DmsaaStatus::Ok || twin == 0 {
@@ -372,7 +381,7 @@ impl Context {
         let mut handle = std::ptr::null_mut();
         // SAFETY: the loader gives this context's real entry points; the
         // options and the out pointer live across the call.
-        let status = self.checked("dmsaa_retrofit_new", || unsafe {
+        let status = self.checked("dmsaa_retrofit_new", |_| unsafe {
             capi::dmsaa_retrofit_new(Some(hooks::library_loader), user, g, &options, &mut handle)
         });
         if status != capi::DmsaaStatus::Ok || handle.is_null() {
@@ -402,6 +411,7 @@ impl Context {
         self.retrofit = Some(Retrofit {
             handle,
             world_space,
+            layers: options.layers,
         });
         Some(())
     }
@@ -411,7 +421,7 @@ impl Context {
         let Some(r) = self.retrofit.as_ref() else {
             return;
         };
-        let (handle, world_space) = (r.handle, r.world_space);
+        let (handle, world_space, layers) = (r.handle, r.world_space, r.layers);
         let (Some(projection), view) = (self.projection, self.view) else {
             return;
         };
@@ -420,17 +430,24 @@ impl Context {
             _ => std::ptr::null(),
         };
         // SAFETY: a live handle; 16 floats each, alive across the call.
-        let status = self.checked("dmsaa_resolve", || unsafe {
+        let status = self.checked("dmsaa_resolve", |_| unsafe {
             capi::dmsaa_resolve(handle, projection.as_ptr(), view_ptr)
         });
         if status == capi::DmsaaStatus::Ok {
             RESOLVES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if layers == 2 {
+                self.recording = Some(Recording::default());
+            }
         } else {
             self.fail("dmsaa_resolve");
         }
     }
 
     fn bind_framebuffer(&mut self, target: u32, name: u32, real: &dyn Fn(u32, u32)) {
+        // The lighting's window ends at the first bind after it drew.
+        if self.recording.as_ref().is_some_and(|r| !r.draws.is_empty()) {
+            self.second_layer();
+        }
         let draw = target == GL_FRAMEBUFFER || target == GL_DRAW_FRAMEBUFFER;
         let read = target == GL_FRAMEBUFFER || target == GL_READ_FRAMEBUFFER;
         let is_gbuffer = name != 0 && self.gbuffer == Some(name);
@@ -463,12 +480,38 @@ impl Context {
 
     /// Before a draw call: the twin is drawn; otherwise the framebuffer
     /// drawn into is inspected, and the G-buffer looked for.
-    fn before_draw(&mut self) {
+    fn before_draw(&mut self, call: DrawCall) {
         if self.twin_bound {
             self.twin_drawn = true;
             return;
         }
         let d = self.draw_fbo;
+        if self
+            .recording
+            .as_ref()
+            .is_some_and(|r| r.target.is_none_or(|t| t == d))
+        {
+            // SAFETY: a query of the current context.
+            let vertex_array =
+                unsafe { self.gl().get_parameter_i32(glow::VERTEX_ARRAY_BINDING) } as u32;
+            let mut textures: Vec<(u32, u32)> = self
+                .unit_textures
+                .iter()
+                .filter(|(_, t)| **t != 0)
+                .map(|(u, t)| (*u, *t))
+                .collect();
+            textures.sort_unstable();
+            let program = self.program;
+            if let Some(r) = self.recording.as_mut() {
+                r.target = Some(d);
+                r.draws.push(RecordedDraw {
+                    call,
+                    program,
+                    vertex_array,
+                    textures,
+                });
+            }
+        }
         if self.learning() {
             match self.passes.last_mut() {
                 Some(p) if p.framebuffer == d && p.program == self.program => p.draws += 1,
@@ -611,6 +654,10 @@ impl Context {
         if self.twin_drawn {
             self.resolve();
         }
+        if self.recording.as_ref().is_some_and(|r| !r.draws.is_empty()) {
+            self.second_layer();
+        }
+        self.recording = None;
         self.frames += 1;
         self.last_frame = std::mem::take(&mut self.passes);
         if self.learning() {
@@ -639,6 +686,53 @@ impl Context {
         }
     }
 
+    /// The second layer: the recorded lighting drawn again into the
+    /// retrofit's own target, the two layers mixed into the program's lit
+    /// target, and the state the replay changed put back.
+    fn second_layer(&mut self) {
+        let Some(recording) = self.recording.take() else {
+            return;
+        };
+        let Some(handle) = self.retrofit.as_ref().map(|r| r.handle) else {
+            return;
+        };
+        let output = recording.target.unwrap_or(0);
+        let draws = recording.draws;
+        let mut failed = "the second layer";
+        let status = self.checked(
+            "the second layer (begin, the replayed lighting, finish)",
+            |gl| {
+                let mut own = 0u32;
+                // SAFETY: a live handle, a writable u32; this context current.
+                let status =
+                    unsafe { capi::dmsaa_begin_second_layer_own_target(handle, output, &mut own) };
+                if status != capi::DmsaaStatus::Ok {
+                    failed = "dmsaa_begin_second_layer_own_target";
+                    return status;
+                }
+                let Some(own) = std::num::NonZeroU32::new(own) else {
+                    return status;
+                };
+                let saved = replay::save(gl, &draws);
+                // SAFETY: the retrofit's framebuffer, bound for the replay.
+                unsafe {
+                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(glow::NativeFramebuffer(own)))
+                };
+                replay::draw(gl, &draws);
+                // SAFETY: as above; the output given to begin.
+                let status = unsafe { capi::dmsaa_finish_second_layer(handle, output) };
+                replay::restore(gl, &saved);
+                if status != capi::DmsaaStatus::Ok {
+                    failed = "dmsaa_finish_second_layer";
+                }
+                status
+            },
+        );
+        if status != capi::DmsaaStatus::Ok {
+            self.fail(failed);
+        }
+    }
+
     fn delete_framebuffers(&mut self, names: &[u32]) {
         for name in names {
             self.framebuffers.remove(name);
@@ -654,7 +748,7 @@ impl Context {
                 self.twin_drawn = false;
                 if let Some(r) = self.retrofit.take() {
                     // SAFETY: a handle the C API made, on its context.
-                    self.checked("dmsaa_destroy", || {
+                    self.checked("dmsaa_destroy", |_| {
                         unsafe { capi::dmsaa_destroy(r.handle) };
                         capi::DmsaaStatus::Ok
                     });
@@ -910,7 +1004,7 @@ pub(crate) mod handlers {
     }
 
     pub(crate) fn glDrawArrays(real: real_type::glDrawArrays, mode: u32, first: i32, count: i32) {
-        with_context(Context::before_draw);
+        with_context(|cx| cx.before_draw(DrawCall::Arrays { mode, first, count }));
         unsafe { real(mode, first, count) }
     }
 
@@ -921,7 +1015,14 @@ pub(crate) mod handlers {
         c: i32,
         i: i32,
     ) {
-        with_context(Context::before_draw);
+        with_context(|cx| {
+            cx.before_draw(DrawCall::ArraysInstanced {
+                mode: m,
+                first: f,
+                count: c,
+                instances: i,
+            })
+        });
         unsafe { real(m, f, c, i) }
     }
 
@@ -932,7 +1033,14 @@ pub(crate) mod handlers {
         k: u32,
         p: *const c_void,
     ) {
-        with_context(Context::before_draw);
+        with_context(|cx| {
+            cx.before_draw(DrawCall::Elements {
+                mode: m,
+                count: c,
+                kind: k,
+                offset: p as usize,
+            })
+        });
         unsafe { real(m, c, k, p) }
     }
 
@@ -944,7 +1052,15 @@ pub(crate) mod handlers {
         p: *const c_void,
         i: i32,
     ) {
-        with_context(Context::before_draw);
+        with_context(|cx| {
+            cx.before_draw(DrawCall::ElementsInstanced {
+                mode: m,
+                count: c,
+                kind: k,
+                offset: p as usize,
+                instances: i,
+            })
+        });
         unsafe { real(m, c, k, p, i) }
     }
 
@@ -956,7 +1072,15 @@ pub(crate) mod handlers {
         p: *const c_void,
         b: i32,
     ) {
-        with_context(Context::before_draw);
+        with_context(|cx| {
+            cx.before_draw(DrawCall::ElementsBaseVertex {
+                mode: m,
+                count: c,
+                kind: k,
+                offset: p as usize,
+                base: b,
+            })
+        });
         unsafe { real(m, c, k, p, b) }
     }
 
@@ -969,7 +1093,14 @@ pub(crate) mod handlers {
         k: u32,
         p: *const c_void,
     ) {
-        with_context(Context::before_draw);
+        with_context(|cx| {
+            cx.before_draw(DrawCall::Elements {
+                mode: m,
+                count: c,
+                kind: k,
+                offset: p as usize,
+            })
+        });
         unsafe { real(m, s, e, c, k, p) }
     }
 

@@ -9,18 +9,22 @@
 //   with -DDMSAA_IN_SOURCE   the retrofit added in the source as
 //                            docs/capi.md says (dmsaa_framebuffer for the
 //                            geometry pass, dmsaa_resolve after it), made
-//                            before the first frame.
+//                            before the first frame; with two layers, the
+//                            lighting quad drawn again into
+//                            dmsaa_begin_second_layer_own_target's
+//                            framebuffer, then dmsaa_finish_second_layer.
 //
 // It draws FRAMES frames and writes the last one, read back from the back
 // buffer before its swap, as raw RGBA8 (rows bottom-up) into OUT_FILE.
 // Exit status non-zero, with a line saying why, on a GL error or a failed
 // call.
 //
-// Usage: inject_tutorial OUT_FILE [--egl] [--tutorial-options]
+// Usage: inject_tutorial OUT_FILE [--egl] [--tutorial-options] [--two-layers]
 //   --egl               the context through EGL (GLFW_EGL_CONTEXT_API)
 //   --tutorial-options  (in-source build) the options
 //                       crates/inject/profiles/tutorial.toml declares,
 //                       rather than dmsaa_options_default()
+//   --two-layers        (in-source build) two layers
 #include "tutorial_program.hpp"
 
 #ifdef DMSAA_IN_SOURCE
@@ -54,15 +58,17 @@ static bool ok(DmsaaStatus status, const char *call)
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options] [--two-layers]\n", argv[0]);
         return 2;
     }
-    bool egl = false, tutorialOptions = false;
+    bool egl = false, tutorialOptions = false, twoLayers = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
         else if (std::strcmp(argv[i], "--tutorial-options") == 0)
             tutorialOptions = true;
+        else if (std::strcmp(argv[i], "--two-layers") == 0)
+            twoLayers = true;
         else {
             std::fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;
@@ -110,11 +116,13 @@ int main(int argc, char **argv)
         options.rules[1] = DMSAA_RULE_SELECT;
         options.layer_mix = DMSAA_LAYER_MIX_SRGB_ENCODED;
     }
+    options.layers = twoLayers ? 2 : 1;
     DmsaaRetrofit *msaa = nullptr;
     if (!ok(dmsaa_retrofit_new(loadForLibrary, nullptr, e.gBuffer, &options, &msaa), "dmsaa_retrofit_new"))
         return 1;
 #else
     (void)tutorialOptions;
+    (void)twoLayers;
 #endif
 
     std::vector<unsigned char> pixels(static_cast<size_t>(WIDTH) * HEIGHT * 4);
@@ -137,6 +145,16 @@ int main(int argc, char **argv)
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
         lightingQuad(e);
+#ifdef DMSAA_IN_SOURCE
+        GLuint secondTarget = 0;
+        if (twoLayers && ok(dmsaa_begin_second_layer_own_target(msaa, 0, &secondTarget),
+                            "dmsaa_begin_second_layer_own_target")) {
+            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, secondTarget);
+            lightingQuad(e);
+            ok(dmsaa_finish_second_layer(msaa, 0), "dmsaa_finish_second_layer");
+            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+        }
+#endif
         blitDepth(e, 0);
         lightCubes(e);
         checkGlErrors("a frame");
