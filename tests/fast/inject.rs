@@ -35,14 +35,58 @@ fn frame(path: &Path) -> Vec<u8> {
     std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
-/// Builds the two programs into `build`: (in source, plain).
-fn build_tutorial(build: &Path, prefix: &Path) -> (PathBuf, PathBuf) {
+/// How the tutorial program is built: its window library and how it
+/// reaches GL.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Flavour {
+    /// GLFW, GL through `glfwGetProcAddress`.
+    Glfw,
+    /// SDL2, GL through `SDL_GL_GetProcAddress`.
+    Sdl,
+    /// GLFW, GL through libGL's symbols (linked with `-lGL`).
+    LinkedGl,
+}
+
+impl Flavour {
+    fn name(self) -> &'static str {
+        match self {
+            Flavour::Glfw => "glfw",
+            Flavour::Sdl => "sdl",
+            Flavour::LinkedGl => "linked-gl",
+        }
+    }
+
+    /// The defines and libraries of the flavour.
+    fn flags(self) -> Vec<String> {
+        match self {
+            Flavour::Glfw => vec!["-lglfw".into()],
+            Flavour::LinkedGl => vec!["-DTUTORIAL_LINK_GL".into(), "-lglfw".into(), "-lGL".into()],
+            Flavour::Sdl => {
+                let out = Command::new("pkg-config")
+                    .args(["--cflags", "--libs", "sdl2"])
+                    .output()
+                    .expect("pkg-config sdl2");
+                let mut flags = vec!["-DTUTORIAL_SDL".to_string()];
+                flags.extend(
+                    String::from_utf8_lossy(&out.stdout)
+                        .split_whitespace()
+                        .map(String::from),
+                );
+                flags
+            }
+        }
+    }
+}
+
+/// Builds the two programs of `flavour` into `build`: (in source, plain).
+fn build_tutorial(build: &Path, prefix: &Path, flavour: Flavour) -> (PathBuf, PathBuf) {
     let src = build.join("src");
     std::fs::create_dir_all(&src).expect("making the source folder");
     for f in ["inject_tutorial.cpp", "tutorial_program.hpp"] {
         std::fs::copy(capi::sources().join(f), src.join(f)).expect("copying the C++ sources");
     }
-    let in_source = build.join("tutorial-in-source");
+    let name = flavour.name();
+    let in_source = build.join(format!("tutorial-{name}-in-source"));
     capi::run(
         cxx()
             .arg("-DDMSAA_IN_SOURCE")
@@ -52,19 +96,19 @@ fn build_tutorial(build: &Path, prefix: &Path) -> (PathBuf, PathBuf) {
             .arg("-o")
             .arg(&in_source)
             .arg(prefix.join("lib/libdeferred_msaa_capi.a"))
-            .arg("-lglfw")
+            .args(flavour.flags())
             .args(capi::NATIVE_LIBS),
-        "compiling inject_tutorial.cpp with the retrofit in its source",
+        &format!("compiling inject_tutorial.cpp ({name}) with the retrofit in its source"),
     );
     // No include path or library of the retrofit's: nothing of it.
-    let plain = build.join("tutorial");
+    let plain = build.join(format!("tutorial-{name}"));
     capi::run(
         cxx()
             .arg(src.join("inject_tutorial.cpp"))
             .arg("-o")
             .arg(&plain)
-            .arg("-lglfw"),
-        "compiling inject_tutorial.cpp as it is",
+            .args(flavour.flags()),
+        &format!("compiling inject_tutorial.cpp ({name}) as it is"),
     );
     (in_source, plain)
 }
@@ -83,6 +127,100 @@ fn can_run_glfw() -> bool {
     true
 }
 
+/// One comparison: the in-source program and the plain one under
+/// `inject --check`, the same arguments.
+struct Run<'a> {
+    what: String,
+    out: &'a Path,
+    display: String,
+    /// The program's arguments after its output file (`--egl`).
+    args: &'a [&'a str],
+    /// The in-source build's further arguments.
+    in_source_args: &'a [&'a str],
+    profile: Option<&'a Path>,
+}
+
+impl Run<'_> {
+    /// Runs both; asserts the injected frame is the in-source one, the
+    /// check clean, and the frame not `own`'s. Returns the injected frame.
+    fn compare(&self, in_source: &Path, plain: &Path, own: &[u8], api: &str) -> Vec<u8> {
+        let what = &self.what;
+        let file = what.replace([' ', ','], "-");
+        let expected = self.out.join(format!("{file}-in-source.rgba"));
+        capi::run(
+            Command::new(in_source)
+                .arg(&expected)
+                .args(self.args)
+                .args(self.in_source_args)
+                .env("DISPLAY", &self.display),
+            &format!("the program retrofitted in its source, {what}"),
+        );
+        let injected = self.out.join(format!("{file}-injected.rgba"));
+        let mut command = cli();
+        command
+            .args(["inject", "--check", "--library"])
+            .arg(capi::built("libdeferred_msaa_inject", "so"));
+        if let Some(p) = self.profile {
+            command.arg("--profile").arg(p);
+        }
+        command
+            .arg("--")
+            .arg(plain)
+            .arg(&injected)
+            .args(self.args)
+            .env("DISPLAY", &self.display);
+        let output = capi::run(&mut command, &format!("deferred-msaa inject, {what}"));
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        eprint!("{what}:\n{stderr}");
+        assert!(
+            stdout.contains(&format!("through {api}")),
+            "{what}: {stdout}"
+        );
+        assert!(
+            stdout.ends_with("ok\n"),
+            "{what}: the program failed a check:\n{stdout}"
+        );
+        assert!(
+            stderr.contains("deferred-msaa inject: retrofitting framebuffer "),
+            "{what}: the library did not retrofit the G-buffer:\n{stderr}"
+        );
+        let check = stderr
+            .lines()
+            .find(|l| l.starts_with("deferred-msaa inject: check: "))
+            .unwrap_or_else(|| panic!("{what}: no check summary:\n{stderr}"));
+        assert!(
+            check.contains(
+                " 0 changed, 0 GL errors left by the library, 0 left pending by the program; 2 frames resolved"
+            ),
+            "{what}: {check}"
+        );
+        let injected = frame(&injected);
+        assert!(
+            injected == frame(&expected),
+            "{what}: the injected frame differs from the frame of the program retrofitted in its source"
+        );
+        assert!(
+            injected != own,
+            "{what}: the injected frame is the program's own (no MSAA)"
+        );
+        injected
+    }
+}
+
+/// The program's own frame, without MSAA.
+fn own_frame(plain: &Path, out: &Path, name: &str, args: &[&str], display: &str) -> Vec<u8> {
+    let own = out.join(format!("{name}-own.rgba"));
+    capi::run(
+        Command::new(plain)
+            .arg(&own)
+            .args(args)
+            .env("DISPLAY", display),
+        &format!("the program as it is, {name}"),
+    );
+    frame(&own)
+}
+
 #[test]
 fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
     if !can_run_glfw() {
@@ -92,8 +230,7 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
         return;
     };
     let (build, prefix) = capi::install("inject-build");
-    let (in_source, plain) = build_tutorial(&build, &prefix);
-    let library = capi::built("libdeferred_msaa_inject", "so");
+    let (in_source, plain) = build_tutorial(&build, &prefix, Flavour::Glfw);
     let profile = capi::root().join("crates/inject/profiles/tutorial.toml");
     let text = std::fs::read_to_string(&profile).expect("the shipped tutorial profile");
     assert!(
@@ -109,92 +246,77 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
     let out = build.join("frames");
     std::fs::create_dir_all(&out).expect("making the frame folder");
     for api in ["GLX", "EGL"] {
-        let api_args: &[&str] = if api == "EGL" { &["--egl"] } else { &[] };
-        let own = out.join(format!("{api}-own.rgba"));
-        capi::run(
-            Command::new(&plain)
-                .arg(&own)
-                .args(api_args)
-                .env("DISPLAY", xvfb.display()),
-            &format!("the program as it is, {api}"),
-        );
-        let variants: [(&str, Option<&PathBuf>, &[&str]); 3] = [
+        let args: &[&str] = if api == "EGL" { &["--egl"] } else { &[] };
+        let own = own_frame(&plain, &out, api, args, &xvfb.display());
+        let variants: [(&str, Option<&Path>, &[&str]); 3] = [
             ("default", None, &[]),
             ("tutorial", Some(&profile), &["--tutorial-options"]),
             (
-                "tutorial-two-layers",
+                "tutorial two layers",
                 Some(&two_layers),
                 &["--tutorial-options", "--two-layers"],
             ),
         ];
+        let mut one_layer = Vec::new();
         for (options, profile, in_source_args) in variants {
-            let what = format!("{api}, {options} options");
-            let expected = out.join(format!("{api}-{options}-in-source.rgba"));
-            let mut command = Command::new(&in_source);
-            command
-                .arg(&expected)
-                .args(api_args)
-                .env("DISPLAY", xvfb.display());
-            command.args(in_source_args);
-            capi::run(
-                &mut command,
-                &format!("the program retrofitted in its source, {what}"),
-            );
-
-            let injected = out.join(format!("{api}-{options}-injected.rgba"));
-            let mut command = cli();
-            command
-                .args(["inject", "--check", "--library"])
-                .arg(&library);
-            if let Some(p) = profile {
-                command.arg("--profile").arg(p);
-            }
-            command
-                .arg("--")
-                .arg(&plain)
-                .arg(&injected)
-                .args(api_args)
-                .env("DISPLAY", xvfb.display());
-            let output = capi::run(&mut command, &format!("deferred-msaa inject, {what}"));
-            let stdout = String::from_utf8_lossy(&output.stdout);
-            let stderr = String::from_utf8_lossy(&output.stderr);
-            eprint!("{what}:\n{stderr}");
-            assert!(
-                stdout.contains(&format!("through {api}")),
-                "{what}: {stdout}"
-            );
-            assert!(
-                stdout.ends_with("ok\n"),
-                "{what}: the program failed a check:\n{stdout}"
-            );
-            assert!(
-                stderr.contains("deferred-msaa inject: retrofitting framebuffer "),
-                "{what}: the library did not retrofit the G-buffer:\n{stderr}"
-            );
-            let check = stderr
-                .lines()
-                .find(|l| l.starts_with("deferred-msaa inject: check: "))
-                .unwrap_or_else(|| panic!("{what}: no check summary:\n{stderr}"));
-            assert!(
-                check.contains(" 0 changed, 0 GL errors left by the library, 0 left pending by the program; 2 frames resolved"),
-                "{what}: {check}"
-            );
-            assert!(
-                frame(&injected) == frame(&expected),
-                "{what}: the injected frame differs from the frame of the program retrofitted in its source"
-            );
-            assert!(
-                frame(&injected) != frame(&own),
-                "{what}: the injected frame is the program's own (no MSAA)"
-            );
-            if options == "tutorial-two-layers" {
-                let one = out.join(format!("{api}-tutorial-injected.rgba"));
-                assert!(
-                    frame(&injected) != frame(&one),
-                    "{what}: two layers drew the one-layer frame"
-                );
+            let run = Run {
+                what: format!("GLFW {api}, {options} options"),
+                out: &out,
+                display: xvfb.display(),
+                args,
+                in_source_args,
+                profile,
+            };
+            let injected = run.compare(&in_source, &plain, &own, api);
+            match options {
+                "tutorial" => one_layer = injected,
+                "tutorial two layers" => assert!(
+                    injected != one_layer,
+                    "{api}: two layers drew the one-layer frame"
+                ),
+                _ => {}
             }
         }
+    }
+}
+
+/// The same program with SDL2's window and loader (GLX and EGL), and with
+/// GLFW's window but GL called through libGL's symbols (a program linked
+/// with `-lGL`, reached through the library's exported wrappers): each
+/// under `inject --check` draws its in-source build's frame bit for bit.
+#[test]
+fn sdl_and_linked_libgl_programs_under_inject_draw_the_in_source_frame() {
+    if !can_run_glfw() {
+        return;
+    }
+    let Some(xvfb) = common::xvfb::start_xvfb() else {
+        return;
+    };
+    let (build, prefix) = capi::install("inject-flavours-build");
+    let out = build.join("frames");
+    std::fs::create_dir_all(&out).expect("making the frame folder");
+    let mut flavours = vec![(Flavour::LinkedGl, "GLX")];
+    if Path::new("/usr/include/SDL2/SDL.h").exists() {
+        flavours.extend([(Flavour::Sdl, "GLX"), (Flavour::Sdl, "EGL")]);
+    } else {
+        common::skip(
+            "no SDL2 headers (scripts/setup installs libsdl2-dev): the SDL2 program is not run",
+        );
+    }
+    for (flavour, api) in flavours {
+        let (in_source, plain) = build_tutorial(&build, &prefix, flavour);
+        let args: &[&str] = if api == "EGL" { &["--egl"] } else { &[] };
+        let name = format!("{}-{api}", flavour.name());
+        let own = own_frame(&plain, &out, &name, args, &xvfb.display());
+        Run {
+            what: format!("{} {api}, default options", flavour.name()),
+            out: &out,
+            display: xvfb.display(),
+            args,
+            in_source_args: &[],
+            profile: None,
+        }
+        .compare(&in_source, &plain, &own, api);
     }
 }
 

@@ -158,9 +158,32 @@ unsafe extern "C" fn egl_get_proc_address(name: *const c_char) -> *mut c_void {
     hooked_lookup(&EGL_GET_PROC_ADDRESS, name)
 }
 
+/// The definition of `name` (NUL-terminated) after this library's: the
+/// one a program linked with libGL would have called.
+fn next_definition(name: &str) -> *mut c_void {
+    match (real_dlsym(), CStr::from_bytes_with_nul(name.as_bytes())) {
+        // SAFETY: a C string; RTLD_NEXT from this library.
+        (Some(real), Ok(name)) => unsafe { real(libc::RTLD_NEXT, name.as_ptr()) },
+        _ => std::ptr::null_mut(),
+    }
+}
+
+/// Fill `slot` with the global definition of `name` where the program's
+/// loader was not seen (a program linked with libGL looks nothing up).
+fn fill_from_global(slot: &Slot, name: &CStr) {
+    if slot.get().is_none()
+        && let Some(real) = real_dlsym()
+    {
+        // SAFETY: a C string; the global scope.
+        slot.set(unsafe { real(libc::RTLD_DEFAULT, name.as_ptr()) });
+    }
+}
+
 /// The context current on this thread, and its API; EGL first (GLFW
 /// loads GLX beside an EGL context).
 pub(crate) fn current_context() -> Option<(Api, usize)> {
+    fill_from_global(&EGL_GET_CURRENT_CONTEXT, c"eglGetCurrentContext");
+    fill_from_global(&GLX_GET_CURRENT_CONTEXT, c"glXGetCurrentContext");
     for (api, slot) in [
         (Api::Egl, &EGL_GET_CURRENT_CONTEXT),
         (Api::Glx, &GLX_GET_CURRENT_CONTEXT),
@@ -181,8 +204,14 @@ pub(crate) fn current_context() -> Option<(Api, usize)> {
 /// The real entry point `name` of `api`'s contexts (never a wrapper).
 pub(crate) fn load_real(api: Api, name: &CStr) -> *const c_void {
     let slot = match api {
-        Api::Glx => &GLX_GET_PROC_ADDRESS,
-        Api::Egl => &EGL_GET_PROC_ADDRESS,
+        Api::Glx => {
+            fill_from_global(&GLX_GET_PROC_ADDRESS, c"glXGetProcAddressARB");
+            &GLX_GET_PROC_ADDRESS
+        }
+        Api::Egl => {
+            fill_from_global(&EGL_GET_PROC_ADDRESS, c"eglGetProcAddress");
+            &EGL_GET_PROC_ADDRESS
+        }
     };
     match slot.get() {
         // SAFETY: the address dlsym gave for a get-proc-address; a C string.
@@ -227,13 +256,25 @@ macro_rules! watched {
             $( pub(crate) static $name: Slot = Slot::new(); )*
         }
 
-        /// What the program calls instead.
+        /// What the program calls instead: handed out by the get-proc-addresses
+        /// and `dlsym`, and exported under the function's own name for a
+        /// program linked with libGL or libEGL (the preload comes first).
         #[allow(non_snake_case)]
         mod wrapper {
             use super::*;
             $(
-                pub(super) unsafe extern "system" fn $name($($arg: $ty),*) $(-> $ret)? {
-                    // The slot is filled before the wrapper is handed out.
+                /// The watched function: the handler around the real one.
+                ///
+                /// # Safety
+                ///
+                /// The GL function's own contract.
+                #[unsafe(no_mangle)]
+                pub unsafe extern "system" fn $name($($arg: $ty),*) $(-> $ret)? {
+                    // Handed out: the slot was filled first. Called by its
+                    // exported name: the next definition (libGL's, libEGL's).
+                    if real::$name.get().is_none() {
+                        real::$name.set(next_definition(concat!(stringify!($name), "\0")));
+                    }
                     let Some(address) = real::$name.get() else {
                         return Default::default();
                     };

@@ -14,6 +14,9 @@
 //                            dmsaa_begin_second_layer_own_target's
 //                            framebuffer, then dmsaa_finish_second_layer.
 //
+// Built with -DTUTORIAL_SDL, the window and the loader are SDL2's; with
+// -DTUTORIAL_LINK_GL (and -lGL), GL is called through libGL's symbols.
+//
 // It draws FRAMES frames and writes the last one, read back from the back
 // buffer before its swap, as raw RGBA8 (rows bottom-up) into OUT_FILE.
 // Exit status non-zero, with a line saying why, on a GL error or a failed
@@ -41,7 +44,7 @@ static const int FRAMES = 3;
 #ifdef DMSAA_IN_SOURCE
 static const void *loadForLibrary(const char *name, void *)
 {
-    return reinterpret_cast<const void *>(glfwGetProcAddress(name));
+    return reinterpret_cast<const void *>(TUTORIAL_GET_PROC_ADDRESS(name));
 }
 
 static bool ok(DmsaaStatus status, const char *call)
@@ -74,6 +77,29 @@ int main(int argc, char **argv)
             return 2;
         }
     }
+#ifdef TUTORIAL_SDL
+    SDL_SetHint(SDL_HINT_VIDEO_X11_FORCE_EGL, egl ? "1" : "0");
+    if (SDL_Init(SDL_INIT_VIDEO) != 0) {
+        std::fprintf(stderr, "SDL_Init: %s\n", SDL_GetError());
+        return 3;
+    }
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, 3);
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, 2);
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_PROFILE_MASK, SDL_GL_CONTEXT_PROFILE_CORE);
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_FLAGS, SDL_GL_CONTEXT_FORWARD_COMPATIBLE_FLAG);
+    // GLFW's defaults: the depth blit needs formats that match.
+    SDL_GL_SetAttribute(SDL_GL_DEPTH_SIZE, 24);
+    SDL_GL_SetAttribute(SDL_GL_STENCIL_SIZE, 8);
+    SDL_Window *window = SDL_CreateWindow("LearnOpenGL", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED, WIDTH,
+                                          HEIGHT, SDL_WINDOW_OPENGL);
+    SDL_GLContext context = window ? SDL_GL_CreateContext(window) : nullptr;
+    if (context == nullptr) {
+        std::fprintf(stderr, "Failed to create an SDL window with a GL context: %s\n", SDL_GetError());
+        SDL_Quit();
+        return 3;
+    }
+    SDL_GL_MakeCurrent(window, context);
+#else
     glfwInit();
     glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
     glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 2);
@@ -91,6 +117,7 @@ int main(int argc, char **argv)
         return 3;
     }
     glfwMakeContextCurrent(window);
+#endif
     if (!loadGL()) {
         std::fprintf(stderr, "Failed to initialize GLAD\n");
         return 3;
@@ -166,8 +193,14 @@ int main(int argc, char **argv)
             glReadPixels(0, 0, WIDTH, HEIGHT, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
             glPixelStorei(GL_PACK_ALIGNMENT, 4);
         }
+#ifdef TUTORIAL_SDL
+        SDL_GL_SwapWindow(window);
+        for (SDL_Event event; SDL_PollEvent(&event);) {
+        }
+#else
         glfwSwapBuffers(window);
         glfwPollEvents();
+#endif
     }
 #ifdef DMSAA_IN_SOURCE
     dmsaa_destroy(msaa);
@@ -181,7 +214,13 @@ int main(int argc, char **argv)
         std::fwrite(pixels.data(), 1, pixels.size(), f);
         std::fclose(f);
     }
+#ifdef TUTORIAL_SDL
+    SDL_GL_DeleteContext(context);
+    SDL_DestroyWindow(window);
+    SDL_Quit();
+#else
     glfwTerminate();
+#endif
     if (failures) {
         std::fprintf(stderr, "%d check(s) failed\n", failures);
         return 1;

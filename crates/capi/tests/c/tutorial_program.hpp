@@ -8,8 +8,21 @@
 #ifndef TUTORIAL_PROGRAM_HPP
 #define TUTORIAL_PROGRAM_HPP
 
+// TUTORIAL_SDL: the window and the GL loader are SDL2's
+// (SDL_GL_GetProcAddress); otherwise GLFW's (glfwGetProcAddress).
+#ifdef TUTORIAL_SDL
+#include <SDL2/SDL.h>
+#define TUTORIAL_GET_PROC_ADDRESS(name) SDL_GL_GetProcAddress(name)
+#else
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
+#define TUTORIAL_GET_PROC_ADDRESS(name) glfwGetProcAddress(name)
+#endif
+// TUTORIAL_LINK_GL: the program calls libGL's symbols directly (linked
+// with -lGL), as a program that loads nothing at run time does.
+#ifdef TUTORIAL_LINK_GL
+#define GL_GLEXT_PROTOTYPES
+#endif
 #include <GL/glcorearb.h>
 
 #include <array>
@@ -86,6 +99,9 @@
     X(PFNGLVERTEXATTRIBPOINTERPROC, glVertexAttribPointer)                                 \
     X(PFNGLVIEWPORTPROC, glViewport)
 
+#ifdef TUTORIAL_LINK_GL
+static inline bool loadGL() { return true; }
+#else
 #define DECLARE(type, name) static type name;
 GL_FUNCTIONS(DECLARE)
 #undef DECLARE
@@ -94,7 +110,7 @@ static inline bool loadGL()
 {
     bool ok = true;
 #define LOAD(type, name)                                                  \
-    name = reinterpret_cast<type>(glfwGetProcAddress(#name));             \
+    name = reinterpret_cast<type>(TUTORIAL_GET_PROC_ADDRESS(#name));      \
     if (!name) {                                                          \
         std::fprintf(stderr, "glfw_tutorial_host: no %s\n", #name);       \
         ok = false;                                                       \
@@ -103,6 +119,7 @@ static inline bool loadGL()
 #undef LOAD
     return ok;
 }
+#endif
 
 
 // ---------------------------------------------------------------------------
