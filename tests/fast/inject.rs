@@ -138,6 +138,11 @@ struct Run<'a> {
     /// The in-source build's further arguments.
     in_source_args: &'a [&'a str],
     profile: Option<&'a Path>,
+    /// Frames the library resolves (the first frame is drawn as it is).
+    resolves: u32,
+    /// Calls into the library the check must have counted, as it prints
+    /// them (`dmsaa_refresh 1`).
+    calls: &'a [&'a str],
 }
 
 impl Run<'_> {
@@ -189,12 +194,16 @@ impl Run<'_> {
             .lines()
             .find(|l| l.starts_with("deferred-msaa inject: check: "))
             .unwrap_or_else(|| panic!("{what}: no check summary:\n{stderr}"));
+        let resolves = self.resolves;
         assert!(
-            check.contains(
-                " 0 changed, 0 GL errors left by the library, 0 left pending by the program; 2 frames resolved"
-            ),
+            check.contains(&format!(
+                " 0 changed, 0 GL errors left by the library, 0 left pending by the program; {resolves} frames resolved"
+            )),
             "{what}: {check}"
         );
+        for call in self.calls {
+            assert!(check.contains(call), "{what}: no `{call}` in {check}");
+        }
         let injected = frame(&injected);
         assert!(
             injected == frame(&expected),
@@ -259,6 +268,7 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
         ];
         let mut one_layer = Vec::new();
         for (options, profile, in_source_args) in variants {
+            let two = options == "tutorial two layers";
             let run = Run {
                 what: format!("GLFW {api}, {options} options"),
                 out: &out,
@@ -266,6 +276,15 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
                 args,
                 in_source_args,
                 profile,
+                resolves: 2,
+                calls: if two {
+                    &[
+                        "dmsaa_retrofit_new 1",
+                        "the second layer (begin, the replayed lighting, finish) 2",
+                    ]
+                } else {
+                    &["dmsaa_retrofit_new 1"]
+                },
             };
             let injected = run.compare(&in_source, &plain, &own, api);
             match options {
@@ -277,6 +296,29 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
                 _ => {}
             }
         }
+    }
+    // A resize (new textures attached to the G-buffer before the last
+    // frame, the retrofit made by then: `dmsaa_refresh`), and a G-buffer
+    // deleted and made again before the second frame (the new one found,
+    // read and retrofitted; the program's delete of it at exit frees that
+    // retrofit: `dmsaa_destroy`).
+    for (event, resolves, calls) in [
+        ("--resize", 2, ["dmsaa_retrofit_new 1", "dmsaa_refresh 1"]),
+        ("--recreate", 1, ["dmsaa_retrofit_new 1", "dmsaa_destroy 1"]),
+    ] {
+        let args: &[&str] = &[event];
+        let own = own_frame(&plain, &out, event, args, &xvfb.display());
+        Run {
+            what: format!("GLFW GLX, default options, {event}"),
+            out: &out,
+            display: xvfb.display(),
+            args,
+            in_source_args: &[],
+            profile: None,
+            resolves,
+            calls: &calls,
+        }
+        .compare(&in_source, &plain, &own, "GLX");
     }
 }
 
@@ -315,6 +357,8 @@ fn sdl_and_linked_libgl_programs_under_inject_draw_the_in_source_frame() {
             args,
             in_source_args: &[],
             profile: None,
+            resolves: 2,
+            calls: &["dmsaa_retrofit_new 1"],
         }
         .compare(&in_source, &plain, &own, api);
     }

@@ -3,6 +3,7 @@
 //! leaves, counted for the summary printed at exit.
 
 use glow::HasContext;
+use std::collections::BTreeMap;
 use std::sync::Mutex;
 
 /// A named GL state value (several numbers for a vector).
@@ -22,6 +23,8 @@ pub(crate) struct Totals {
     /// GL errors the program left pending before a call (read, and so
     /// cleared, by the check).
     pub(crate) program_errors: u64,
+    /// How many times each call was made.
+    pub(crate) by_call: BTreeMap<String, u64>,
 }
 
 /// The run's totals.
@@ -31,6 +34,7 @@ pub(crate) static TOTALS: Mutex<Totals> = Mutex::new(Totals {
     changed: 0,
     errors: 0,
     program_errors: 0,
+    by_call: BTreeMap::new(),
 });
 
 const INTEGERS: &[(&str, u32)] = &[

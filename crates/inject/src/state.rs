@@ -84,10 +84,22 @@ pub(crate) fn say_once(key: &str, message: &str) {
 extern "C" fn print_check_totals() {
     let t = check::TOTALS.lock().unwrap_or_else(|e| e.into_inner());
     let resolves = RESOLVES.load(std::sync::atomic::Ordering::Relaxed);
+    let calls: Vec<String> = t
+        .by_call
+        .iter()
+        .map(|(call, n)| format!("{call} {n}"))
+        .collect();
     eprintln!(
         "deferred-msaa inject: check: {} calls into the library, {} GL state values compared around each, \
-         {} changed, {} GL errors left by the library, {} left pending by the program; {} frames resolved",
-        t.calls, t.values, t.changed, t.errors, t.program_errors, resolves
+         {} changed, {} GL errors left by the library, {} left pending by the program; {} frames resolved \
+         (calls: {})",
+        t.calls,
+        t.values,
+        t.changed,
+        t.errors,
+        t.program_errors,
+        resolves,
+        calls.join(", ")
     );
 }
 
@@ -272,6 +284,7 @@ impl Context {
         t.changed += changed.len() as u64;
         t.errors += errors.len() as u64;
         t.program_errors += pending.len() as u64;
+        *t.by_call.entry(call.to_string()).or_default() += 1;
         status
     }
 
@@ -320,6 +333,12 @@ impl Context {
         }
         let g = self.gbuffer?;
         if self.retrofit.is_none() {
+            if !self.attachments_exist(g) {
+                // The program is remaking its G-buffer (a resize deletes
+                // the old textures before it attaches new ones): made at a
+                // later bind, once its attachments are whole again.
+                return None;
+            }
             self.make(g)?;
         }
         let handle = self.retrofit.as_ref()?.handle;
@@ -342,6 +361,22 @@ impl Context {
             return None;
         }
         Some(twin)
+    }
+
+    /// Whether the colour textures framebuffer `g` was last seen with all
+    /// still exist.
+    fn attachments_exist(&mut self, g: u32) -> bool {
+        let textures: Vec<u32> = self
+            .framebuffers
+            .get(&g)
+            .map(|f| f.colour_textures.iter().map(|&(_, t)| t).collect())
+            .unwrap_or_default();
+        let gl = self.gl();
+        textures.iter().all(|&t| {
+            std::num::NonZeroU32::new(t)
+                // SAFETY: a query of the current context.
+                .is_some_and(|t| unsafe { gl.is_texture(glow::NativeTexture(t)) })
+        })
     }
 
     /// Make the retrofit of framebuffer `g`.
@@ -769,19 +804,33 @@ impl Context {
         if let Some(f) = self.framebuffers.get_mut(&bound) {
             f.stale = true;
         }
-        if self.gbuffer == Some(bound) && bound != 0 {
-            if self.twin_bound && target != GL_READ_FRAMEBUFFER {
-                // The change would go to the twin: put the G-buffer back
-                // under it first, and leave the retrofit off.
-                say_once(
-                    "reattach",
-                    "the program changed its G-buffer's attachments while drawing into it; the retrofit is off for the rest of the run",
-                );
-                self.give_up();
-            } else {
-                self.needs_refresh = true;
-            }
+        if self.gbuffer != Some(bound) || bound == 0 {
+            return;
         }
+        // The twins are rebuilt from the G-buffer at its next bind.
+        self.needs_refresh = true;
+        if !self.twin_bound || target == GL_READ_FRAMEBUFFER {
+            return;
+        }
+        if self.twin_drawn {
+            // Drawn into the twin and not resolved: the frame's geometry
+            // would be lost either way.
+            say_once(
+                "reattach",
+                "the program changed its G-buffer's attachments after drawing into it; the retrofit is off for the rest of the run",
+            );
+            self.give_up();
+            return;
+        }
+        // The change would go to the twin, bound in the G-buffer's place
+        // (a program binds its G-buffer to reattach its textures after a
+        // resize): the G-buffer goes back under it, and this frame's
+        // drawing into it stays single-sampled.
+        real_bind(GL_DRAW_FRAMEBUFFER, bound);
+        if self.read_fbo == bound {
+            real_bind(GL_READ_FRAMEBUFFER, bound);
+        }
+        self.twin_bound = false;
     }
 }
 

@@ -23,11 +23,20 @@
 // call.
 //
 // Usage: inject_tutorial OUT_FILE [--egl] [--tutorial-options] [--two-layers]
+//                       [--resize | --recreate]
 //   --egl               the context through EGL (GLFW_EGL_CONTEXT_API)
 //   --tutorial-options  (in-source build) the options
 //                       crates/inject/profiles/tutorial.toml declares,
 //                       rather than dmsaa_options_default()
 //   --two-layers        (in-source build) two layers
+//   --resize            before the last frame (the injected program is
+//                       retrofitted by then), the G-buffer's textures and
+//                       depth made anew at RESIZED_WIDTH x RESIZED_HEIGHT and
+//                       attached to it, the viewport with them (the in-source
+//                       build then calls dmsaa_refresh)
+//   --recreate          before the second frame, the G-buffer deleted and
+//                       made again (the in-source build destroys its
+//                       retrofit and makes a new one)
 #include "tutorial_program.hpp"
 
 #ifdef DMSAA_IN_SOURCE
@@ -40,6 +49,33 @@ static const int HEIGHT = 120;
 // G-buffer is known once the first frame's lighting has read it); the
 // last frame is the third in both builds.
 static const int FRAMES = 3;
+static const int RESIZED_WIDTH = 128;
+static const int RESIZED_HEIGHT = 96;
+
+// A resize as a program handles one: new textures and depth of the new
+// size, attached to the same G-buffer.
+static void resizeGBuffer(Engine &e, int width, int height)
+{
+    GLuint old[3] = {e.gPosition, e.gNormal, e.gAlbedoSpec};
+    glDeleteTextures(3, old);
+    glDeleteRenderbuffers(1, &e.rboDepth);
+    e.width = width;
+    e.height = height;
+    glBindFramebuffer(GL_FRAMEBUFFER, e.gBuffer);
+    e.gPosition = makeTexture(width, height, GL_RGBA16F, GL_FLOAT);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, e.gPosition, 0);
+    e.gNormal = makeTexture(width, height, GL_RGBA16F, GL_FLOAT);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, e.gNormal, 0);
+    e.gAlbedoSpec = makeTexture(width, height, GL_RGBA, GL_UNSIGNED_BYTE);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, e.gAlbedoSpec, 0);
+    glGenRenderbuffers(1, &e.rboDepth);
+    glBindRenderbuffer(GL_RENDERBUFFER, e.rboDepth);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT, width, height);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, e.rboDepth);
+    CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "the resized G-buffer is incomplete");
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, width, height);
+}
 
 #ifdef DMSAA_IN_SOURCE
 static const void *loadForLibrary(const char *name, void *)
@@ -61,10 +97,10 @@ static bool ok(DmsaaStatus status, const char *call)
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options] [--two-layers]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options] [--two-layers] [--resize | --recreate]\n", argv[0]);
         return 2;
     }
-    bool egl = false, tutorialOptions = false, twoLayers = false;
+    bool egl = false, tutorialOptions = false, twoLayers = false, resize = false, recreate = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -72,6 +108,10 @@ int main(int argc, char **argv)
             tutorialOptions = true;
         else if (std::strcmp(argv[i], "--two-layers") == 0)
             twoLayers = true;
+        else if (std::strcmp(argv[i], "--resize") == 0)
+            resize = true;
+        else if (std::strcmp(argv[i], "--recreate") == 0)
+            recreate = true;
         else {
             std::fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;
@@ -155,6 +195,25 @@ int main(int argc, char **argv)
     std::vector<unsigned char> pixels(static_cast<size_t>(WIDTH) * HEIGHT * 4);
     glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
     for (int frame = 0; frame < FRAMES; frame++) {
+        if (frame == FRAMES - 1 && resize) {
+            resizeGBuffer(e, RESIZED_WIDTH, RESIZED_HEIGHT);
+#ifdef DMSAA_IN_SOURCE
+            ok(dmsaa_refresh(msaa), "dmsaa_refresh");
+#endif
+        }
+        if (frame == 1 && recreate) {
+#ifdef DMSAA_IN_SOURCE
+            dmsaa_destroy(msaa);
+            msaa = nullptr;
+#endif
+            engineFree(e);
+            e = Engine();
+            engineInit(e, WIDTH, HEIGHT, false);
+#ifdef DMSAA_IN_SOURCE
+            if (!ok(dmsaa_retrofit_new(loadForLibrary, nullptr, e.gBuffer, &options, &msaa), "dmsaa_retrofit_new"))
+                return 1;
+#endif
+        }
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
 
