@@ -148,6 +148,7 @@ fn c_hosts_build_against_the_installed_library_and_run() {
         "bad_calls.c",
         "minimal_host.c",
         "egl_gl.h",
+        "tutorial_host_state.h",
     ] {
         std::fs::copy(sources().join(f), src.join(f)).expect("copying a C source");
     }

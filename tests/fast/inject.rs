@@ -11,7 +11,9 @@
 //! (the lighting pass recorded and replayed); the library's check finds no
 //! GL state value changed and no GL error around any of its calls, and the
 //! frame differs from the program's own without MSAA (and two layers from
-//! one).
+//! one). The same after a resize and after the G-buffer is remade; and for
+//! the program built on SDL2 (GLX, EGL) and linked with libGL directly.
+//! A forward bloom program is left untouched without a profile.
 
 use super::capi;
 use crate::common;
@@ -217,6 +219,44 @@ impl Run<'_> {
     }
 }
 
+/// The frame size of `inject_tutorial.cpp`.
+const FRAME: (u32, u32) = (160, 120);
+/// How much the figure magnifies each frame.
+const MAGNIFY: u32 = 3;
+
+/// The README's figure: the program's own frame (left) and the frame under
+/// `inject` (right), each magnified `MAGNIFY` times (nearest), written to
+/// `path`, and also to `$DMSAA_INJECT_FIGURE` where it is set
+/// (`scripts/inject-figure` sets it to docs/inject-before-after.png).
+fn before_and_after(before: &[u8], after: &[u8], path: &Path) {
+    let (w, h) = FRAME;
+    let gap = 4;
+    let mut figure = image::RgbaImage::from_pixel(
+        2 * w * MAGNIFY + gap,
+        h * MAGNIFY,
+        image::Rgba([255, 255, 255, 255]),
+    );
+    for (k, frame) in [before, after].into_iter().enumerate() {
+        let x0 = k as u32 * (w * MAGNIFY + gap);
+        for y in 0..h * MAGNIFY {
+            for x in 0..w * MAGNIFY {
+                // The frames' rows are bottom-up, as glReadPixels gives them.
+                let i = (((h - 1 - y / MAGNIFY) * w + x / MAGNIFY) * 4) as usize;
+                let p = &frame[i..i + 4];
+                figure.put_pixel(x0 + x, y, image::Rgba([p[0], p[1], p[2], 255]));
+            }
+        }
+    }
+    figure
+        .save(path)
+        .expect("writing the before-and-after figure");
+    if let Some(docs) = std::env::var_os("DMSAA_INJECT_FIGURE") {
+        figure
+            .save(&docs)
+            .expect("writing the before-and-after figure to $DMSAA_INJECT_FIGURE");
+    }
+}
+
 /// The program's own frame, without MSAA.
 fn own_frame(plain: &Path, out: &Path, name: &str, args: &[&str], display: &str) -> Vec<u8> {
     let own = out.join(format!("{name}-own.rgba"));
@@ -289,10 +329,15 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
             let injected = run.compare(&in_source, &plain, &own, api);
             match options {
                 "tutorial" => one_layer = injected,
-                "tutorial two layers" => assert!(
-                    injected != one_layer,
-                    "{api}: two layers drew the one-layer frame"
-                ),
+                "tutorial two layers" => {
+                    assert!(
+                        injected != one_layer,
+                        "{api}: two layers drew the one-layer frame"
+                    );
+                    if api == "GLX" {
+                        before_and_after(&own, &injected, &build.join("before-after.png"));
+                    }
+                }
                 _ => {}
             }
         }

@@ -269,6 +269,7 @@ macro_rules! watched {
                 ///
                 /// The GL function's own contract.
                 #[unsafe(no_mangle)]
+                #[allow(clippy::too_many_arguments)]
                 pub unsafe extern "system" fn $name($($arg: $ty),*) $(-> $ret)? {
                     // Handed out: the slot was filled first. Called by its
                     // exported name: the next definition (libGL's, libEGL's).
@@ -303,6 +304,10 @@ watched! {
     glFramebufferTexture(target: u32, attachment: u32, texture: u32, level: i32);
     glFramebufferTexture2D(target: u32, attachment: u32, textarget: u32, texture: u32, level: i32);
     glFramebufferRenderbuffer(target: u32, attachment: u32, rbtarget: u32, renderbuffer: u32);
+    glNamedFramebufferTexture(framebuffer: u32, attachment: u32, texture: u32, level: i32);
+    glNamedFramebufferRenderbuffer(framebuffer: u32, attachment: u32, rbtarget: u32, renderbuffer: u32);
+    glBlitNamedFramebuffer(read: u32, draw: u32, sx0: i32, sy0: i32, sx1: i32, sy1: i32, dx0: i32, dy0: i32, dx1: i32, dy1: i32, mask: u32, filter: u32);
+    glBindTextureUnit(unit: u32, texture: u32);
     glActiveTexture(unit: u32);
     glBindTexture(target: u32, texture: u32);
     glUseProgram(program: u32);

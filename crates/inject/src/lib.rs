@@ -8,7 +8,7 @@
 //! functions and the real entry points for the rest. From those calls the
 //! library finds the G-buffer, binds the retrofit's multisampled framebuffer
 //! in its place and resolves into it when the program leaves it
-//! ([`state`] says how, docs/inject.md the contract). The retrofit itself
+//! (docs/inject.md says how, and the contract). The retrofit itself
 //! is `deferred-msaa-capi`'s, given the real entry points.
 //!
 //! The environment it reads: `DMSAA_INJECT_PROFILE` (a [`profile`] file),
@@ -17,7 +17,7 @@
 //! (write a first profile there from one observed frame; retrofit nothing).
 
 mod check;
-pub mod hooks;
+mod hooks;
 mod learn;
 pub mod profile;
 mod replay;

@@ -794,6 +794,17 @@ impl Context {
         }
     }
 
+    /// Before an attachment of framebuffer `name` changes through direct
+    /// state access (the twin, bound or not, is not touched).
+    fn named_attachment_changes(&mut self, name: u32) {
+        if let Some(f) = self.framebuffers.get_mut(&name) {
+            f.stale = true;
+        }
+        if name != 0 && self.gbuffer == Some(name) {
+            self.needs_refresh = true;
+        }
+    }
+
     /// Before an attachment of the framebuffer bound at `target` changes.
     fn attachment_changes(&mut self, target: u32) {
         let bound = if target == GL_READ_FRAMEBUFFER {
@@ -928,6 +939,64 @@ pub(crate) mod handlers {
     ) {
         with_context(|cx| cx.attachment_changes(t));
         unsafe { real(t, a, rt, rb) }
+    }
+
+    pub(crate) fn glNamedFramebufferTexture(
+        real: real_type::glNamedFramebufferTexture,
+        framebuffer: u32,
+        a: u32,
+        tex: u32,
+        l: i32,
+    ) {
+        with_context(|cx| cx.named_attachment_changes(framebuffer));
+        unsafe { real(framebuffer, a, tex, l) }
+    }
+
+    pub(crate) fn glNamedFramebufferRenderbuffer(
+        real: real_type::glNamedFramebufferRenderbuffer,
+        framebuffer: u32,
+        a: u32,
+        rt: u32,
+        rb: u32,
+    ) {
+        with_context(|cx| cx.named_attachment_changes(framebuffer));
+        unsafe { real(framebuffer, a, rt, rb) }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn glBlitNamedFramebuffer(
+        real: real_type::glBlitNamedFramebuffer,
+        read: u32,
+        draw: u32,
+        sx0: i32,
+        sy0: i32,
+        sx1: i32,
+        sy1: i32,
+        dx0: i32,
+        dy0: i32,
+        dx1: i32,
+        dy1: i32,
+        mask: u32,
+        filter: u32,
+    ) {
+        // A blit from the G-buffer reads it: resolved first.
+        with_context(|cx| {
+            if cx.twin_drawn && read != 0 && cx.gbuffer == Some(read) {
+                cx.resolve();
+            }
+        });
+        unsafe {
+            real(
+                read, draw, sx0, sy0, sx1, sy1, dx0, dy0, dx1, dy1, mask, filter,
+            )
+        }
+    }
+
+    pub(crate) fn glBindTextureUnit(real: real_type::glBindTextureUnit, unit: u32, texture: u32) {
+        unsafe { real(unit, texture) };
+        with_context(|cx| {
+            cx.unit_textures.insert(unit, texture);
+        });
     }
 
     pub(crate) fn glActiveTexture(real: real_type::glActiveTexture, unit: u32) {
