@@ -342,6 +342,58 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
             }
         }
     }
+    // `--learn`: the program untouched, a first profile written with the
+    // G-buffer's signature; that profile as it is (every attachment
+    // "other", the matrix uniforms seen) gives the default options' frame.
+    let learned = build.join("learned.toml");
+    let untouched = out.join("learn.rgba");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(capi::built("libdeferred_msaa_inject", "so"))
+            .arg("--learn")
+            .arg(&learned)
+            .arg("--")
+            .arg(&plain)
+            .arg(&untouched)
+            .env("DISPLAY", xvfb.display()),
+        "deferred-msaa inject --learn",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !stderr.contains("retrofitting"),
+        "--learn retrofitted:\n{stderr}"
+    );
+    let own = own_frame(&plain, &out, "GLX-learn", &[], &xvfb.display());
+    assert!(
+        frame(&untouched) == own,
+        "--learn changed the program's frame"
+    );
+    let profile_text = std::fs::read_to_string(&learned).expect("--learn wrote no profile");
+    eprint!("the learned profile:\n{profile_text}");
+    for line in [
+        "<- the G-buffer",
+        "colour_textures = 3",
+        "formats = [\"float16\", \"float16\", \"unorm8\"]",
+        "uniform = \"projection\"",
+        "view_uniform = \"view\"",
+    ] {
+        assert!(
+            profile_text.contains(line),
+            "no `{line}` in the learned profile"
+        );
+    }
+    Run {
+        what: "GLFW GLX, the learned profile".into(),
+        out: &out,
+        display: xvfb.display(),
+        args: &[],
+        in_source_args: &[],
+        profile: Some(&learned),
+        resolves: 2,
+        calls: &["dmsaa_retrofit_new 1"],
+    }
+    .compare(&in_source, &plain, &own, "GLX");
     // A resize (new textures attached to the G-buffer before the last
     // frame, the retrofit made by then: `dmsaa_refresh`), and a G-buffer
     // deleted and made again before the second frame (the new one found,
