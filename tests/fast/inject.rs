@@ -394,6 +394,49 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
         calls: &["dmsaa_retrofit_new 1"],
     }
     .compare(&in_source, &plain, &own, "GLX");
+    // A pass between the G-buffer and the lighting (`--pre-pass`): two
+    // layers replay the lighting where the profile says it is the second
+    // pass after the resolve, and the in-source frame comes out; left to
+    // the default (the first pass), the replay is the wrong pass.
+    let second_pass = build.join("tutorial-two-layers-lighting-second.toml");
+    let two_text = std::fs::read_to_string(&two_layers).expect("the two-layer profile");
+    std::fs::write(&second_pass, format!("{two_text}\n[lighting]\npass = 2\n"))
+        .expect("writing the profile with the lighting's pass");
+    let pre_pass: &[&str] = &["--pre-pass"];
+    let own = own_frame(&plain, &out, "GLX-pre-pass", pre_pass, &xvfb.display());
+    let run = Run {
+        what: "GLFW GLX, pre-pass, tutorial two layers, lighting pass 2".into(),
+        out: &out,
+        display: xvfb.display(),
+        args: pre_pass,
+        in_source_args: &["--tutorial-options", "--two-layers"],
+        profile: Some(&second_pass),
+        resolves: 2,
+        calls: &["the second layer (begin, the replayed lighting, finish) 2"],
+    };
+    run.compare(&in_source, &plain, &own, "GLX");
+    let expected = out.join(format!(
+        "{}-in-source.rgba",
+        run.what.replace([' ', ','], "-")
+    ));
+    let first_pass = out.join("pre-pass-lighting-first.rgba");
+    capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(capi::built("libdeferred_msaa_inject", "so"))
+            .arg("--profile")
+            .arg(&two_layers)
+            .arg("--")
+            .arg(&plain)
+            .arg(&first_pass)
+            .args(pre_pass)
+            .env("DISPLAY", xvfb.display()),
+        "deferred-msaa inject, pre-pass, the lighting left as the first pass",
+    );
+    assert!(
+        frame(&first_pass) != frame(&expected),
+        "with a pass before the lighting, replaying the first pass after the resolve drew the in-source frame: the pre-pass proves nothing"
+    );
     // A resize (new textures attached to the G-buffer before the last
     // frame, the retrofit made by then: `dmsaa_refresh`), and a G-buffer
     // deleted and made again before the second frame (the new one found,

@@ -120,6 +120,7 @@ pub(crate) fn render(cx: &Context, frame: usize) -> String {
             layer_mix: Some("auto".into()),
             ..Retrofit::default()
         }),
+        lighting: None,
     };
     if gbuffer.is_none() {
         let _ = writeln!(

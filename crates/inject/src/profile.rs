@@ -52,6 +52,18 @@ pub struct Profile {
     /// The retrofit's options.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub retrofit: Option<Retrofit>,
+    /// Which pass after the resolve is the lighting (two layers).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lighting: Option<Lighting>,
+}
+
+/// The lighting pass the second layer replays.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Lighting {
+    /// Its position among the passes after the resolve (each pass: the
+    /// draws up to the next framebuffer bind), from 1 (the default).
+    pub pass: u32,
 }
 
 /// A framebuffer's attachment signature: a framebuffer that has all of
@@ -256,6 +268,16 @@ impl Profile {
                 };
             }
         }
+        if self.lighting.as_ref().is_some_and(|l| l.pass == 0) {
+            return Err(bad("lighting.pass counts from 1".into()));
+        }
+        if let Some(p) = &self.projection {
+            for (name, m) in [("matrix", &p.matrix), ("view", &p.view)] {
+                if m.as_ref().is_some_and(|v| v.len() != 16) {
+                    return Err(bad(format!("projection.{name} needs 16 numbers")));
+                }
+            }
+        }
         let Some(r) = &self.retrofit else {
             return Ok(options);
         };
@@ -302,13 +324,6 @@ impl Profile {
         if let Some(check) = r.check_second_lighting {
             options.check_second_lighting = u8::from(check);
         }
-        if let Some(p) = &self.projection {
-            for (name, m) in [("matrix", &p.matrix), ("view", &p.view)] {
-                if m.as_ref().is_some_and(|v| v.len() != 16) {
-                    return Err(bad(format!("projection.{name} needs 16 numbers")));
-                }
-            }
-        }
         Ok(options)
     }
 }
@@ -340,6 +355,8 @@ mod tests {
             ),
             ("[retrofit]\nlayer_mix = \"gamma\"\n", "unknown layer_mix"),
             ("[retrofit]\nsampels = 4\n", "not valid"),
+            ("[lighting]\npass = 0\n", "counts from 1"),
+            ("[projection]\nmatrix = [1.0, 0.0]\n", "16 numbers"),
         ] {
             let e = Profile::parse(text, "p.toml").expect_err(text).to_string();
             assert!(e.contains(needle), "{text:?}: {e}");

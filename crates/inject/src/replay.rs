@@ -68,6 +68,9 @@ pub(crate) struct Recording {
     /// by the first draw.
     pub(crate) target: Option<u32>,
     pub(crate) draws: Vec<RecordedDraw>,
+    /// Passes still to let go by before the lighting (the profile's
+    /// `lighting.pass` - 1).
+    pub(crate) skip: u32,
 }
 
 fn program(name: u32) -> Option<glow::Program> {

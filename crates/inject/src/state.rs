@@ -471,7 +471,15 @@ impl Context {
         if status == capi::DmsaaStatus::Ok {
             RESOLVES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             if layers == 2 {
-                self.recording = Some(Recording::default());
+                let pass = settings()
+                    .profile
+                    .as_ref()
+                    .and_then(|p| p.lighting.as_ref())
+                    .map_or(1, |l| l.pass);
+                self.recording = Some(Recording {
+                    skip: pass.saturating_sub(1),
+                    ..Recording::default()
+                });
             }
         } else {
             self.fail("dmsaa_resolve");
@@ -479,9 +487,18 @@ impl Context {
     }
 
     fn bind_framebuffer(&mut self, target: u32, name: u32, real: &dyn Fn(u32, u32)) {
-        // The lighting's window ends at the first bind after it drew.
-        if self.recording.as_ref().is_some_and(|r| !r.draws.is_empty()) {
-            self.second_layer();
+        // A pass ends at the first bind after it drew: the lighting's is
+        // replayed, an earlier one's let go.
+        if let Some(r) = self.recording.as_mut()
+            && !r.draws.is_empty()
+        {
+            if r.skip > 0 {
+                r.skip -= 1;
+                r.draws.clear();
+                r.target = None;
+            } else {
+                self.second_layer();
+            }
         }
         let draw = target == GL_FRAMEBUFFER || target == GL_DRAW_FRAMEBUFFER;
         let read = target == GL_FRAMEBUFFER || target == GL_READ_FRAMEBUFFER;
@@ -689,7 +706,11 @@ impl Context {
         if self.twin_drawn {
             self.resolve();
         }
-        if self.recording.as_ref().is_some_and(|r| !r.draws.is_empty()) {
+        if self
+            .recording
+            .as_ref()
+            .is_some_and(|r| !r.draws.is_empty() && r.skip == 0)
+        {
             self.second_layer();
         }
         self.recording = None;

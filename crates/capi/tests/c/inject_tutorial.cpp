@@ -23,7 +23,7 @@
 // call.
 //
 // Usage: inject_tutorial OUT_FILE [--egl] [--tutorial-options] [--two-layers]
-//                       [--resize | --recreate]
+//                       [--resize | --recreate] [--pre-pass]
 //   --egl               the context through EGL (GLFW_EGL_CONTEXT_API)
 //   --tutorial-options  (in-source build) the options
 //                       crates/inject/profiles/tutorial.toml declares,
@@ -34,6 +34,10 @@
 //                       depth made anew at RESIZED_WIDTH x RESIZED_HEIGHT and
 //                       attached to it, the viewport with them (the in-source
 //                       build then calls dmsaa_refresh)
+//   --pre-pass          a pass between the G-buffer and the lighting (where
+//                       SSAO would be), into a framebuffer of its own that
+//                       the lighting does not read: the lighting is the
+//                       second pass after the resolve
 //   --recreate          before the second frame, the G-buffer deleted and
 //                       made again (the in-source build destroys its
 //                       retrofit and makes a new one)
@@ -51,6 +55,17 @@ static const int HEIGHT = 120;
 static const int FRAMES = 3;
 static const int RESIZED_WIDTH = 128;
 static const int RESIZED_HEIGHT = 96;
+
+// The pre-pass: a quad reading gPosition into a texture of its own.
+static const char *prePassFs = R"(
+out vec4 FragColor;
+in vec2 TexCoords;
+uniform sampler2D gPosition;
+void main()
+{
+    FragColor = vec4(fract(texture(gPosition, TexCoords).rgb), 1.0);
+}
+)";
 
 // A resize as a program handles one: new textures and depth of the new
 // size, attached to the same G-buffer.
@@ -97,10 +112,10 @@ static bool ok(DmsaaStatus status, const char *call)
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options] [--two-layers] [--resize | --recreate]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options] [--two-layers] [--resize | --recreate] [--pre-pass]\n", argv[0]);
         return 2;
     }
-    bool egl = false, tutorialOptions = false, twoLayers = false, resize = false, recreate = false;
+    bool egl = false, tutorialOptions = false, twoLayers = false, resize = false, recreate = false, prePass = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -112,6 +127,8 @@ int main(int argc, char **argv)
             resize = true;
         else if (std::strcmp(argv[i], "--recreate") == 0)
             recreate = true;
+        else if (std::strcmp(argv[i], "--pre-pass") == 0)
+            prePass = true;
         else {
             std::fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;
@@ -192,6 +209,14 @@ int main(int argc, char **argv)
     (void)twoLayers;
 #endif
 
+    Shader prePassShader(quadVs, prePassFs);
+    GLuint prePassFbo = 0, prePassColor = 0;
+    glGenFramebuffers(1, &prePassFbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, prePassFbo);
+    prePassColor = makeTexture(WIDTH, HEIGHT, GL_RGBA8, GL_UNSIGNED_BYTE);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, prePassColor, 0);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+
     std::vector<unsigned char> pixels(static_cast<size_t>(WIDTH) * HEIGHT * 4);
     glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
     for (int frame = 0; frame < FRAMES; frame++) {
@@ -226,6 +251,16 @@ int main(int argc, char **argv)
 #ifdef DMSAA_IN_SOURCE
         ok(dmsaa_resolve(msaa, e.projection.m.data(), e.view.m.data()), "dmsaa_resolve");
 #endif
+
+        if (prePass) {
+            glBindFramebuffer(GL_FRAMEBUFFER, prePassFbo);
+            glClear(GL_COLOR_BUFFER_BIT);
+            prePassShader.use();
+            prePassShader.setInt("gPosition", 0);
+            glActiveTexture(GL_TEXTURE0);
+            glBindTexture(GL_TEXTURE_2D, e.gPosition);
+            renderQuad();
+        }
 
         // 2. lighting pass, 2.5 the depth copy, 3. the light cubes
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
@@ -264,6 +299,9 @@ int main(int argc, char **argv)
 #ifdef DMSAA_IN_SOURCE
     dmsaa_destroy(msaa);
 #endif
+    glDeleteFramebuffers(1, &prePassFbo);
+    glDeleteTextures(1, &prePassColor);
+    glDeleteProgram(prePassShader.ID);
     engineFree(e);
     checkGlErrors("the end");
 
