@@ -574,3 +574,155 @@ fn a_forward_bloom_program_is_left_untouched_without_a_profile() {
         "the bloom program's frame under inject differs from its own"
     );
 }
+
+/// A library error (here `dmsaa_retrofit_new` refusing a profile whose rule
+/// names an attachment the G-buffer lacks) is said once, turns the
+/// retrofit off, and the program goes on as it is: its own frame, exit 0.
+#[test]
+fn a_library_error_leaves_the_program_as_it_is() {
+    if !can_run_glfw() {
+        return;
+    }
+    let Some(xvfb) = common::xvfb::start_xvfb() else {
+        return;
+    };
+    let build = Path::new(env!("CARGO_TARGET_TMPDIR")).join("inject-error-build");
+    let _ = std::fs::remove_dir_all(&build);
+    std::fs::create_dir_all(&build).expect("making the build folder");
+    let src = build.join("src");
+    std::fs::create_dir_all(&src).expect("making the source folder");
+    for f in ["inject_tutorial.cpp", "tutorial_program.hpp"] {
+        std::fs::copy(capi::sources().join(f), src.join(f)).expect("copying the C++ sources");
+    }
+    let plain = build.join("tutorial");
+    capi::run(
+        cxx()
+            .arg(src.join("inject_tutorial.cpp"))
+            .arg("-o")
+            .arg(&plain)
+            .arg("-lglfw"),
+        "compiling inject_tutorial.cpp",
+    );
+    let own = own_frame(&plain, &build, "own", &[], &xvfb.display());
+    let profile = build.join("missing-attachment.toml");
+    std::fs::write(&profile, "[[attachment]]\nindex = 5\nrule = \"select\"\n")
+        .expect("writing the profile");
+    let injected = build.join("injected.rgba");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--check", "--library"])
+            .arg(capi::built("libdeferred_msaa_inject", "so"))
+            .arg("--profile")
+            .arg(&profile)
+            .arg("--")
+            .arg(&plain)
+            .arg(&injected)
+            .env("DISPLAY", xvfb.display()),
+        "deferred-msaa inject with a profile the library refuses",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    eprint!("{stderr}");
+    let failed: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains("dmsaa_retrofit_new failed"))
+        .collect();
+    assert_eq!(failed.len(), 1, "not said exactly once:\n{stderr}");
+    assert!(
+        failed[0].contains("the retrofit is off for the rest of the run"),
+        "{}",
+        failed[0]
+    );
+    assert!(
+        stderr.contains("0 changed, 0 GL errors left by the library"),
+        "{stderr}"
+    );
+    assert!(
+        frame(&injected) == own,
+        "after the library's error the program's frame is not its own"
+    );
+}
+
+/// Bad input to `inject` is a one-line error and exit status 1 before any
+/// program runs: a profile that does not parse or has a bad value, a
+/// missing profile, library or program.
+#[test]
+fn inject_refuses_bad_input_in_one_line() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("inject-refusals");
+    std::fs::create_dir_all(&dir).expect("making the folder");
+    let library = capi::built("libdeferred_msaa_inject", "so");
+    let bad_value = dir.join("bad-value.toml");
+    std::fs::write(&bad_value, "[retrofit]\nlayers = 3\n").expect("writing");
+    let bad_key = dir.join("bad-key.toml");
+    std::fs::write(&bad_key, "[retrofit]\nsampels = 4\n").expect("writing");
+    let marker = dir.join("ran");
+    let _ = std::fs::remove_file(&marker);
+    let touch = ["--", "touch"];
+    let cases: Vec<(Vec<std::ffi::OsString>, &str)> = vec![
+        (
+            vec!["--profile".into(), bad_value.clone().into()],
+            "layers = 3: 1 or 2",
+        ),
+        (
+            vec!["--profile".into(), bad_key.clone().into()],
+            "is not valid",
+        ),
+        (
+            vec!["--profile".into(), dir.join("none.toml").into()],
+            "cannot read the profile",
+        ),
+    ];
+    for (args, needle) in cases {
+        let out = cli()
+            .arg("inject")
+            .arg("--library")
+            .arg(&library)
+            .args(&args)
+            .args(touch)
+            .arg(&marker)
+            .output()
+            .expect("running deferred-msaa");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(
+            stderr.lines().count(),
+            1,
+            "{args:?}: not one line: {stderr}"
+        );
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+        assert!(!marker.exists(), "{args:?}: the program ran");
+    }
+    for (args, needle) in [
+        (
+            vec![
+                "--library".to_string(),
+                dir.join("none.so").display().to_string(),
+            ],
+            "the inject library",
+        ),
+        (
+            vec![
+                "--library".to_string(),
+                library.display().to_string(),
+                "--".into(),
+                dir.join("no-program").display().to_string(),
+            ],
+            "cannot run",
+        ),
+    ] {
+        let mut command = cli();
+        command.arg("inject").args(&args);
+        if !args.iter().any(|a| a == "--") {
+            command.args(touch).arg(&marker);
+        }
+        let out = command.output().expect("running deferred-msaa");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(
+            stderr.lines().count(),
+            1,
+            "{args:?}: not one line: {stderr}"
+        );
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+    }
+    assert!(!marker.exists(), "a refused command ran its program");
+}
