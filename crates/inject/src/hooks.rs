@@ -322,5 +322,7 @@ watched! {
     glDrawElementsBaseVertex(mode: u32, count: i32, kind: u32, indices: *const c_void, base: i32);
     glDrawRangeElements(mode: u32, start: u32, end: u32, count: i32, kind: u32, indices: *const c_void);
     glXSwapBuffers(display: *mut c_void, drawable: c_ulong);
+    glXDestroyContext(display: *mut c_void, context: *mut c_void);
+    eglDestroyContext(display: *mut c_void, context: *mut c_void) -> u32;
     eglSwapBuffers(display: *mut c_void, surface: *mut c_void) -> u32;
 }

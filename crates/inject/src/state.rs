@@ -876,12 +876,32 @@ fn real_bind(target: u32, name: u32) {
 
 static CONTEXTS: Mutex<Option<HashMap<usize, Context>>> = Mutex::new(None);
 
+thread_local! {
+    /// Whether this thread is inside [`with_context`] already (a driver
+    /// calling an exported GL symbol of this library's while it works).
+    static INSIDE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Clears [`INSIDE`] on every way out.
+struct Inside;
+
+impl Drop for Inside {
+    fn drop(&mut self) {
+        INSIDE.with(|i| i.set(false));
+    }
+}
+
 /// `f` on the current context's state, or `None` (the call passes through
-/// untouched) where there is no current context, another thread holds the
-/// state, or a panic turned the library off.
+/// untouched) where there is no current context, the call comes from inside
+/// the library's own work on this thread, or the state is poisoned. Another
+/// thread's call waits for the state (each context's state stays whole).
 fn with_context<R>(f: impl FnOnce(&mut Context) -> R) -> Option<R> {
+    if INSIDE.with(|i| i.replace(true)) {
+        return None;
+    }
+    let _inside = Inside;
     let (api, id) = hooks::current_context()?;
-    let mut guard = CONTEXTS.try_lock().ok()?;
+    let mut guard = CONTEXTS.lock().ok()?;
     let context = guard
         .get_or_insert_with(HashMap::new)
         .entry(id)
@@ -1250,6 +1270,38 @@ pub(crate) mod handlers {
     ) {
         with_context(Context::end_frame);
         unsafe { real(display, drawable) }
+    }
+
+    /// A destroyed context's state is forgotten: its GL objects went with
+    /// it, and the retrofit's handle is left unfreed (`dmsaa_destroy` would
+    /// call GL without the context), a small allocation per context.
+    fn forget_context(context: *mut c_void) {
+        if INSIDE.with(|i| i.get()) {
+            return;
+        }
+        if let Ok(mut guard) = CONTEXTS.lock()
+            && let Some(map) = guard.as_mut()
+        {
+            map.remove(&(context as usize));
+        }
+    }
+
+    pub(crate) fn glXDestroyContext(
+        real: real_type::glXDestroyContext,
+        display: *mut c_void,
+        context: *mut c_void,
+    ) {
+        forget_context(context);
+        unsafe { real(display, context) }
+    }
+
+    pub(crate) fn eglDestroyContext(
+        real: real_type::eglDestroyContext,
+        display: *mut c_void,
+        context: *mut c_void,
+    ) -> u32 {
+        forget_context(context);
+        unsafe { real(display, context) }
     }
 
     pub(crate) fn eglSwapBuffers(
