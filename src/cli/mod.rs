@@ -4,6 +4,7 @@
 mod bench;
 pub mod first_run;
 mod info;
+mod inject;
 mod render;
 
 use crate::context::Backend;
@@ -44,6 +45,8 @@ pub enum Command {
     Dump(render::DumpCmd),
     /// Measure error against run time for every method; write a report with plots.
     Bench(bench::BenchCmd),
+    /// Run an unmodified deferred GL program with MSAA injected (docs/inject.md).
+    Inject(inject::InjectArgs),
 }
 
 /// Run the CLI; returns the process exit code. Errors print as one line on stderr.
@@ -67,6 +70,16 @@ pub fn main() -> i32 {
         Err(Printed::Help) => return 0,
         Err(Printed::UsageError) => return 2,
     };
+    if let Some(Command::Inject(args)) = &cli.command {
+        // The program's own exit status is the command's.
+        return match inject::run(args) {
+            Ok(code) => code,
+            Err(e) => {
+                eprintln!("error: {}", one_line(&e));
+                1
+            }
+        };
+    }
     match std::panic::catch_unwind(|| run(cli)) {
         Ok(Ok(())) => 0,
         Ok(Err(e)) => {
@@ -124,6 +137,7 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Render(cmd)) => render::run_render(&cmd),
         Some(Command::Dump(cmd)) => render::run_dump(&cmd),
         Some(Command::Bench(cmd)) => bench::run(&cmd),
+        Some(Command::Inject(args)) => inject::run(&args).map(|_| ()),
         // The first run: what the crate does, shown on the default scene.
         None => first_run::run(Backend::Egl, std::path::Path::new(first_run::FIRST_RUN_DIR)),
     }

@@ -107,7 +107,16 @@ pub fn start_xvfb() -> Option<Xvfb> {
             if socket.exists() {
                 // The socket appears just before the server accepts clients.
                 std::thread::sleep(Duration::from_millis(200));
-                return Some(server);
+                // Tests of one binary start from the same display number:
+                // the socket may be another test's server, started a moment
+                // before, while this one is still losing the race for the
+                // display. The lock file names the winner.
+                let lock = format!("/tmp/.X{n}-lock");
+                let winner = std::fs::read_to_string(&lock).unwrap_or_default();
+                if winner.trim() == server.child.id().to_string() {
+                    return Some(server);
+                }
+                break;
             }
             std::thread::sleep(Duration::from_millis(50));
         }

@@ -32,7 +32,7 @@ use std::process::{Command, Output};
 
 /// What the static library needs beside it (`rustc --print
 /// native-static-libs`, as the pkg-config file's `Libs.private` says).
-const NATIVE_LIBS: &[&str] = &[
+pub(crate) const NATIVE_LIBS: &[&str] = &[
     "-lgcc_s",
     "-lutil",
     "-lrt",
@@ -42,17 +42,23 @@ const NATIVE_LIBS: &[&str] = &[
     "-lc",
 ];
 
-fn root() -> &'static Path {
+pub(crate) fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn sources() -> PathBuf {
+pub(crate) fn sources() -> PathBuf {
     root().join("crates/capi/tests/c")
 }
 
-/// The library cargo built for this binary, newest first among the
-/// builds in its folder (`target/<profile>/deps`), as `kind` (`a`, `so`).
+/// The C library cargo built for this binary, as `kind` (`a`, `so`).
 fn built_library(kind: &str) -> PathBuf {
+    built("libdeferred_msaa_capi", kind)
+}
+
+/// A library cargo built for this binary (the lab's dev-dependencies'
+/// `cdylib`s and `staticlib`s), newest first among the builds in its folder
+/// (`target/<profile>/deps`) whose names start with `prefix`, as `kind`.
+pub(crate) fn built(prefix: &str, kind: &str) -> PathBuf {
     let exe = std::env::current_exe().expect("the test binary's path");
     let deps = exe.parent().expect("the test binary's folder");
     let mut found: Vec<(std::time::SystemTime, PathBuf)> = std::fs::read_dir(deps)
@@ -61,7 +67,7 @@ fn built_library(kind: &str) -> PathBuf {
         .map(|e| e.path())
         .filter(|p| {
             let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
-            name.starts_with("libdeferred_msaa_capi") && name.ends_with(&format!(".{kind}"))
+            name.starts_with(prefix) && name.ends_with(&format!(".{kind}"))
         })
         .filter_map(|p| Some((p.metadata().ok()?.modified().ok()?, p)))
         .collect();
@@ -69,10 +75,10 @@ fn built_library(kind: &str) -> PathBuf {
     found
         .pop()
         .map(|(_, p)| p)
-        .unwrap_or_else(|| panic!("no libdeferred_msaa_capi*.{kind} in {}", deps.display()))
+        .unwrap_or_else(|| panic!("no {prefix}*.{kind} in {}", deps.display()))
 }
 
-fn run(command: &mut Command, what: &str) -> Output {
+pub(crate) fn run(command: &mut Command, what: &str) -> Output {
     let out = command.output().unwrap_or_else(|e| panic!("{what}: {e}"));
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -100,7 +106,7 @@ fn image(dir: &Path, name: &str, width: u32, height: u32) -> image::RgbaImage {
 
 /// A fresh build folder `name` with the library installed by
 /// `scripts/capi-install` into its `prefix`.
-fn install(name: &str) -> (PathBuf, PathBuf) {
+pub(crate) fn install(name: &str) -> (PathBuf, PathBuf) {
     let build = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
     let _ = std::fs::remove_dir_all(&build);
     let staged = build.join("built");
@@ -142,6 +148,7 @@ fn c_hosts_build_against_the_installed_library_and_run() {
         "bad_calls.c",
         "minimal_host.c",
         "egl_gl.h",
+        "tutorial_host_state.h",
     ] {
         std::fs::copy(sources().join(f), src.join(f)).expect("copying a C source");
     }
@@ -309,11 +316,9 @@ fn the_glfw_tutorial_program_retrofitted_from_the_docs() {
     let (build, prefix) = install("capi-glfw-build");
     let src = build.join("src");
     std::fs::create_dir_all(&src).expect("making the source folder");
-    std::fs::copy(
-        sources().join("glfw_tutorial_host.cpp"),
-        src.join("glfw_tutorial_host.cpp"),
-    )
-    .expect("copying the C++ source");
+    for f in ["glfw_tutorial_host.cpp", "tutorial_program.hpp"] {
+        std::fs::copy(sources().join(f), src.join(f)).expect("copying the C++ sources");
+    }
     let exe = build.join("glfw_tutorial_host");
     run(
         Command::new("c++")

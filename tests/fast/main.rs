@@ -20,6 +20,7 @@ mod gltf_sources;
 mod goldens;
 mod host_equivalence;
 mod host_habits;
+mod inject;
 mod lit_target;
 mod misuse;
 mod plan;

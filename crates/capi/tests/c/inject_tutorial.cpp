@@ -1,0 +1,327 @@
+// The LearnOpenGL "Deferred Shading" chapter's program as its readers
+// write it (tutorial_program.hpp), run as a render loop: a GLFW window,
+// each frame the geometry pass into the G-buffer, the lighting quad into
+// framebuffer 0, the G-buffer's depth blitted to it, the light cubes drawn
+// forward, and the swap. Built two ways from this one source:
+//
+//   without DMSAA_IN_SOURCE  no line of the retrofit: what
+//                            `deferred-msaa inject` is run on;
+//   with -DDMSAA_IN_SOURCE   the retrofit added in the source as
+//                            docs/capi.md says (dmsaa_framebuffer for the
+//                            geometry pass, dmsaa_resolve after it), made
+//                            before the first frame; with two layers, the
+//                            lighting quad drawn again into
+//                            dmsaa_begin_second_layer_own_target's
+//                            framebuffer, then dmsaa_finish_second_layer.
+//
+// Built with -DTUTORIAL_SDL, the window and the loader are SDL2's; with
+// -DTUTORIAL_LINK_GL (and -lGL), GL is called through libGL's symbols.
+//
+// It draws FRAMES frames and writes the last one, read back from the back
+// buffer before its swap, as raw RGBA8 (rows bottom-up) into OUT_FILE.
+// Exit status non-zero, with a line saying why, on a GL error or a failed
+// call.
+//
+// Usage: inject_tutorial OUT_FILE [--egl] [--tutorial-options] [--two-layers]
+//                       [--resize | --recreate] [--pre-pass]
+//   --egl               the context through EGL (GLFW_EGL_CONTEXT_API)
+//   --tutorial-options  (in-source build) the options
+//                       crates/inject/profiles/tutorial.toml declares,
+//                       rather than dmsaa_options_default()
+//   --two-layers        (in-source build) two layers
+//   --resize            before the last frame (the injected program is
+//                       retrofitted by then), the G-buffer's textures and
+//                       depth made anew at RESIZED_WIDTH x RESIZED_HEIGHT and
+//                       attached to it, the viewport with them (the in-source
+//                       build then calls dmsaa_refresh)
+//   --pre-pass          a pass between the G-buffer and the lighting (where
+//                       SSAO would be), into a framebuffer of its own that
+//                       the lighting does not read: the lighting is the
+//                       second pass after the resolve
+//   --recreate          before the second frame, the G-buffer deleted and
+//                       made again (the in-source build destroys its
+//                       retrofit and makes a new one)
+#include "tutorial_program.hpp"
+
+#ifdef DMSAA_IN_SOURCE
+#include "deferred_msaa.h"
+#endif
+
+static const int WIDTH = 160;
+static const int HEIGHT = 120;
+// The injected program is retrofitted from its second frame on (the
+// G-buffer is known once the first frame's lighting has read it); the
+// last frame is the third in both builds.
+static const int FRAMES = 3;
+static const int RESIZED_WIDTH = 128;
+static const int RESIZED_HEIGHT = 96;
+
+// The pre-pass: a quad reading gPosition into a texture of its own.
+static const char *prePassFs = R"(
+out vec4 FragColor;
+in vec2 TexCoords;
+uniform sampler2D gPosition;
+void main()
+{
+    FragColor = vec4(fract(texture(gPosition, TexCoords).rgb), 1.0);
+}
+)";
+
+// A resize as a program handles one: new textures and depth of the new
+// size, attached to the same G-buffer.
+static void resizeGBuffer(Engine &e, int width, int height)
+{
+    GLuint old[3] = {e.gPosition, e.gNormal, e.gAlbedoSpec};
+    glDeleteTextures(3, old);
+    glDeleteRenderbuffers(1, &e.rboDepth);
+    e.width = width;
+    e.height = height;
+    glBindFramebuffer(GL_FRAMEBUFFER, e.gBuffer);
+    e.gPosition = makeTexture(width, height, GL_RGBA16F, GL_FLOAT);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, e.gPosition, 0);
+    e.gNormal = makeTexture(width, height, GL_RGBA16F, GL_FLOAT);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, e.gNormal, 0);
+    e.gAlbedoSpec = makeTexture(width, height, GL_RGBA, GL_UNSIGNED_BYTE);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, e.gAlbedoSpec, 0);
+    glGenRenderbuffers(1, &e.rboDepth);
+    glBindRenderbuffer(GL_RENDERBUFFER, e.rboDepth);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT, width, height);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, e.rboDepth);
+    CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "the resized G-buffer is incomplete");
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, width, height);
+}
+
+#ifdef DMSAA_IN_SOURCE
+static const void *loadForLibrary(const char *name, void *)
+{
+    return reinterpret_cast<const void *>(TUTORIAL_GET_PROC_ADDRESS(name));
+}
+
+static bool ok(DmsaaStatus status, const char *call)
+{
+    if (status != DMSAA_STATUS_OK) {
+        std::fprintf(stderr, "%s: status %d: %s\n", call, static_cast<int>(status), dmsaa_last_error());
+        failures++;
+        return false;
+    }
+    return true;
+}
+#endif
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options] [--two-layers] [--resize | --recreate] [--pre-pass]\n", argv[0]);
+        return 2;
+    }
+    bool egl = false, tutorialOptions = false, twoLayers = false, resize = false, recreate = false, prePass = false;
+    for (int i = 2; i < argc; i++) {
+        if (std::strcmp(argv[i], "--egl") == 0)
+            egl = true;
+        else if (std::strcmp(argv[i], "--tutorial-options") == 0)
+            tutorialOptions = true;
+        else if (std::strcmp(argv[i], "--two-layers") == 0)
+            twoLayers = true;
+        else if (std::strcmp(argv[i], "--resize") == 0)
+            resize = true;
+        else if (std::strcmp(argv[i], "--recreate") == 0)
+            recreate = true;
+        else if (std::strcmp(argv[i], "--pre-pass") == 0)
+            prePass = true;
+        else {
+            std::fprintf(stderr, "unknown argument %s\n", argv[i]);
+            return 2;
+        }
+    }
+#ifdef TUTORIAL_SDL
+    SDL_SetHint(SDL_HINT_VIDEO_X11_FORCE_EGL, egl ? "1" : "0");
+    if (SDL_Init(SDL_INIT_VIDEO) != 0) {
+        std::fprintf(stderr, "SDL_Init: %s\n", SDL_GetError());
+        return 3;
+    }
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, 3);
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, 2);
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_PROFILE_MASK, SDL_GL_CONTEXT_PROFILE_CORE);
+    SDL_GL_SetAttribute(SDL_GL_CONTEXT_FLAGS, SDL_GL_CONTEXT_FORWARD_COMPATIBLE_FLAG);
+    // GLFW's defaults: the depth blit needs formats that match.
+    SDL_GL_SetAttribute(SDL_GL_DEPTH_SIZE, 24);
+    SDL_GL_SetAttribute(SDL_GL_STENCIL_SIZE, 8);
+    SDL_Window *window = SDL_CreateWindow("LearnOpenGL", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED, WIDTH,
+                                          HEIGHT, SDL_WINDOW_OPENGL);
+    SDL_GLContext context = window ? SDL_GL_CreateContext(window) : nullptr;
+    if (context == nullptr) {
+        std::fprintf(stderr, "Failed to create an SDL window with a GL context: %s\n", SDL_GetError());
+        SDL_Quit();
+        return 3;
+    }
+    SDL_GL_MakeCurrent(window, context);
+#else
+    glfwInit();
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 2);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GL_TRUE);
+    glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
+    if (egl)
+        glfwWindowHint(GLFW_CONTEXT_CREATION_API, GLFW_EGL_CONTEXT_API);
+    GLFWwindow *window = glfwCreateWindow(WIDTH, HEIGHT, "LearnOpenGL", NULL, NULL);
+    if (window == NULL) {
+        const char *why = nullptr;
+        glfwGetError(&why);
+        std::fprintf(stderr, "Failed to create GLFW window: %s\n", why ? why : "?");
+        glfwTerminate();
+        return 3;
+    }
+    glfwMakeContextCurrent(window);
+#endif
+    if (!loadGL()) {
+        std::fprintf(stderr, "Failed to initialize GLAD\n");
+        return 3;
+    }
+    GLint major = 0, minor = 0;
+    glGetIntegerv(GL_MAJOR_VERSION, &major);
+    glGetIntegerv(GL_MINOR_VERSION, &minor);
+    if (major * 10 + minor < 33)
+        glslVersion = "#version 150 core\n#extension GL_ARB_explicit_attrib_location : require\n";
+    std::printf("GL %s through %s\n", reinterpret_cast<const char *>(glGetString(GL_VERSION)), egl ? "EGL" : "GLX");
+    glViewport(0, 0, WIDTH, HEIGHT);
+
+    Engine e;
+    engineInit(e, WIDTH, HEIGHT, false);
+#ifdef DMSAA_IN_SOURCE
+    DmsaaOptions options = dmsaa_options_default();
+    if (tutorialOptions) {
+        // What crates/inject/profiles/tutorial.toml declares.
+        options.position_attachment = 0;
+        options.world_space_position = 1;
+        options.normal_attachment = 1;
+        options.normal_encoding = DMSAA_NORMAL_XYZ;
+        options.rules[1] = DMSAA_RULE_SELECT;
+        options.layer_mix = DMSAA_LAYER_MIX_SRGB_ENCODED;
+    }
+    options.layers = twoLayers ? 2 : 1;
+    DmsaaRetrofit *msaa = nullptr;
+    if (!ok(dmsaa_retrofit_new(loadForLibrary, nullptr, e.gBuffer, &options, &msaa), "dmsaa_retrofit_new"))
+        return 1;
+#else
+    (void)tutorialOptions;
+    (void)twoLayers;
+#endif
+
+    Shader prePassShader(quadVs, prePassFs);
+    GLuint prePassFbo = 0, prePassColor = 0;
+    glGenFramebuffers(1, &prePassFbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, prePassFbo);
+    prePassColor = makeTexture(WIDTH, HEIGHT, GL_RGBA8, GL_UNSIGNED_BYTE);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, prePassColor, 0);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+
+    std::vector<unsigned char> pixels(static_cast<size_t>(WIDTH) * HEIGHT * 4);
+    glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+    for (int frame = 0; frame < FRAMES; frame++) {
+        if (frame == FRAMES - 1 && resize) {
+            resizeGBuffer(e, RESIZED_WIDTH, RESIZED_HEIGHT);
+#ifdef DMSAA_IN_SOURCE
+            ok(dmsaa_refresh(msaa), "dmsaa_refresh");
+#endif
+        }
+        if (frame == 1 && recreate) {
+#ifdef DMSAA_IN_SOURCE
+            dmsaa_destroy(msaa);
+            msaa = nullptr;
+#endif
+            engineFree(e);
+            e = Engine();
+            engineInit(e, WIDTH, HEIGHT, false);
+#ifdef DMSAA_IN_SOURCE
+            if (!ok(dmsaa_retrofit_new(loadForLibrary, nullptr, e.gBuffer, &options, &msaa), "dmsaa_retrofit_new"))
+                return 1;
+#endif
+        }
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+
+        // 1. geometry pass
+        GLuint geometryTarget = e.gBuffer;
+#ifdef DMSAA_IN_SOURCE
+        ok(dmsaa_framebuffer(msaa, &geometryTarget), "dmsaa_framebuffer");
+#endif
+        geometryPass(e, geometryTarget);
+#ifdef DMSAA_IN_SOURCE
+        ok(dmsaa_resolve(msaa, e.projection.m.data(), e.view.m.data()), "dmsaa_resolve");
+#endif
+
+        if (prePass) {
+            glBindFramebuffer(GL_FRAMEBUFFER, prePassFbo);
+            glClear(GL_COLOR_BUFFER_BIT);
+            prePassShader.use();
+            prePassShader.setInt("gPosition", 0);
+            glActiveTexture(GL_TEXTURE0);
+            glBindTexture(GL_TEXTURE_2D, e.gPosition);
+            renderQuad();
+        }
+
+        // 2. lighting pass, 2.5 the depth copy, 3. the light cubes
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        lightingQuad(e);
+#ifdef DMSAA_IN_SOURCE
+        GLuint secondTarget = 0;
+        if (twoLayers && ok(dmsaa_begin_second_layer_own_target(msaa, 0, &secondTarget),
+                            "dmsaa_begin_second_layer_own_target")) {
+            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, secondTarget);
+            lightingQuad(e);
+            ok(dmsaa_finish_second_layer(msaa, 0), "dmsaa_finish_second_layer");
+            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+        }
+#endif
+        blitDepth(e, 0);
+        lightCubes(e);
+        checkGlErrors("a frame");
+
+        if (frame == FRAMES - 1) {
+            glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+            glReadBuffer(GL_BACK);
+            glPixelStorei(GL_PACK_ALIGNMENT, 1);
+            glReadPixels(0, 0, WIDTH, HEIGHT, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+            glPixelStorei(GL_PACK_ALIGNMENT, 4);
+        }
+#ifdef TUTORIAL_SDL
+        SDL_GL_SwapWindow(window);
+        for (SDL_Event event; SDL_PollEvent(&event);) {
+        }
+#else
+        glfwSwapBuffers(window);
+        glfwPollEvents();
+#endif
+    }
+#ifdef DMSAA_IN_SOURCE
+    dmsaa_destroy(msaa);
+#endif
+    glDeleteFramebuffers(1, &prePassFbo);
+    glDeleteTextures(1, &prePassColor);
+    glDeleteProgram(prePassShader.ID);
+    engineFree(e);
+    checkGlErrors("the end");
+
+    FILE *f = std::fopen(argv[1], "wb");
+    CHECK(f != nullptr, "cannot write %s", argv[1]);
+    if (f) {
+        std::fwrite(pixels.data(), 1, pixels.size(), f);
+        std::fclose(f);
+    }
+#ifdef TUTORIAL_SDL
+    SDL_GL_DeleteContext(context);
+    SDL_DestroyWindow(window);
+    SDL_Quit();
+#else
+    glfwTerminate();
+#endif
+    if (failures) {
+        std::fprintf(stderr, "%d check(s) failed\n", failures);
+        return 1;
+    }
+    std::printf("ok\n");
+    return 0;
+}
