@@ -34,5 +34,6 @@ mod smaa;
 mod sparse;
 mod stability;
 mod standalone;
+mod structure;
 mod taa;
 mod zoo;
