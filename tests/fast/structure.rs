@@ -43,10 +43,8 @@ const NOT_YET_SPLIT: &[&str] = &[
     "crates/capi/tests/c/tutorial_host.c",
     "crates/core/src/resolve/cpu.rs",
     "crates/core/src/resolve/mod.rs",
-    "crates/testkit/src/random_host.rs",
     "benches/gpu_bench.rs",
     "benches/resolve_vs_blit.rs",
-    "examples/viewer.rs",
     "src/bench/mod.rs",
     "src/scene/builtin.rs",
     "tests/common/property.rs",
@@ -73,7 +71,11 @@ const KNOWN_CYCLES: &[&[&str]] = &[
         "src/scene/gltf_loader/walk.rs",
         "src/scene/mod.rs",
     ],
-    &["src/bench/crops.rs", "src/bench/mod.rs", "src/bench/motion.rs"],
+    &[
+        "src/bench/crops.rs",
+        "src/bench/mod.rs",
+        "src/bench/motion.rs",
+    ],
     &[
         "src/cli/bench.rs",
         "src/cli/info.rs",
