@@ -9,7 +9,7 @@
 //!    of depth is read back, the GL resolve runs through `MsaaRetrofit`
 //!    (fast path on and off), and every resolved value is compared with
 //!    `resolve::cpu::CpuResolve` on the same samples, within the tolerances
-//!    of `tests/fast/retrofit.rs` (FP16 storage `1e-5 + 1.2e-3·|x|`, FP32
+//!    of `tests/fast/retrofit/` (FP16 storage `1e-5 + 1.2e-3·|x|`, FP32
 //!    `1e-4·(1 + |x|)`, depth `1e-6`; 8-bit attachments one step, 1/255).
 //!    A count the driver refuses or rounds to another is "not offered".
 //! 2. Time. At 1920x1080 (`--quick`: 640x360), for each offered count (4x
@@ -54,7 +54,7 @@ const HEADLINE_SAMPLES: u32 = 4;
 const CHECK_WIDTH: u32 = 64;
 const CHECK_HEIGHT: u32 = 48;
 const CHECK_TRIANGLES: usize = 40;
-/// As `tests/fast/retrofit.rs` asks: the slow path must really run.
+/// As `tests/fast/retrofit/` asks: the slow path must really run.
 const MIN_COMPLEX_PIXELS: usize = 30;
 const TIMING_TRIANGLES: usize = 600;
 
