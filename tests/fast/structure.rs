@@ -43,8 +43,6 @@ const NOT_YET_SPLIT: &[&str] = &[
     "crates/capi/tests/c/tutorial_host.c",
     "crates/core/src/resolve/cpu.rs",
     "crates/core/src/resolve/mod.rs",
-    "benches/gpu_bench.rs",
-    "benches/resolve_vs_blit.rs",
     "src/bench/mod.rs",
     "src/scene/builtin.rs",
     "tests/common/property.rs",
