@@ -70,155 +70,62 @@
 //! depth function and the clear depth. Before allocating, the layout is
 //! checked against the scene's depth range ([`Renderer::warnings`]).
 
-mod background;
-mod background_copy;
-mod complex_mask;
 mod depth;
 pub mod frame_pass;
-mod fxaa;
-pub(crate) mod gbaa;
-mod gbaa_geometry;
-mod geometry;
-mod geometry_coverage;
-mod lighting;
-mod lighting_per_sample;
 mod mesh;
 mod options;
 mod pass;
 pub mod plan;
-mod second_layer_mask;
-mod slow_path;
-mod smaa;
-mod smaa_blend;
-mod smaa_edges;
-pub mod smaa_tables;
-mod smaa_weights;
-mod sparse;
-mod taa;
+mod reconfigure;
+mod render;
+mod resources;
 mod targets;
 pub mod technique;
-mod tonemap;
+mod timing;
 
 /// The demo renderer's tonemap curve and its inverse as GLSL, for
 /// [`LayerMix::Curve`](deferred_msaa::LayerMix::Curve): the declaration of
 /// its lit values it makes by default ([`RenderOptions::layer_mix`]).
 pub fn tonemap_curve() -> String {
-    tonemap::layer_mix_curve()
+    pass::tonemap::layer_mix_curve()
 }
-mod transparent;
 
 use crate::frame::{DepthMode as ResolveDepthMode, Frame as ResolveFrame};
 use crate::gbuffer::{GBuffer, GBufferLayout};
-use crate::gl::ColorAttachment;
-use crate::gl::destroy_object;
-use crate::gl::{
-    Attachment, Capabilities, Framebuffer, GlObject, GpuTimer, Handle, Made, Texture2d, TextureRef,
-    TimerKind, VertexArray, check_error, framebuffer_status_name,
-};
+use crate::gl::{Capabilities, ColorAttachment, Made, TextureRef, TimerKind};
 use crate::resolve::SelectionFlag;
-use crate::retrofit::{FirstLayerRestore, MsaaRetrofit, RetrofitOptions};
+use crate::retrofit::MsaaRetrofit;
 use crate::scene::{Background, Camera, Light, Scene};
 use crate::{Error, Result};
-use background::BackgroundPass;
-use background_copy::BackgroundCopyPass;
 pub use depth::DepthMode;
 use depth::{ClipControl, SceneExtent};
-use fxaa::FxaaPass;
-use geometry::{GeometryPass, GeometryTarget};
 use glam::Mat4;
-use glow::HasContext;
-use lighting::{LightingPass, StandIns, light_batches};
-use lighting_per_sample::PerSampleLightingPass;
 use mesh::GpuScene;
 pub use options::{AaMode, RenderOptions};
-use plan::{Pass, Plan, PlanContext, SceneNeeds};
-use smaa::{DepthInput, SmaaPasses, SmaaTargets};
-pub use smaa::{SmaaEdges, SmaaFilter, SmaaOptions, SmaaOutput, SmaaPreset};
-pub use sparse::{
-    DEFAULT_POOL_BLOCKS_PER_PIXEL, MASK_OVERFLOW, MASK_SINGLE, MAX_SPARSE_SAMPLES, SparseMemory,
-    SparseOptions, SparseStats,
-};
+use pass::geometry::GeometryPass;
+use pass::lighting::LightingPass;
+use pass::lighting_per_sample::PerSampleLightingPass;
+use pass::slots::GBufferSlots;
+use plan::{Plan, PlanContext, SceneNeeds};
+use resources::{Frame, Passes};
 use std::ffi::c_void;
-pub use taa::{MAX_TAA_PHASES, TaaOptions};
-use targets::Targets;
-use technique::{
-    ComplexPixelsInput, FrameCamera, FrameParts, GeometryStep, LightingStep, Setup, Techniques,
+pub use technique::smaa::tables as smaa_tables;
+pub use technique::smaa::{SmaaEdges, SmaaFilter, SmaaOptions, SmaaOutput, SmaaPreset};
+use technique::{ComplexPixelsInput, Techniques};
+pub use technique::{
+    DEFAULT_POOL_BLOCKS_PER_PIXEL, MASK_OVERFLOW, MASK_SINGLE, MAX_SPARSE_SAMPLES, MAX_TAA_PHASES,
+    SparseMemory, SparseOptions, SparseStats, TaaOptions,
 };
-use tonemap::TonemapPass;
-use transparent::TransparentPass;
 
 /// The sources of the renderer's model and lighting shaders, for a host (or
 /// a test) that builds the very same programs around its own G-buffer.
 pub mod shaders {
-    pub use super::geometry::{GEOMETRY_FRAG, GEOMETRY_VERT};
-    pub use super::lighting::{AMBIENT, LIGHTING_FRAG, LIGHTS_PER_BATCH, lighting_defines};
-}
-
-/// The colour attachment numbers of the attachments the renderer writes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct GBufferSlots {
-    pub(crate) color: u32,
-    pub(crate) position: u32,
-    pub(crate) normal: u32,
-    /// `None`: the layout has none (the scene-adaptive plan left it out).
-    pub(crate) specular: Option<u32>,
-    /// `None`: the layout has none (the scene-adaptive plan left it out).
-    pub(crate) emissive: Option<u32>,
-}
-
-impl GBufferSlots {
-    fn of(layout: &GBufferLayout) -> Result<Self> {
-        let find = |name: &str| {
-            layout.index_of(name).map(|k| k as u32).ok_or_else(|| {
-                Error::Layout(format!(
-                    "the renderer writes an attachment named `{name}`, which this layout lacks (it has: {})",
-                    layout
-                        .colors
-                        .iter()
-                        .map(|a| a.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ))
-            })
-        };
-        Ok(GBufferSlots {
-            color: find("color")?,
-            position: find("position")?,
-            normal: find("normal")?,
-            specular: layout.index_of("specular").map(|k| k as u32),
-            emissive: layout.index_of("emissive").map(|k| k as u32),
-        })
-    }
-
-    /// The model shader's outputs the layout has, with their attachment numbers.
-    pub(crate) fn outputs(&self) -> Vec<(&'static str, u32)> {
-        let mut outputs = vec![
-            ("o_color", self.color),
-            ("o_position", self.position),
-            ("o_normal", self.normal),
-        ];
-        outputs.extend(self.specular.map(|k| ("o_specular", k)));
-        outputs.extend(self.emissive.map(|k| ("o_emissive", k)));
-        outputs
-    }
-
-    /// The defines the model and lighting shaders are compiled with for
-    /// this attachment set: `GBUFFER_NO_SPECULAR`, `GBUFFER_NO_EMISSIVE`
-    /// (none for the full layout).
-    pub(crate) fn defines(&self) -> Vec<(String, String)> {
-        let mut d = Vec::new();
-        if self.specular.is_none() {
-            d.push(("GBUFFER_NO_SPECULAR".to_string(), "1".to_string()));
-        }
-        if self.emissive.is_none() {
-            d.push(("GBUFFER_NO_EMISSIVE".to_string(), "1".to_string()));
-        }
-        d
-    }
+    pub use super::pass::geometry::{GEOMETRY_FRAG, GEOMETRY_VERT};
+    pub use super::pass::lighting::{AMBIENT, LIGHTING_FRAG, LIGHTS_PER_BATCH, lighting_defines};
 }
 
 /// Where one frame's time went, in milliseconds, measured pass by pass with
-/// [`GpuTimer`] (`total_ms` is the sum).
+/// [`GpuTimer`](crate::gl::GpuTimer) (`total_ms` is the sum).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct FrameTimings {
     /// The whole frame.
@@ -275,193 +182,6 @@ pub struct DecalTarget<'a> {
     /// sub-pixel jitter under [`AaMode::Taa`] (a decal drawn unjittered
     /// there would swim against the jittered geometry under it).
     pub projection: Mat4,
-}
-
-/// Programs, the full-screen vertex array and the timer: built once.
-#[derive(Debug)]
-struct Passes {
-    background: BackgroundPass,
-    background_copy: BackgroundCopyPass,
-    geometry: GeometryPass,
-    lighting: LightingPass,
-    transparent: TransparentPass,
-    tonemap: TonemapPass,
-    fxaa: FxaaPass,
-    /// SMAA's programs and tables, built when SMAA is first asked for.
-    smaa: Option<SmaaPasses>,
-    fullscreen: VertexArray,
-    timer: GpuTimer,
-}
-
-impl GlObject for Passes {
-    fn handles(&self, out: &mut Vec<Handle>) {
-        self.background.handles(out);
-        self.background_copy.handles(out);
-        self.geometry.handles(out);
-        self.lighting.handles(out);
-        self.transparent.handles(out);
-        self.tonemap.handles(out);
-        self.fxaa.handles(out);
-        self.smaa.handles(out);
-        self.fullscreen.handles(out);
-        self.timer.handles(out);
-    }
-}
-
-impl Passes {
-    fn new(gl: &glow::Context, slots: GBufferSlots, smaa: bool) -> Result<Self> {
-        Made::build(gl, |made| {
-            Ok(Passes {
-                background: made.keep(BackgroundPass::new(gl)?),
-                background_copy: made.keep(BackgroundCopyPass::new(gl)?),
-                geometry: made.keep(GeometryPass::new(gl, slots)?),
-                lighting: made.keep(LightingPass::new(gl, slots)?),
-                transparent: made.keep(TransparentPass::new(gl)?),
-                tonemap: made.keep(TonemapPass::new(gl)?),
-                fxaa: made.keep(FxaaPass::new(gl)?),
-                smaa: if smaa {
-                    Some(made.keep(SmaaPasses::new(gl)?))
-                } else {
-                    None
-                },
-                fullscreen: made.keep(VertexArray::new(gl, "renderer full-screen triangle")?),
-                timer: made.keep(GpuTimer::new(gl, false)?),
-            })
-        })
-    }
-
-    fn destroy(self, gl: &glow::Context) {
-        destroy_object(gl, self);
-    }
-}
-
-/// The size- and layout-dependent resources: the host G-buffer, the
-/// retrofit on it, and the other targets.
-#[derive(Debug)]
-struct Frame {
-    gbuffer: GBuffer,
-    retrofit: Option<MsaaRetrofit>,
-    targets: Targets,
-}
-
-impl GlObject for Frame {
-    fn handles(&self, out: &mut Vec<Handle>) {
-        self.gbuffer.handles(out);
-        self.retrofit.handles(out);
-        self.targets.handles(out);
-    }
-}
-
-impl Frame {
-    fn new(
-        gl: &glow::Context,
-        options: &RenderOptions,
-        opt_out_flag: Option<SelectionFlag>,
-    ) -> Result<Self> {
-        Made::build(gl, |made| {
-            let gbuffer = made.keep(GBuffer::new(
-                gl,
-                &options.layout,
-                options.width,
-                options.height,
-            )?);
-            let retrofit = if options.aa.is_multisampled() {
-                Some(made.keep(MsaaRetrofit::new(
-                    gl,
-                    gbuffer.fbo.raw(),
-                    &options.retrofit_options(opt_out_flag),
-                )?))
-            } else {
-                None
-            };
-            let targets = made.keep(Targets::new(
-                gl,
-                &gbuffer.depth,
-                options.fxaa,
-                options.smaa.is_some(),
-            )?);
-            Ok(Frame {
-                gbuffer,
-                retrofit,
-                targets,
-            })
-        })
-    }
-
-    fn destroy(self, gl: &glow::Context) {
-        destroy_object(gl, self);
-    }
-}
-
-fn free_textures(gl: &glow::Context, colors: Vec<Texture2d>, depth: Option<Texture2d>) {
-    for t in colors {
-        t.destroy(gl);
-    }
-    if let Some(t) = depth {
-        t.destroy(gl);
-    }
-}
-
-/// Attach `colors` (colour `k` at `GL_COLOR_ATTACHMENTk`) and `depth` to the
-/// existing framebuffer `fbo`, as an engine does when it re-allocates its
-/// G-buffer on resize, and check completeness.
-fn attach_gbuffer_textures(
-    gl: &glow::Context,
-    fbo: &mut Framebuffer,
-    colors: &[Texture2d],
-    depth: &Texture2d,
-) -> Result<()> {
-    let mut attachments: Vec<(Attachment, TextureRef)> = colors
-        .iter()
-        .enumerate()
-        .map(|(k, t)| (Attachment::Color(k as u32), TextureRef::from(t)))
-        .collect();
-    attachments.push((
-        Attachment::for_depth_format(depth.format),
-        TextureRef::from(depth),
-    ));
-    let status = unsafe {
-        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo.raw()));
-        for (point, texture) in &attachments {
-            gl.framebuffer_texture_2d(
-                glow::FRAMEBUFFER,
-                point.gl_enum(),
-                glow::TEXTURE_2D,
-                Some(texture.raw()),
-                0,
-            );
-        }
-        let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
-        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
-        status
-    };
-    check_error(
-        gl,
-        &format!("re-attaching the textures of framebuffer `{}`", fbo.label),
-    )?;
-    if status != glow::FRAMEBUFFER_COMPLETE {
-        return Err(deferred_msaa::Error::FramebufferIncomplete {
-            label: fbo.label.clone(),
-            status: framebuffer_status_name(status),
-        }
-        .into());
-    }
-    fbo.width = depth.width;
-    fbo.height = depth.height;
-    fbo.attachments = attachments;
-    Ok(())
-}
-
-/// Run `f` between a timer's begin and end; the milliseconds it took.
-pub(crate) fn timed(
-    gl: &glow::Context,
-    timer: &mut GpuTimer,
-    f: impl FnOnce() -> Result<()>,
-) -> Result<f64> {
-    timer.begin(gl);
-    let result = f();
-    let ms = timer.end(gl);
-    result.map(|()| ms)
 }
 
 /// The demo deferred renderer; see the [module documentation](self).
@@ -539,7 +259,7 @@ impl Renderer {
     ) -> Result<Self> {
         requested.validate()?;
         deferred_msaa::gl::load_state_functions(&loader)?;
-        sparse::check_support(gl, &requested.aa)?;
+        technique::sparse_check_support(gl, &requested.aa)?;
         let needs = SceneNeeds::of(scene);
         let plan_context = PlanContext::query(gl, &requested.layout);
         let plan = Plan::for_needs(&needs, &plan_context, requested)?;
@@ -696,266 +416,6 @@ impl Renderer {
             .map_or(1, MsaaRetrofit::samples)
     }
 
-    /// Render one frame (see the [module documentation](self) for the passes).
-    ///
-    /// The clip control the depth mode needs is set for the frame; the
-    /// host's clip control, depth function and clear depth are put back
-    /// afterwards, on error too.
-    pub fn render(&mut self, gl: &glow::Context) -> Result<FrameTimings> {
-        let saved = self.clip.enter(gl, self.depth_mode);
-        let result = self.render_passes(gl);
-        self.clip.leave(gl, saved);
-        result
-    }
-
-    fn render_passes(&mut self, gl: &glow::Context) -> Result<FrameTimings> {
-        let (width, height) = (self.options.width, self.options.height);
-        let aa = self.options.aa;
-        let depth_mode = self.depth_mode;
-        let clear_depth = depth_mode.clear_depth();
-        let view = self.camera.view.as_dmat4();
-        let resolve_frame = self.resolve_frame();
-        let batches = light_batches(&self.lights, &view);
-        let footprint = (self.camera.fov_y / height as f32).tan();
-        let slots = self.passes.geometry.slots();
-        let runs_transparent = self.plan.runs(Pass::Transparent);
-        self.align_first_layer_restore(gl)?;
-        let specular_constant = self
-            .plan
-            .constant_specular
-            .unwrap_or([0.04, 0.04, 0.04, 0.0]);
-        let frame = FrameParts {
-            aa,
-            gbuffer: &self.frame.gbuffer,
-            retrofit: self.frame.retrofit.as_ref(),
-            targets: &self.frame.targets,
-        };
-        let setup = Setup {
-            options: &self.options,
-            slots,
-            colors: self.frame.gbuffer.colors.len() as u32,
-        };
-        let technique = self.techniques.active_mut(&aa);
-        technique.prepare(gl, &setup, Some(frame))?;
-        // Every pass of the frame draws with the projection the technique
-        // gives (`taa` jitters it).
-        let projection = technique.begin_frame(&FrameCamera {
-            view: &view,
-            projection: &depth::projection(&self.camera, width as f32 / height as f32, depth_mode),
-            size: (width, height),
-            zero_to_one: depth_mode.is_reversed(),
-        });
-        let Passes {
-            background,
-            background_copy,
-            geometry,
-            lighting,
-            transparent,
-            tonemap,
-            fxaa,
-            smaa,
-            fullscreen,
-            timer,
-        } = &mut self.passes;
-        let mut t = FrameTimings {
-            total_ms: 0.0,
-            geometry_ms: 0.0,
-            resolve_ms: 0.0,
-            decal_ms: 0.0,
-            lighting_ms: 0.0,
-            second_layer_ms: 0.0,
-            transparent_ms: 0.0,
-            tonemap_ms: 0.0,
-            fxaa_ms: 0.0,
-            post_ms: 0.0,
-            smaa_ms: 0.0,
-            smaa_edges_ms: 0.0,
-            smaa_weights_ms: 0.0,
-            smaa_blend_ms: 0.0,
-            timer: timer.kind(),
-        };
-
-        let gbuffer_target = technique.geometry_target(&frame);
-        let target = GeometryTarget {
-            fbo: gbuffer_target.fbo,
-            width,
-            height,
-        };
-        let step = GeometryStep {
-            target,
-            draw_buffers: &gbuffer_target.draw_buffers,
-            frame,
-            model: geometry,
-            background_copy,
-            fullscreen,
-            slots,
-            scene: &self.scene,
-            view: &view,
-            projection: &projection,
-            nearer_func: depth_mode.nearer_func(),
-            clear_depth,
-        };
-        t.geometry_ms = timed(gl, timer, || {
-            GeometryPass::clear(gl, target, clear_depth);
-            technique.clear_outputs(gl);
-            background.draw(
-                gl,
-                &frame.targets.background,
-                fullscreen,
-                &self.background,
-                &view,
-                &projection,
-            )?;
-            technique.draw_gbuffer(gl, &step)
-        })?;
-
-        t.resolve_ms =
-            technique.after_geometry(gl, self.frame.retrofit.as_mut(), &resolve_frame, timer)?;
-
-        let Frame {
-            gbuffer,
-            retrofit,
-            targets,
-        } = &mut self.frame;
-        let (gbuffer, targets) = (&*gbuffer, &*targets);
-        if let Some(hook) = self.decal_hook.as_mut() {
-            let decal_target = DecalTarget {
-                gbuffer,
-                view: self.camera.view,
-                projection,
-            };
-            t.decal_ms = timed(gl, timer, || {
-                gbuffer.fbo.bind(gl);
-                hook(gl, &decal_target);
-                Ok(check_error(gl, "the decal hook")?)
-            })?;
-        }
-
-        // One step per lighting call: the second lends the retrofit apart.
-        macro_rules! lighting_step {
-            ($retrofit:expr) => {
-                LightingStep {
-                    frame: FrameParts {
-                        aa,
-                        gbuffer,
-                        retrofit: $retrofit,
-                        targets,
-                    },
-                    lighting,
-                    fullscreen,
-                    slots,
-                    batches: &batches,
-                    clear_depth,
-                    stand_ins: StandIns {
-                        background: &targets.background.texture,
-                        specular: specular_constant,
-                    },
-                    projection: &projection,
-                    footprint,
-                }
-            };
-        }
-        let step = lighting_step!(retrofit.as_ref());
-        t.lighting_ms = timed(gl, timer, || technique.light(gl, &step))?;
-        // The retrofit is lent mutably for its second-layer calls, so this
-        // step does not lend it again.
-        let step = lighting_step!(None);
-        t.second_layer_ms = technique.second_lighting(gl, retrofit.as_mut(), &step, timer)?;
-        if runs_transparent {
-            let forward_msaa = self.options.forward_msaa;
-            t.transparent_ms = timed(gl, timer, || {
-                let lit = targets.hdr.fbo.raw();
-                // With forward MSAA, into the retrofit's multisampled
-                // forward target, resolved back into the HDR image.
-                let target = match (forward_msaa, retrofit.as_mut()) {
-                    (true, Some(r)) => r.begin_forward(gl, Some(lit))?,
-                    (true, None) => {
-                        return Err(Error::invalid(
-                            "forward MSAA needs the retrofit's multisampled G-buffer, and this method has none",
-                        ));
-                    }
-                    (false, _) => targets.hdr_with_depth.raw(),
-                };
-                transparent.draw(
-                    gl,
-                    (target, width, height),
-                    &self.scene,
-                    &view,
-                    &projection,
-                    &batches,
-                    depth_mode.nearer_func(),
-                )?;
-                match (forward_msaa, retrofit.as_mut()) {
-                    (true, Some(r)) => Ok(r.finish_forward(gl, Some(lit))?),
-                    _ => Ok(()),
-                }
-            })?;
-        }
-        let tonemapped = technique.tonemap_target(targets);
-        t.tonemap_ms = timed(gl, timer, || {
-            tonemap.draw(gl, tonemapped, fullscreen, &targets.hdr.texture)
-        })?;
-        t.post_ms = technique.post(gl, targets, fullscreen, timer)?;
-        if let Some(out) = targets.fxaa.as_ref() {
-            t.fxaa_ms = timed(gl, timer, || {
-                fxaa.draw(gl, out, fullscreen, &targets.ldr.texture)
-            })?;
-        }
-        if let (Some(options), Some(passes), Some(out)) =
-            (self.options.smaa, smaa.as_ref(), targets.smaa.as_ref())
-        {
-            let depth_input = DepthInput::new(&projection, depth_mode.is_reversed());
-            let times = passes.draw(
-                gl,
-                &options,
-                out,
-                fullscreen,
-                &targets.ldr.texture,
-                &gbuffer.depth,
-                depth_input,
-                timer,
-            )?;
-            t.smaa_edges_ms = times.edges_ms;
-            t.smaa_weights_ms = times.weights_ms;
-            t.smaa_blend_ms = times.blend_ms;
-            t.smaa_ms = times.edges_ms + times.weights_ms + times.blend_ms;
-        }
-        unsafe {
-            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
-            gl.bind_vertex_array(None);
-            gl.use_program(None);
-        }
-        t.total_ms = t.geometry_ms
-            + t.resolve_ms
-            + t.decal_ms
-            + t.lighting_ms
-            + t.second_layer_ms
-            + t.transparent_ms
-            + t.tonemap_ms
-            + t.post_ms
-            + t.fxaa_ms
-            + t.smaa_ms;
-        Ok(t)
-    }
-
-    /// Let the technique of `options` (default: the current ones) build its
-    /// programs and the targets that do not refer to the frame's objects.
-    fn prepare_technique(
-        &mut self,
-        gl: &glow::Context,
-        options: Option<&RenderOptions>,
-    ) -> Result<()> {
-        let options = options.unwrap_or(&self.options);
-        let setup = Setup {
-            options,
-            slots: GBufferSlots::of(&options.layout)?,
-            colors: options.layout.colors.len() as u32,
-        };
-        self.techniques
-            .active_mut(&options.aa)
-            .prepare(gl, &setup, None)
-    }
-
     /// The state of the technique that renders the current method, when it
     /// is a `T` ([`technique::Gbaa`], [`technique::Complex`],
     /// [`technique::Sparse`]); `None` with other methods. For example
@@ -1068,271 +528,6 @@ impl Renderer {
         self.decal_hook = hook;
     }
 
-    /// Change size, sample count, anti-aliasing method, FXAA, SMAA or layout at run
-    /// time, re-creating only what changed:
-    /// - a new size re-allocates the G-buffer's textures on the same
-    ///   framebuffer and lets the retrofit re-read it ([`MsaaRetrofit::set_samples`],
-    ///   which rebuilds from the host's framebuffer), then the other targets;
-    /// - a new sample count rebuilds the multisampled twins only;
-    /// - switching between `none` and a multisampled method creates or frees
-    ///   the retrofit;
-    /// - a new resolve method or window changes nothing on the GPU;
-    /// - the first switch to `per-sample` or `complex` builds their programs
-    ///   (kept from then on); `complex`'s stencil mask and coverage flags are
-    ///   allocated by the next frame (they follow the twins and targets, and
-    ///   are freed on every change);
-    /// - a new layout builds a new G-buffer and retrofit;
-    /// - a new depth mode changes nothing on the GPU (it is decided again
-    ///   with a new layout too, see [`DepthMode::Auto`]).
-    ///
-    /// The precision check runs again before allocating; new findings are
-    /// logged. New objects are made before old ones are freed: on error the
-    /// renderer keeps rendering with its previous options.
-    pub fn set_options(&mut self, gl: &glow::Context, requested: &RenderOptions) -> Result<()> {
-        requested.validate()?;
-        sparse::check_support(gl, &requested.aa)?;
-        let plan_context = if requested.layout == self.requested.layout {
-            self.plan_context.clone()
-        } else {
-            PlanContext::query(gl, &requested.layout)
-        };
-        let mut plan = Plan::for_needs(&self.needs, &plan_context, requested)?;
-        plan.set_decals(self.decal_hook.is_some());
-        let active = plan.apply(requested);
-        let options = &active;
-        // The technique's programs first: they are kept either way.
-        self.prepare_technique(gl, Some(options))?;
-        if options.smaa.is_some() && self.passes.smaa.is_none() {
-            self.passes.smaa = Some(SmaaPasses::new(gl)?);
-        }
-        let depth_mode =
-            depth::resolve_mode(gl, options.depth_mode, &self.clip, options.layout.depth)?;
-        let mut warnings = depth::warnings(&options.layout, &self.camera, depth_mode, self.extent);
-        warnings.extend(plan.warnings.iter().cloned());
-        if warnings != self.warnings {
-            for w in &warnings {
-                log::warn!("scene `{}` ({depth_mode} depth): {w}", self.scene_name);
-            }
-        }
-        if options.layout != self.options.layout {
-            self.rebuild_frame(gl, options)?;
-        } else if (options.width, options.height) != (self.options.width, self.options.height) {
-            self.resize(gl, options)?;
-        } else {
-            self.update_in_place(gl, options)?;
-        }
-        self.options = options.clone();
-        self.requested = requested.clone();
-        self.plan = plan;
-        self.plan_context = plan_context;
-        self.depth_mode = depth_mode;
-        self.warnings = warnings;
-        // Technique targets refer to the twins and targets that may have
-        // changed; the next frame allocates them again.
-        self.techniques.options_changed(gl, &self.options.aa);
-        Ok(())
-    }
-
-    /// A new layout: a new G-buffer, retrofit and targets (and a new model
-    /// program when the attachment numbers moved).
-    fn rebuild_frame(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
-        let slots = GBufferSlots::of(&options.layout)?;
-        // The model and lighting programs follow the attachment set.
-        let (frame, geometry, lighting) = Made::build(gl, |made| {
-            let frame = made.keep(Frame::new(gl, options, self.opt_out_flag)?);
-            let geometry = if slots != self.passes.geometry.slots() {
-                Some(made.keep(GeometryPass::new(gl, slots)?))
-            } else {
-                None
-            };
-            let lighting = if slots != self.passes.lighting.slots() {
-                Some(made.keep(LightingPass::new(gl, slots)?))
-            } else {
-                None
-            };
-            Ok::<_, Error>((frame, geometry, lighting))
-        })?;
-        std::mem::replace(&mut self.frame, frame).destroy(gl);
-        if let Some(g) = geometry {
-            std::mem::replace(&mut self.passes.geometry, g).destroy(gl);
-        }
-        if let Some(l) = lighting {
-            std::mem::replace(&mut self.passes.lighting, l).destroy(gl);
-        }
-        Ok(())
-    }
-
-    /// A new size with the same layout.
-    fn resize(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
-        let (colors, depth, targets) = Made::build(gl, |made| {
-            let (colors, depth) =
-                GBuffer::allocate_textures(gl, &options.layout, options.width, options.height)?;
-            let (colors, depth) = (made.keep(colors), made.keep(depth));
-            let targets = made.keep(Targets::new(
-                gl,
-                &depth,
-                options.fxaa,
-                options.smaa.is_some(),
-            )?);
-            Ok::<_, Error>((colors, depth, targets))
-        })?;
-        let gb = &mut self.frame.gbuffer;
-        if let Err(e) = attach_gbuffer_textures(gl, &mut gb.fbo, &colors, &depth) {
-            let _ = attach_gbuffer_textures(gl, &mut gb.fbo, &gb.colors, &gb.depth);
-            targets.destroy(gl);
-            free_textures(gl, colors, Some(depth));
-            return Err(e);
-        }
-        let old_colors = std::mem::replace(&mut gb.colors, colors);
-        let old_depth = std::mem::replace(&mut gb.depth, depth);
-        let old_size = (gb.width, gb.height);
-        (gb.width, gb.height) = (options.width, options.height);
-        if let Err(e) = self.update_retrofit(gl, options, true) {
-            // Put the old textures back: the retrofit still matches them.
-            let gb = &mut self.frame.gbuffer;
-            let colors = std::mem::replace(&mut gb.colors, old_colors);
-            let depth = std::mem::replace(&mut gb.depth, old_depth);
-            (gb.width, gb.height) = old_size;
-            let _ = attach_gbuffer_textures(gl, &mut gb.fbo, &gb.colors, &gb.depth);
-            targets.destroy(gl);
-            free_textures(gl, colors, Some(depth));
-            return Err(e);
-        }
-        free_textures(gl, old_colors, Some(old_depth));
-        std::mem::replace(&mut self.frame.targets, targets).destroy(gl);
-        Ok(())
-    }
-
-    /// Same size and layout: the retrofit and the FXAA and SMAA targets may change.
-    fn update_in_place(&mut self, gl: &glow::Context, options: &RenderOptions) -> Result<()> {
-        let (w, h) = (options.width, options.height);
-        let new_fxaa = if options.fxaa && self.frame.targets.fxaa.is_none() {
-            Some(Targets::ldr_target(gl, "fxaa", w, h)?)
-        } else {
-            None
-        };
-        let new_smaa = if options.smaa.is_some() && self.frame.targets.smaa.is_none() {
-            match SmaaTargets::new(gl, w, h) {
-                Ok(t) => Some(t),
-                Err(e) => {
-                    if let Some(t) = new_fxaa {
-                        t.destroy(gl);
-                    }
-                    return Err(e);
-                }
-            }
-        } else {
-            None
-        };
-        if let Err(e) = self.update_retrofit(gl, options, false) {
-            if let Some(t) = new_fxaa {
-                t.destroy(gl);
-            }
-            if let Some(t) = new_smaa {
-                t.destroy(gl);
-            }
-            return Err(e);
-        }
-        if new_smaa.is_some() {
-            self.frame.targets.smaa = new_smaa;
-        } else if options.smaa.is_none() {
-            if let Some(t) = self.frame.targets.smaa.take() {
-                t.destroy(gl);
-            }
-        }
-        if new_fxaa.is_some() {
-            self.frame.targets.fxaa = new_fxaa;
-        } else if !options.fxaa {
-            if let Some(t) = self.frame.targets.fxaa.take() {
-                t.destroy(gl);
-            }
-        }
-        Ok(())
-    }
-
-    /// Keep the G-buffer's first layer after each frame (`true`, the
-    /// default) or not. With two layers the retrofit puts the host's
-    /// second layer into the G-buffer for the second lighting; a caller that
-    /// reads the G-buffer after [`Renderer::render`] ([`Renderer::gbuffer`],
-    /// `dump`, the goldens) needs it back. One that reads only the lit image
-    /// (the bench) may say `false`: the retrofit then copies back only what
-    /// the frame's own passes after lighting read (the depth, which
-    /// transparent objects are tested against and SMAA's depth edges read),
-    /// or nothing ([`RetrofitOptions::restore_first_layer`]). The lit image
-    /// is the same either way.
-    pub fn set_keep_gbuffer(&mut self, gl: &glow::Context, keep: bool) -> Result<()> {
-        self.keep_gbuffer = keep;
-        self.align_first_layer_restore(gl)
-    }
-
-    /// What of the first layer the frame's G-buffer must hold again after
-    /// the second lighting.
-    fn first_layer_restore(&self) -> FirstLayerRestore {
-        let smaa_reads_depth = self
-            .options
-            .smaa
-            .is_some_and(|smaa| smaa.edges == SmaaEdges::Depth);
-        if self.keep_gbuffer {
-            FirstLayerRestore::Everything
-        } else if self.plan.runs(Pass::Transparent) || smaa_reads_depth {
-            FirstLayerRestore::DepthAndStencil
-        } else {
-            FirstLayerRestore::Nothing
-        }
-    }
-
-    /// Set the retrofit's [`RetrofitOptions::restore_first_layer`] to what
-    /// this frame needs, where it differs (a change of no twin: no rebuild).
-    fn align_first_layer_restore(&mut self, gl: &glow::Context) -> Result<()> {
-        let restore = self.first_layer_restore();
-        if let Some(r) = self.frame.retrofit.as_mut() {
-            if r.options().restore_first_layer != restore {
-                let options = RetrofitOptions {
-                    restore_first_layer: restore,
-                    ..r.options().clone()
-                };
-                r.set_options(gl, &options)?;
-            }
-        }
-        Ok(())
-    }
-
-    /// Bring the retrofit in line with `options` (each branch is all or
-    /// nothing). `host_changed`: the G-buffer's textures were re-allocated.
-    fn update_retrofit(
-        &mut self,
-        gl: &glow::Context,
-        options: &RenderOptions,
-        host_changed: bool,
-    ) -> Result<()> {
-        let retrofit_options = RetrofitOptions {
-            // Checked again each frame against the plan then in effect.
-            restore_first_layer: self.first_layer_restore(),
-            ..options.retrofit_options(self.opt_out_flag)
-        };
-        match (&mut self.frame.retrofit, options.aa.is_multisampled()) {
-            (Some(r), true) => {
-                if host_changed {
-                    // Rebuilds the twins from the host framebuffer as it is now.
-                    r.refresh(gl)?;
-                }
-                // Rebuilds only what the options change.
-                r.set_options(gl, &retrofit_options)?;
-            }
-            (None, true) => {
-                let r = MsaaRetrofit::new(gl, self.frame.gbuffer.fbo.raw(), &retrofit_options)?;
-                self.frame.retrofit = Some(r);
-            }
-            (Some(_), false) => {
-                if let Some(r) = self.frame.retrofit.take() {
-                    r.destroy(gl);
-                }
-            }
-            (None, false) => {}
-        }
-        Ok(())
-    }
-
     /// The resolved single-sample G-buffer (the host G-buffer).
     pub fn gbuffer(&self) -> &GBuffer {
         &self.frame.gbuffer
@@ -1398,15 +593,12 @@ impl Renderer {
 
     /// Read the final image (after tonemapping and FXAA or SMAA); row 0 is the top.
     pub fn read_final(&self, gl: &glow::Context) -> Result<image::RgbaImage> {
-        self.frame
-            .targets
-            .final_target()
-            .read_rgba8(gl, "the final image")
+        self.frame.final_target().read_rgba8(gl, "the final image")
     }
 
     /// The final image's texture (RGBA8, sRGB-encoded values).
     pub fn final_texture(&self) -> TextureRef {
-        TextureRef::from(&self.frame.targets.final_target().texture)
+        TextureRef::from(&self.frame.final_target().texture)
     }
 
     /// The HDR target's texture (RGBA16F, linear radiance after lighting and
@@ -1421,5 +613,22 @@ impl Renderer {
         self.scene.destroy(gl);
         self.frame.destroy(gl);
         self.techniques.destroy(gl);
+    }
+
+    /// Whether this context can render with `aa`: [`Error::Unsupported`](deferred_msaa::Error::Unsupported),
+    /// naming what is missing, when it cannot. Of the methods, only
+    /// [`AaMode::Sparse`] needs more than OpenGL 3.2 (the others fall back
+    /// where a feature is missing); [`Renderer::new`] and
+    /// [`Renderer::set_options`] make the same check.
+    pub fn check_support(gl: &glow::Context, aa: &AaMode) -> Result<()> {
+        technique::sparse_check_support(gl, aa)
+    }
+
+    /// The fragment shader of [`AaMode::Sparse`]'s lighting pass exactly as
+    /// compiled: `lighting.frag` (with `LIGHTING_FUNCTIONS_ONLY`),
+    /// `tonemap.frag`'s curve, `complex.glsl` (the resolve's selection test),
+    /// `sparse.frag`, then `sparse_lighting.frag`.
+    pub fn sparse_lighting_program_source(&self) -> String {
+        technique::sparse_lighting_source()
     }
 }

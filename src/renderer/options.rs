@@ -1,17 +1,18 @@
 //! What a frame is rendered with: the anti-aliasing method ([`AaMode`])
 //! and the rest of the options ([`RenderOptions`]).
 
-use super::{
-    DepthMode, GBufferSlots, SmaaEdges, SmaaOptions, SparseOptions, TaaOptions, technique,
-};
+use super::pass::slots::GBufferSlots;
 use crate::gbuffer::{GBufferLayout, MemoryBudget};
 use crate::gl::ColorAttachment;
+use crate::renderer::depth::DepthMode;
+use crate::renderer::technique::smaa::options::{SmaaEdges, SmaaOptions};
+use crate::renderer::technique::sparse::options::SparseOptions;
+use crate::renderer::technique::taa::options::TaaOptions;
 use crate::resolve::NormalEncoding;
 use crate::resolve::{KeySource, ResolveSettings, ResolveSlot, SelectionFlag};
 use crate::retrofit::{NormalAttachment, PositionSpace, RetrofitOptions};
 use crate::second_layer::LayerMix;
 use crate::{Error, Result};
-use std::str::FromStr;
 
 /// How the frame is anti-aliased.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -94,18 +95,6 @@ pub enum AaMode {
 }
 
 impl AaMode {
-    /// `none`, the resolve method's name (`average`, `front`, `median`,
-    /// `back`), `per-sample`, `complex`, `gbaa`, `sparse` or `taa`: the
-    /// name a bench method entry starts with.
-    pub fn name(&self) -> &'static str {
-        technique::kind_of(self).method_name(self)
-    }
-
-    /// Every method name, as [`AaMode::name`] gives them.
-    pub fn method_names() -> Vec<&'static str> {
-        technique::method_names()
-    }
-
     /// The settings of the G-buffer's resolve, when multisampling: those
     /// given with [`AaMode::Resolve`]; the default (median, smooth) for
     /// the other methods that draw into the twins ([`AaMode::PerSample`],
@@ -117,61 +106,6 @@ impl AaMode {
             other if other.is_multisampled() => Some(ResolveSettings::default()),
             _ => None,
         }
-    }
-
-    /// The technique that renders the method: its name, or `resolve` for
-    /// the four resolve methods. Methods of one technique can share a
-    /// renderer: switching between them changes nothing on the GPU.
-    pub fn technique_name(&self) -> &'static str {
-        technique::kind_of(self).name()
-    }
-
-    /// How many frames the method renders from a fresh renderer (or after
-    /// [`Renderer::reset_history`](super::Renderer::reset_history)) before
-    /// a still camera's image has settled: 0 but for [`AaMode::Taa`]
-    /// ([`TaaOptions::warmup_frames`]). The bench renders them before it
-    /// measures a still frame.
-    pub fn warmup_frames(&self) -> u32 {
-        technique::kind_of(self).warmup_frames(self)
-    }
-
-    /// Whether the method renders more than one sample per pixel, so that
-    /// [`RenderOptions::samples`] applies: into the multisampled twins, or
-    /// into [`AaMode::Sparse`]'s pre-pass.
-    pub fn takes_samples(&self) -> bool {
-        technique::kind_of(self).takes_samples()
-    }
-
-    /// Whether the G-buffer pass draws into the multisampled twins.
-    pub fn is_multisampled(&self) -> bool {
-        technique::kind_of(self).draws_into_twins()
-    }
-
-    /// Whether the lighting pass lights samples of the multisampled
-    /// G-buffer ([`AaMode::PerSample`], [`AaMode::Complex`]) rather than
-    /// the resolved pixels.
-    pub fn lights_per_sample(&self) -> bool {
-        technique::kind_of(self).lights_per_sample()
-    }
-}
-
-impl FromStr for AaMode {
-    type Err = Error;
-
-    /// A method spec: a method name, then its options after colons
-    /// (`median:hard:c=2`, `sparse:pool=64`, `gbaa`), as bench entries
-    /// write them. The error is one line.
-    fn from_str(spec: &str) -> Result<Self> {
-        let mut parts = spec.split(':');
-        let name = parts.next().unwrap_or("");
-        let options: Vec<&str> = parts.collect();
-        let kind = technique::kind_named(name).ok_or_else(|| {
-            Error::invalid(format!(
-                "unknown method `{spec}`; methods: {}",
-                technique::method_names().join(", ")
-            ))
-        })?;
-        kind.parse(name, &options, spec)
     }
 }
 
@@ -299,7 +233,7 @@ impl RenderOptions {
                     "FXAA and SMAA are both post filters of the tonemapped image; choose one",
                 ));
             }
-            if smaa.edges == SmaaEdges::Depth && !technique::kind_of(&self.aa).fills_gbuffer() {
+            if smaa.edges == SmaaEdges::Depth && !self.aa.fills_gbuffer() {
                 return Err(Error::invalid(format!(
                     "SMAA's depth edges read the G-buffer's depth, which `{}` does not fill; use edges=luma or edges=color",
                     self.aa.name()
@@ -355,7 +289,7 @@ impl RenderOptions {
             layer_mix: self
                 .layer_mix
                 .clone()
-                .unwrap_or_else(|| LayerMix::Curve(super::tonemap::layer_mix_curve())),
+                .unwrap_or_else(|| LayerMix::Curve(super::pass::tonemap::layer_mix_curve())),
             ..RetrofitOptions::default()
         }
     }

@@ -35,6 +35,7 @@ mod smaa;
 mod sparse;
 mod stability;
 mod standalone;
+mod structure;
 mod taa;
 mod three_surfaces;
 mod zoo;

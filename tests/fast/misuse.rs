@@ -1,5 +1,5 @@
 //! The host's GL state kept exactly through the C API's calls, under
-//! misuse too (`tests/common/misuse.rs`, whose fuzzer the slow tier runs
+//! misuse too (`tests/common/misuse/`, whose fuzzer the slow tier runs
 //! over thousands of sequences): one named sequence per way it was lost,
 //! and a few hundred random sequences.
 //!

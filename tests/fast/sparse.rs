@@ -1,5 +1,5 @@
 //! Method `sparse`: the multisampled G-buffer as per-pixel linked lists of
-//! blocks (`src/renderer/sparse.rs`). Its error against the supersampled
+//! blocks (`src/renderer/technique/sparse/`). Its error against the supersampled
 //! reference, its memory against the full multisampled G-buffer, pool
 //! overflow, selective anti-aliasing, object lifetimes, the bench's report,
 //! and the typed error on contexts without shader storage buffers.

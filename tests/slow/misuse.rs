@@ -1,4 +1,4 @@
-//! The C API's misuse fuzzer (`tests/common/misuse.rs`) over thousands of
+//! The C API's misuse fuzzer (`tests/common/misuse/`) over thousands of
 //! random call sequences, each in a child process of this test binary: a
 //! crash (a signal, an abort) or a hang (no progress for
 //! `HANG_SECONDS`) is that sequence's, and the next child goes on from the

@@ -19,8 +19,8 @@ use crate::gl::{
     Attachment, Framebuffer, FullscreenPass, GlObject, Handle, Made, SavedState, Texture2d,
     Texture2dMultisample, TextureRef, VertexArray, check_error,
 };
+use crate::layer_mix::{LayerMix, MixKind, mix_domain_source, set_srgb};
 use crate::lit_output::{LitOutput, bind_for_reading};
-use crate::second_layer::{LayerMix, MixKind, mix_domain_source, set_srgb};
 use crate::{Error, Result};
 use glow::HasContext;
 

@@ -104,6 +104,7 @@ pub mod frame;
 pub mod gbuffer;
 pub mod gl;
 pub mod host;
+mod layer_mix;
 mod lighting_check;
 mod lit_output;
 pub mod profile;

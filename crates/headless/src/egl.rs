@@ -446,7 +446,7 @@ pub(crate) struct EglContext {
 
 impl EglContext {
     /// Creates a context as `req` asks and makes it current.
-    pub(crate) fn create(req: &super::ContextRequest) -> Result<EglContext> {
+    pub(crate) fn create(req: &crate::request::ContextRequest) -> Result<EglContext> {
         let lib = library()?;
         let lease = DisplayLease::acquire(lib)?;
         lib.bind_opengl()?;
@@ -512,7 +512,9 @@ impl EglContext {
             unsafe { (lib.create_context)(d.raw, config, std::ptr::null_mut(), attribs.as_ptr()) };
         if context.is_null() {
             let reason = lib.error();
-            if let Some(too_low) = super::too_low_from_probe(probe_version(lib, &d, config)) {
+            if let Some(too_low) =
+                crate::request::too_low_from_probe(probe_version(lib, &d, config))
+            {
                 return Err(too_low);
             }
             return Err(Error::Create {
@@ -668,7 +670,7 @@ fn probe_version(lib: &EglLib, d: &OpenDisplay, config: EglConfig) -> Option<Str
             == EGL_TRUE
         {
             let loader = |name: &CStr| (lib.get_proc_address)(name.as_ptr());
-            version = super::read_gl_string(&loader, glow::VERSION);
+            version = crate::request::read_gl_string(&loader, glow::VERSION);
             if prev_context.is_null() {
                 (lib.make_current)(
                     d.raw,

@@ -104,7 +104,7 @@ pub(crate) struct OsMesaContext {
 
 impl OsMesaContext {
     /// Creates a context as `req` asks and makes it current.
-    pub(crate) fn create(req: &super::ContextRequest) -> Result<OsMesaContext> {
+    pub(crate) fn create(req: &crate::request::ContextRequest) -> Result<OsMesaContext> {
         let lib = library()?;
         let attribs = [
             OSMESA_FORMAT,
@@ -129,7 +129,7 @@ impl OsMesaContext {
             unsafe { (lib.create_context_attribs)(attribs.as_ptr(), std::ptr::null_mut()) }
         };
         if context.is_null() {
-            if let Some(too_low) = super::too_low_from_probe(probe_version(lib)) {
+            if let Some(too_low) = crate::request::too_low_from_probe(probe_version(lib)) {
                 return Err(too_low);
             }
             return Err(Error::Create {
@@ -278,7 +278,7 @@ fn probe_version(lib: &OsMesaLib) -> Option<String> {
         );
         if made != 0 {
             let loader = |name: &CStr| (lib.get_proc_address)(name.as_ptr());
-            version = super::read_gl_string(&loader, glow::VERSION);
+            version = crate::request::read_gl_string(&loader, glow::VERSION);
             restore(lib, previous);
         }
         (lib.destroy_context)(context);

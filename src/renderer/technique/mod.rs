@@ -28,34 +28,40 @@
 //! lends out, through [`Renderer::technique`](super::Renderer::technique).
 
 mod complex;
+mod contract;
+pub(crate) mod fxaa;
 mod gbaa;
+mod kind;
 mod none;
 mod per_sample;
 mod resolve;
-mod sparse;
-mod taa;
+pub mod smaa;
+pub(crate) mod sparse;
+pub(crate) mod taa;
 
-use super::background_copy::{BackgroundCopyPass, CopyTarget};
-use super::frame_pass::Pass;
-use super::geometry::{GeometryPass, GeometryTarget};
-use super::lighting::{LightBatch, LightingPass, StandIns};
-use super::mesh::GpuScene;
-use super::pass::{LightTarget, StencilSelect};
-use super::targets::{ColorTarget, Targets};
-use super::{AaMode, GBufferSlots, RenderOptions, timed};
-use crate::Result;
-use crate::frame::Frame as ResolveFrame;
-use crate::gbuffer::GBuffer;
-use crate::gl::{GpuTimer, Texture2d, VertexArray};
-use crate::retrofit::MsaaRetrofit;
+use crate::renderer::options::{AaMode, RenderOptions};
+use crate::{Error, Result};
 pub use complex::Complex;
+pub use contract::TechniqueState;
+pub(crate) use contract::{
+    ComplexPixelsInput, FrameCamera, FrameParts, GeometryStep, LightingStep, Setup, Technique,
+};
 pub use gbaa::Gbaa;
-use glam::{DMat4, Mat4};
+pub(crate) use kind::Kind;
 pub(crate) use per_sample::PerSample;
 pub(crate) use resolve::second_layer_bytes;
 pub use sparse::Sparse;
+pub use sparse::options::{
+    DEFAULT_POOL_BLOCKS_PER_PIXEL, MAX_SPARSE_SAMPLES, SparseOptions, SparseStats,
+};
+pub use sparse::state::{MASK_OVERFLOW, MASK_SINGLE};
+pub use sparse::targets::SparseMemory;
+pub(crate) use sparse::{
+    check_support as sparse_check_support, lighting_program_source as sparse_lighting_source,
+};
 use std::any::Any;
 pub use taa::Taa;
+pub use taa::options::{MAX_TAA_PHASES, TaaOptions};
 
 /// Every technique, once. Adding a technique is one line here.
 pub(crate) static KINDS: [&dyn Kind; 7] = [
@@ -67,103 +73,6 @@ pub(crate) static KINDS: [&dyn Kind; 7] = [
     &sparse::Kind,
     &taa::Kind,
 ];
-
-/// What is known of a technique before anything is built: its method names
-/// and how they parse, and the facts the options, the plan, the bench and
-/// the command line ask of it. The defaults are `none`'s.
-pub(crate) trait Kind: Sync {
-    /// The method names it renders, as `--method` and bench entries spell them.
-    fn methods(&self) -> &'static [&'static str];
-
-    /// The technique's name: its one method's (`resolve` for the four
-    /// resolve methods). Methods of one technique can share a renderer.
-    fn name(&self) -> &'static str {
-        self.methods()[0]
-    }
-
-    /// Whether it renders `aa`.
-    fn renders(&self, aa: &AaMode) -> bool;
-
-    /// The method name of `aa`, which it renders.
-    fn method_name(&self, _aa: &AaMode) -> &'static str {
-        self.name()
-    }
-
-    /// The mode for `method` (one of [`Kind::methods`]) with `options`, the
-    /// parts of a method spec after its colons; errors are one line that
-    /// names `spec`.
-    fn parse(&self, method: &str, options: &[&str], spec: &str) -> Result<AaMode>;
-
-    /// The options [`Kind::parse`] takes, for error messages; `None`: none.
-    fn options_help(&self) -> Option<&'static str> {
-        None
-    }
-
-    /// Whether the G-buffer pass draws into the retrofit's multisampled twins.
-    fn draws_into_twins(&self) -> bool {
-        false
-    }
-
-    /// Whether it renders more than one sample per pixel, so that
-    /// [`RenderOptions::samples`] applies.
-    fn takes_samples(&self) -> bool {
-        self.draws_into_twins()
-    }
-
-    /// Whether lighting lights samples of the twins rather than resolved pixels.
-    fn lights_per_sample(&self) -> bool {
-        false
-    }
-
-    /// Whether its G-buffer pass does more than `none`'s (the bench then
-    /// counts its G-buffer time beyond `none`'s as anti-aliasing time).
-    fn adds_geometry(&self) -> bool {
-        false
-    }
-
-    /// Whether its lighting does more than `none`'s per-pixel pass (the
-    /// bench then counts its lighting time beyond `none`'s likewise).
-    fn adds_lighting(&self) -> bool {
-        self.lights_per_sample()
-    }
-
-    /// Whether the G-buffer pass fills the G-buffer's attachments.
-    fn fills_gbuffer(&self) -> bool {
-        true
-    }
-
-    /// The plan's lighting passes for `aa`, in frame order.
-    fn lighting_passes(&self, _aa: &AaMode) -> Vec<Pass> {
-        vec![Pass::Lighting]
-    }
-
-    /// The plan's passes after the tonemap and before FXAA.
-    fn post_passes(&self) -> Vec<Pass> {
-        Vec::new()
-    }
-
-    /// The plan's name for its G-buffer program.
-    fn geometry_program(&self) -> &'static str {
-        "geometry"
-    }
-
-    /// The plan's names of the programs it compiles beside the G-buffer,
-    /// resolve and lighting programs, in frame order.
-    fn own_programs(&self) -> &'static [&'static str] {
-        &[]
-    }
-
-    /// How many frames `aa` must render, from a fresh state, before its
-    /// image is what a still camera settles on (a temporal method's
-    /// history); the bench renders them before it measures a still frame.
-    fn warmup_frames(&self, _aa: &AaMode) -> u32 {
-        0
-    }
-
-    /// The technique, in an empty state (nothing is built before it is
-    /// first used).
-    fn build(&self) -> Box<dyn Technique>;
-}
 
 /// The kind of the technique that renders `aa`.
 pub(crate) fn kind_of(aa: &AaMode) -> &'static dyn Kind {
@@ -191,373 +100,78 @@ pub(crate) fn method_names() -> Vec<&'static str> {
         .collect()
 }
 
-/// The error for options given to a method that takes none.
-pub(crate) fn no_options(method: &str, options: &[&str], spec: &str) -> Result<()> {
-    match options.first() {
-        None => Ok(()),
-        Some(o) => Err(crate::Error::invalid(format!(
-            "method `{spec}`: `{method}` takes no options (got `:{o}`)"
-        ))),
+/// What an [`AaMode`] is, as the registry knows it.
+impl AaMode {
+    /// `none`, the resolve method's name (`average`, `front`, `median`,
+    /// `back`), `per-sample`, `complex`, `gbaa`, `sparse` or `taa`: the
+    /// name a bench method entry starts with.
+    pub fn name(&self) -> &'static str {
+        kind_of(self).method_name(self)
+    }
+
+    /// Every method name, as [`AaMode::name`] gives them.
+    pub fn method_names() -> Vec<&'static str> {
+        method_names()
+    }
+
+    /// The technique that renders the method: its name, or `resolve` for
+    /// the four resolve methods. Methods of one technique can share a
+    /// renderer: switching between them changes nothing on the GPU.
+    pub fn technique_name(&self) -> &'static str {
+        kind_of(self).name()
+    }
+
+    /// How many frames the method renders from a fresh renderer (or after
+    /// [`Renderer::reset_history`](crate::renderer::Renderer::reset_history)) before
+    /// a still camera's image has settled: 0 but for [`AaMode::Taa`]
+    /// ([`TaaOptions::warmup_frames`]). The bench renders them before it
+    /// measures a still frame.
+    pub fn warmup_frames(&self) -> u32 {
+        kind_of(self).warmup_frames(self)
+    }
+
+    /// Whether the method renders more than one sample per pixel, so that
+    /// [`RenderOptions::samples`] applies: into the multisampled twins, or
+    /// into [`AaMode::Sparse`]'s pre-pass.
+    pub fn takes_samples(&self) -> bool {
+        kind_of(self).takes_samples()
+    }
+
+    /// Whether the G-buffer pass draws into the multisampled twins.
+    pub fn is_multisampled(&self) -> bool {
+        kind_of(self).draws_into_twins()
+    }
+
+    /// Whether the lighting pass lights samples of the multisampled
+    /// G-buffer ([`AaMode::PerSample`], [`AaMode::Complex`]) rather than
+    /// the resolved pixels.
+    pub fn lights_per_sample(&self) -> bool {
+        kind_of(self).lights_per_sample()
+    }
+
+    /// Whether the G-buffer pass fills the G-buffer's attachments.
+    pub(crate) fn fills_gbuffer(&self) -> bool {
+        kind_of(self).fills_gbuffer()
     }
 }
 
-/// A technique whose state [`Renderer::technique`](super::Renderer::technique)
-/// lends out: [`Gbaa`], [`Complex`], [`Sparse`] or [`Taa`].
-pub trait TechniqueState: std::any::Any + sealed::Sealed {}
+impl std::str::FromStr for AaMode {
+    type Err = Error;
 
-mod sealed {
-    /// Only this crate's techniques are [`TechniqueState`](super::TechniqueState)s.
-    pub trait Sealed {}
-    impl Sealed for super::Gbaa {}
-    impl Sealed for super::Complex {}
-    impl Sealed for super::Sparse {}
-    impl Sealed for super::Taa {}
-}
-
-/// The camera of the frame about to be rendered, as
-/// [`Technique::begin_frame`] sees it.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct FrameCamera<'a> {
-    /// The camera's view.
-    pub(crate) view: &'a DMat4,
-    /// The projection in the frame's depth mode, unjittered.
-    pub(crate) projection: &'a Mat4,
-    /// The image size.
-    pub(crate) size: (u32, u32),
-    /// Whether clip-space z maps to depth 0..1 as it is (reversed-Z's
-    /// clip control) rather than from −1..1.
-    pub(crate) zero_to_one: bool,
-}
-
-/// What a technique builds against.
-#[derive(Clone, Copy)]
-pub(crate) struct Setup<'a> {
-    /// The options the frame runs with (the plan applied).
-    pub(crate) options: &'a RenderOptions,
-    /// The attachment numbers of the G-buffer.
-    pub(crate) slots: GBufferSlots,
-    /// The G-buffer's colour attachments; a technique's own outputs take
-    /// the next draw buffers.
-    pub(crate) colors: u32,
-}
-
-/// The frame's size- and layout-dependent objects, lent to a technique.
-#[derive(Clone, Copy)]
-pub(crate) struct FrameParts<'a> {
-    /// The method the frame runs, with its options.
-    pub(crate) aa: AaMode,
-    /// The host's single-sample G-buffer.
-    pub(crate) gbuffer: &'a GBuffer,
-    /// The retrofit, for the methods with multisampled twins.
-    pub(crate) retrofit: Option<&'a MsaaRetrofit>,
-    /// The background, HDR and LDR targets.
-    pub(crate) targets: &'a Targets,
-}
-
-/// The framebuffer the G-buffer pass draws into and its draw buffers.
-#[derive(Clone, Debug)]
-pub(crate) struct GBufferTarget {
-    /// The framebuffer.
-    pub(crate) fbo: glow::Framebuffer,
-    /// Its draw buffers (the background copy writes the emissive one).
-    pub(crate) draw_buffers: Vec<Option<u32>>,
-}
-
-impl GBufferTarget {
-    /// The retrofit's multisampled twin when there is one (the first of the
-    /// two integration lines), else the G-buffer itself.
-    pub(crate) fn of_frame(frame: &FrameParts<'_>) -> Self {
-        match frame.retrofit {
-            Some(r) => GBufferTarget {
-                fbo: r.framebuffer(),
-                draw_buffers: r.host().draw_buffers.clone(),
-            },
-            None => GBufferTarget {
-                fbo: frame.gbuffer.fbo.raw(),
-                draw_buffers: (0..frame.gbuffer.colors.len() as u32).map(Some).collect(),
-            },
-        }
-    }
-}
-
-/// The G-buffer pass's inputs, after the clear and the background.
-pub(crate) struct GeometryStep<'a> {
-    /// Where it draws.
-    pub(crate) target: GeometryTarget,
-    /// The draw buffers of `target`.
-    pub(crate) draw_buffers: &'a [Option<u32>],
-    /// The frame's objects.
-    pub(crate) frame: FrameParts<'a>,
-    /// The model program of the layout.
-    pub(crate) model: &'a GeometryPass,
-    /// The pass that copies the background into every sample.
-    pub(crate) background_copy: &'a BackgroundCopyPass,
-    /// The full-screen vertex array.
-    pub(crate) fullscreen: &'a VertexArray,
-    /// The layout's attachment numbers.
-    pub(crate) slots: GBufferSlots,
-    /// The scene's meshes.
-    pub(crate) scene: &'a GpuScene,
-    /// The camera's view.
-    pub(crate) view: &'a DMat4,
-    /// The projection in the frame's depth mode.
-    pub(crate) projection: &'a Mat4,
-    /// The depth function that lets the nearer fragment pass.
-    pub(crate) nearer_func: u32,
-    /// The depth the G-buffer is cleared to.
-    pub(crate) clear_depth: f32,
-}
-
-impl GeometryStep<'_> {
-    /// Copy the background into the target's emissive attachment. Without
-    /// one the lighting pass reads the background texture itself.
-    pub(crate) fn copy_background(&self, gl: &glow::Context) -> Result<()> {
-        let Some(emissive) = self.slots.emissive else {
-            return Ok(());
-        };
-        let copy = CopyTarget {
-            fbo: self.target.fbo,
-            width: self.target.width,
-            height: self.target.height,
-            emissive,
-            draw_buffers: self.draw_buffers,
-        };
-        self.background_copy.draw(
-            gl,
-            copy,
-            self.fullscreen,
-            &self.frame.targets.background.texture,
-        )
-    }
-
-    /// Draw the scene's opaque and alpha-tested objects with `model`.
-    pub(crate) fn draw_models(&self, gl: &glow::Context, model: &GeometryPass) -> Result<()> {
-        model.draw(
-            gl,
-            self.target,
-            self.scene,
-            self.view,
-            self.projection,
-            self.nearer_func,
-        )
-    }
-}
-
-/// The lighting step's inputs.
-pub(crate) struct LightingStep<'a> {
-    /// The frame's objects (the HDR target is `frame.targets.hdr`).
-    pub(crate) frame: FrameParts<'a>,
-    /// The per-pixel lighting program of the layout.
-    pub(crate) lighting: &'a LightingPass,
-    /// The full-screen vertex array.
-    pub(crate) fullscreen: &'a VertexArray,
-    /// The layout's attachment numbers.
-    pub(crate) slots: GBufferSlots,
-    /// The scene's lights in view space.
-    pub(crate) batches: &'a [LightBatch],
-    /// The depth background pixels keep.
-    pub(crate) clear_depth: f32,
-    /// What stands in for attachments the plan left out.
-    pub(crate) stand_ins: StandIns<'a>,
-    /// The projection in the frame's depth mode.
-    pub(crate) projection: &'a Mat4,
-    /// The size of a pixel at unit distance (`tan(fov_y / height)`).
-    pub(crate) footprint: f32,
-}
-
-impl LightingStep<'_> {
-    /// Light every pixel once from the resolved G-buffer.
-    pub(crate) fn light_per_pixel(&self, gl: &glow::Context) -> Result<()> {
-        let hdr = &self.frame.targets.hdr;
-        self.light_per_pixel_into(
-            gl,
-            LightTarget {
-                fbo: hdr.fbo.raw(),
-                width: hdr.texture.width,
-                height: hdr.texture.height,
-                stencil: StencilSelect::All,
-            },
-        )
-    }
-
-    /// [`LightingStep::light_per_pixel`] into `target` (the HDR texture,
-    /// perhaps with a stencil mask).
-    pub(crate) fn light_per_pixel_into(
-        &self,
-        gl: &glow::Context,
-        target: LightTarget,
-    ) -> Result<()> {
-        self.lighting.draw(
-            gl,
-            target,
-            self.fullscreen,
-            self.frame.gbuffer,
-            self.slots,
-            self.batches,
-            self.clear_depth,
-            self.stand_ins,
-        )
-    }
-
-    /// The image size.
-    pub(crate) fn size(&self) -> (u32, u32) {
-        let hdr = &self.frame.targets.hdr.texture;
-        (hdr.width, hdr.height)
-    }
-
-    /// The background's own texture.
-    pub(crate) fn background(&self) -> &Texture2d {
-        &self.frame.targets.background.texture
-    }
-}
-
-/// What [`Technique::complex_pixels`] may read.
-pub(crate) struct ComplexPixelsInput<'a> {
-    /// The retrofit, for the methods with multisampled twins.
-    pub(crate) retrofit: Option<&'a mut MsaaRetrofit>,
-    /// The last frame's resolve input.
-    pub(crate) resolve_frame: ResolveFrame,
-    /// The image size.
-    pub(crate) width: u32,
-    /// The image size.
-    pub(crate) height: u32,
-}
-
-/// One anti-aliasing technique: the steps of the renderer's frame that
-/// differ by method. Programs are built by the first
-/// [`prepare`](Technique::prepare) that needs them and kept; targets that
-/// refer to the frame's are dropped by [`options_changed`](Technique::options_changed).
-pub(crate) trait Technique: std::fmt::Debug {
-    /// Build what a frame with `setup` needs: programs (and targets of its
-    /// own) always; targets that refer to the frame's objects when `frame`
-    /// is given (it is not while options are being changed).
-    fn prepare(
-        &mut self,
-        _gl: &glow::Context,
-        _setup: &Setup<'_>,
-        _frame: Option<FrameParts<'_>>,
-    ) -> Result<()> {
-        Ok(())
-    }
-
-    /// The options changed: free what refers to the old frame's objects;
-    /// `active`: whether this technique renders the new options.
-    fn options_changed(&mut self, _gl: &glow::Context, _active: bool) {}
-
-    /// The frame begins with `camera`: the projection every pass of the
-    /// frame draws with (`camera.projection` unless the technique jitters
-    /// it). Called once per frame rendered, after [`Technique::prepare`].
-    fn begin_frame(&mut self, camera: &FrameCamera<'_>) -> Mat4 {
-        *camera.projection
-    }
-
-    /// Forget what earlier frames left behind (a temporal history), so
-    /// that the next frame starts afresh.
-    fn reset_history(&mut self) {}
-
-    /// Where the G-buffer pass draws.
-    fn geometry_target(&self, frame: &FrameParts<'_>) -> GBufferTarget {
-        GBufferTarget::of_frame(frame)
-    }
-
-    /// Clear the technique's own G-buffer outputs, after the G-buffer's
-    /// clear (which zeroes every draw buffer).
-    fn clear_outputs(&self, _gl: &glow::Context) {}
-
-    /// The G-buffer pass, after the clear and the background: the
-    /// background copy, then the model program.
-    fn draw_gbuffer(&self, gl: &glow::Context, step: &GeometryStep<'_>) -> Result<()> {
-        step.copy_background(gl)?;
-        step.draw_models(gl, step.model)
-    }
-
-    /// What runs between the G-buffer pass and the decal hook, timed; the
-    /// milliseconds it took (0 when nothing runs, untimed).
-    fn after_geometry(
-        &self,
-        _gl: &glow::Context,
-        _retrofit: Option<&mut MsaaRetrofit>,
-        _resolve_frame: &ResolveFrame,
-        _timer: &mut GpuTimer,
-    ) -> Result<f64> {
-        Ok(0.0)
-    }
-
-    /// Light the HDR target (the renderer times it).
-    fn light(&mut self, gl: &glow::Context, step: &LightingStep<'_>) -> Result<()> {
-        step.light_per_pixel(gl)
-    }
-
-    /// After [`Technique::light`]: the resolve's second layer, lit by the
-    /// same pass and mixed in, timed; the milliseconds it took (0 when
-    /// there is none, untimed).
-    fn second_lighting(
-        &mut self,
-        _gl: &glow::Context,
-        _retrofit: Option<&mut MsaaRetrofit>,
-        _step: &LightingStep<'_>,
-        _timer: &mut GpuTimer,
-    ) -> Result<f64> {
-        Ok(0.0)
-    }
-
-    /// Where the tonemap writes: the LDR image unless a post pass follows.
-    fn tonemap_target<'a>(&'a self, targets: &'a Targets) -> &'a ColorTarget {
-        &targets.ldr
-    }
-
-    /// The pass after the tonemap and before FXAA, timed; the milliseconds
-    /// it took (0 when there is none, untimed).
-    fn post(
-        &mut self,
-        _gl: &glow::Context,
-        _targets: &Targets,
-        _fullscreen: &VertexArray,
-        _timer: &mut GpuTimer,
-    ) -> Result<f64> {
-        Ok(0.0)
-    }
-
-    /// The bytes the technique allocates beside the G-buffer and its twins
-    /// for `options`.
-    fn memory(&self, _options: &RenderOptions) -> u64 {
-        0
-    }
-
-    /// The real samples per pixel of the technique's own multisampled
-    /// targets, when it has any (the twins' count is the retrofit's).
-    fn samples(&self) -> Option<u32> {
-        None
-    }
-
-    /// Which pixels the last frame treated as complex (255) or simple (0),
-    /// row 0 at the top; `None` when the technique has no such notion.
-    fn complex_pixels(
-        &self,
-        _gl: &glow::Context,
-        _input: ComplexPixelsInput<'_>,
-    ) -> Result<Option<image::GrayImage>> {
-        Ok(None)
-    }
-
-    /// For [`Techniques::get`].
-    fn as_any(&self) -> &dyn Any;
-
-    /// Free every GL object the technique made.
-    fn destroy(self: Box<Self>, gl: &glow::Context);
-}
-
-/// The resolve of the multisampled twins into the G-buffer's own textures
-/// (the second integration line), timed; 0 without twins.
-pub(crate) fn resolve_twins(
-    gl: &glow::Context,
-    retrofit: Option<&mut MsaaRetrofit>,
-    resolve_frame: &ResolveFrame,
-    timer: &mut GpuTimer,
-) -> Result<f64> {
-    match retrofit {
-        Some(r) => timed(gl, timer, || Ok(r.resolve(gl, resolve_frame)?)),
-        None => Ok(0.0),
+    /// A method spec: a method name, then its options after colons
+    /// (`median:hard:c=2`, `sparse:pool=64`, `gbaa`), as bench entries
+    /// write them. The error is one line.
+    fn from_str(spec: &str) -> Result<Self> {
+        let mut parts = spec.split(':');
+        let name = parts.next().unwrap_or("");
+        let options: Vec<&str> = parts.collect();
+        let kind = kind_named(name).ok_or_else(|| {
+            Error::invalid(format!(
+                "unknown method `{spec}`; methods: {}",
+                method_names().join(", ")
+            ))
+        })?;
+        kind.parse(name, &options, spec)
     }
 }
 

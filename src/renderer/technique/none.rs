@@ -1,9 +1,10 @@
 //! Method `none` ([`AaMode::None`]): the G-buffer pass draws straight into
 //! the single-sample G-buffer and every step is the frame's default.
 
-use super::{Technique, no_options};
+use super::contract::Technique;
+use super::kind::no_options;
 use crate::Result;
-use crate::renderer::AaMode;
+use crate::renderer::options::AaMode;
 use std::any::Any;
 
 /// No anti-aliasing.
@@ -21,7 +22,7 @@ impl Technique for NoAntialiasing {
 /// What is known of `none` before anything is built.
 pub(crate) struct Kind;
 
-impl super::Kind for Kind {
+impl super::kind::Kind for Kind {
     fn methods(&self) -> &'static [&'static str] {
         &["none"]
     }

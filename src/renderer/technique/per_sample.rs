@@ -4,15 +4,18 @@
 //! (`lighting_per_sample.frag`) and averages the samples as the tonemap
 //! will see them (`sample_average.frag`).
 
-use super::{ComplexPixelsInput, FrameParts, LightingStep, Setup, Technique, resolve_twins};
+use super::contract::{
+    ComplexPixelsInput, FrameParts, LightingStep, Setup, Technique, resolve_twins,
+};
 use crate::frame::Frame as ResolveFrame;
 use crate::gl::GpuTimer;
 use crate::renderer::frame_pass::Pass;
-use crate::renderer::lighting_per_sample::{
+use crate::renderer::options::AaMode;
+use crate::renderer::pass::lighting_per_sample::{
     PerSampleLightingPass, SampleInputs, SampleRadiance, prepare_radiance,
 };
-use crate::renderer::pass::{LightTarget, StencilSelect};
-use crate::renderer::{AaMode, GBufferSlots};
+use crate::renderer::pass::shared::{LightTarget, StencilSelect};
+use crate::renderer::pass::slots::GBufferSlots;
 use crate::retrofit::MsaaRetrofit;
 use crate::{Error, Result};
 use std::any::Any;
@@ -167,7 +170,7 @@ impl Technique for PerSample {
 /// What is known of `per-sample` before anything is built.
 pub(crate) struct Kind;
 
-impl super::Kind for Kind {
+impl super::kind::Kind for Kind {
     fn methods(&self) -> &'static [&'static str] {
         &["per-sample"]
     }
@@ -177,7 +180,7 @@ impl super::Kind for Kind {
     }
 
     fn parse(&self, method: &str, options: &[&str], spec: &str) -> Result<AaMode> {
-        super::no_options(method, options, spec)?;
+        super::kind::no_options(method, options, spec)?;
         Ok(AaMode::PerSample)
     }
 

@@ -8,6 +8,7 @@
 //! (`GL_NVX_gpu_memory_info`, `GL_ATI_meminfo`) where it says, else 1 GiB.
 
 use super::GBufferLayout;
+use super::bytes::fmt_bytes;
 use crate::{Error, Result};
 use glow::HasContext;
 
@@ -259,21 +260,6 @@ pub fn budget_twins(
         log::warn!("{w}");
     }
     Ok((choice.samples, warning))
-}
-
-/// `bytes` for people: `512.0 MiB`, `1.25 GiB`, `900 B`.
-pub fn fmt_bytes(bytes: u64) -> String {
-    const KIB: f64 = 1024.0;
-    let b = bytes as f64;
-    if b >= KIB * KIB * KIB {
-        format!("{:.2} GiB", b / (KIB * KIB * KIB))
-    } else if b >= KIB * KIB {
-        format!("{:.1} MiB", b / (KIB * KIB))
-    } else if b >= KIB {
-        format!("{:.1} KiB", b / KIB)
-    } else {
-        format!("{bytes} B")
-    }
 }
 
 /// Parse a byte count: a number with an optional unit, `B`, `K`/`KiB`,

@@ -22,12 +22,14 @@ mod made;
 mod pass;
 mod program;
 mod query;
+mod samples;
 mod source;
 mod state;
 mod target;
 mod texture;
 
 pub use buffer::{Buffer, VertexArray};
+pub(crate) use caps::output_points;
 pub use caps::{Capabilities, ExtraFns, sample_positions};
 pub use counters::{LiveObjects, live_objects};
 pub use debug::{install_debug_log, label_object};

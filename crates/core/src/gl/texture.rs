@@ -276,7 +276,7 @@ impl Texture2dMultisample {
                     Error::UnsupportedSampleCount {
                         requested: samples,
                         format: format.name().to_string(),
-                        supported: super::Capabilities::sample_counts_for(gl, format),
+                        supported: super::samples::sample_counts_for(gl, format),
                     }
                 }
                 other => other,
@@ -287,7 +287,7 @@ impl Texture2dMultisample {
             return Err(Error::UnsupportedSampleCount {
                 requested: samples,
                 format: format.name().to_string(),
-                supported: super::Capabilities::sample_counts_for(gl, format),
+                supported: super::samples::sample_counts_for(gl, format),
             });
         }
         label_object(gl, glow::TEXTURE, raw.0.get(), label);
