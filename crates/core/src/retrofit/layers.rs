@@ -263,7 +263,7 @@ impl MsaaRetrofit {
         self.forward.as_ref().map_or(0, ForwardTarget::bytes)
     }
 
-    /// The second layer's coverage `α = n2 / (n1 + n2)` per pixel (R16F, in
+    /// The second layer's coverage `α = (n2 + j2) / N` per pixel (R16F, in
     /// red; 0 where a pixel has one cluster), as of the last resolve; `None`
     /// with one layer.
     pub fn second_layer_coverage(&self) -> Option<TextureRef> {

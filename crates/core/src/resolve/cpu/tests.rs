@@ -1,0 +1,339 @@
+//! The CPU reference's own cases, rule by rule.
+
+use super::*;
+
+fn resolver(method: ResolveMethod, window: Window) -> CpuResolve {
+    CpuResolve {
+        settings: ResolveSettings {
+            method,
+            window,
+            ..ResolveSettings::default()
+        },
+        rules: vec![ResolveRule::Blend, ResolveRule::Blend],
+        key_source: CpuKeySource::Position(1),
+        clear_depth: 1.0,
+        footprint: 0.001,
+        normal: None,
+    }
+}
+
+/// Colour = sample index, position z = −depths[i].
+fn pixel(depths: &[f64]) -> PixelSamples {
+    PixelSamples {
+        depth: depths
+            .iter()
+            .map(|&z| if z.is_infinite() { 1.0 } else { 0.5 })
+            .collect(),
+        attachments: vec![
+            (0..depths.len())
+                .map(|i| [i as f64, 0.0, 0.0, 1.0])
+                .collect(),
+            depths.iter().map(|&z| [0.0, 0.0, -z, 1.0]).collect(),
+        ],
+    }
+}
+
+#[test]
+fn median_is_the_median_by_depth_not_by_index() {
+    // Sorted by depth the samples are 3, 1, 0, 2: position 2 is sample 0.
+    // An index-comparing network (FreeSpace Open's bug) would return sample 2.
+    let cpu = resolver(ResolveMethod::Median, Window::Hard);
+    let px = pixel(&[30.0, 20.0, 40.0, 10.0]);
+    assert_eq!(cpu.resolve_pixel(&px).reference, 0);
+    let px = pixel(&[5.0, 9.0, 1.0, 7.0, 3.0, 8.0, 2.0, 6.0]);
+    // Sorted: 1(s2) 2(s6) 3(s4) 5(s0) 6(s7) 7(s3) 8(s5) 9(s1); position 4 is s7.
+    assert_eq!(cpu.resolve_pixel(&px).reference, 7);
+}
+
+#[test]
+fn ties_break_to_the_lower_index() {
+    let px = pixel(&[10.0, 5.0, 5.0, 10.0]);
+    assert_eq!(
+        resolver(ResolveMethod::Front, Window::Hard)
+            .resolve_pixel(&px)
+            .reference,
+        1
+    );
+    assert_eq!(
+        resolver(ResolveMethod::Back, Window::Hard)
+            .resolve_pixel(&px)
+            .reference,
+        0
+    );
+    // Sorted (z, i): s1 s2 s0 s3 → position 2 is s0.
+    assert_eq!(
+        resolver(ResolveMethod::Median, Window::Hard)
+            .resolve_pixel(&px)
+            .reference,
+        0
+    );
+}
+
+#[test]
+fn background_majority_resolves_to_background() {
+    let inf = f64::INFINITY;
+    let px = pixel(&[10.0, inf, inf, inf]);
+    let out = resolver(ResolveMethod::Median, Window::Smooth).resolve_pixel(&px);
+    assert_eq!(out.weights, vec![0.0, 1.0, 1.0, 1.0]);
+    assert_eq!(out.attachments[0][0], 2.0); // mean of samples 1..3
+    assert_eq!(out.depth, 1.0);
+}
+
+#[test]
+fn hard_window_blends_only_close_samples() {
+    // footprint at z=100: 0.1 → c·m = 0.5.
+    let px = pixel(&[100.0, 100.4, 100.6, 300.0]);
+    let out = resolver(ResolveMethod::Front, Window::Hard).resolve_pixel(&px);
+    assert_eq!(out.reference, 0);
+    assert_eq!(out.weights, vec![1.0, 1.0, 0.0, 0.0]);
+    assert_eq!(out.attachments[0][0], 0.5);
+}
+
+#[test]
+fn smooth_window_ramps() {
+    // c_in·m = 0.25, c·m = 0.5 at z = 100.
+    let px = pixel(&[100.0, 100.2, 100.375, 100.6]);
+    let out = resolver(ResolveMethod::Front, Window::Smooth).resolve_pixel(&px);
+    assert_eq!(out.weights[1], 1.0);
+    assert!((out.weights[2] - 0.5).abs() < 1e-9, "{:?}", out.weights);
+    assert_eq!(out.weights[3], 0.0);
+}
+
+#[test]
+fn average_weighs_everything() {
+    let inf = f64::INFINITY;
+    let px = pixel(&[1.0, 100.0, inf, 7.0]);
+    let out = resolver(ResolveMethod::Average, Window::Hard).resolve_pixel(&px);
+    assert_eq!(out.weights, vec![1.0; 4]);
+    assert_eq!(out.attachments[0][0], 1.5);
+}
+
+#[test]
+fn fast_path_takes_sample_zero() {
+    let mut px = pixel(&[10.0; 4]);
+    px.attachments[0][1] = [9.0, 9.0, 9.0, 9.0];
+    let cpu = resolver(ResolveMethod::Median, Window::Smooth);
+    let out = cpu.resolve_pixel(&px);
+    assert!(!out.complex);
+    assert_eq!(out.attachments[0], px.attachments[0][0]);
+    let mut slow = cpu.clone();
+    slow.settings.fast_path = false;
+    let out = slow.resolve_pixel(&px);
+    assert!(out.complex);
+    assert_eq!(out.attachments[0][0], (0.0 + 9.0 + 2.0 + 3.0) / 4.0);
+}
+
+#[test]
+fn non_finite_values_are_skipped() {
+    let mut px = pixel(&[10.0; 4]);
+    px.attachments[0][2] = [f64::NAN, 0.0, 0.0, 1.0];
+    let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
+    cpu.settings.fast_path = false;
+    let out = cpu.resolve_pixel(&px);
+    assert_eq!(out.attachments[0][0], (0.0 + 1.0 + 3.0) / 3.0);
+}
+
+#[test]
+fn equal_normals_are_kept_as_written() {
+    // Not unit length (a gloss-scaled normal): one surface's samples
+    // resolve to it unchanged, as the host's own render holds it.
+    let n = [0.3, 0.1, 0.2, 0.7];
+    assert_eq!(blend_normal(&[n, n, n], &[1.0, 0.5, 1.0], 0), n);
+}
+
+#[test]
+fn opposite_normals_fall_back_to_the_reference() {
+    let values = vec![[0.0, 0.0, 1.0, 0.3], [0.0, 0.0, -1.0, 0.5]];
+    let out = blend_normal(&values, &[1.0, 1.0], 1);
+    assert_eq!(out, [0.0, 0.0, -1.0, 0.4]);
+}
+
+#[test]
+fn hdr_blend_stays_finite_and_in_range() {
+    let values = vec![[65504.0, 65504.0, 65504.0, 1.0], [65504.0, 0.0, 1.0, 1.0]];
+    let out = blend_hdr(&values, &[1.0, 1.0], 0);
+    assert!(out.iter().all(|c| c.is_finite()));
+    assert!(out[0] <= 65504.0 && out[0] >= 65504.0 * 0.99);
+    let one = blend_hdr(&values[..1], &[1.0], 0);
+    assert_eq!(one[0], 65504.0);
+}
+
+#[test]
+fn depth_keys_from_the_projection() {
+    // Standard GL projection terms for near 0.1, far 100.
+    let (n, f) = (0.1, 100.0);
+    let dp = DepthProjection {
+        p22: -(f + n) / (f - n),
+        p23: -2.0 * f * n / (f - n),
+        zero_to_one: false,
+        clear_depth: 1.0,
+    };
+    // A point at distance 10: z_clip = p22·(−10) + p23, w = 10.
+    let z_ndc = (dp.p22 * -10.0 + dp.p23) / 10.0;
+    let depth = (z_ndc + 1.0) * 0.5;
+    assert!((dp.linearize(depth) - 10.0).abs() < 1e-9);
+    assert!((dp.linearize(0.0) - n).abs() < 1e-12);
+    assert!((dp.linearize(1.0) - f).abs() < 1e-9);
+    // Reversed-Z with an infinite far plane and GL_ZERO_TO_ONE: depth = n / z.
+    let rev = DepthProjection {
+        p22: 0.0,
+        p23: n,
+        zero_to_one: true,
+        clear_depth: 0.0,
+    };
+    assert!((rev.linearize(n / 10.0) - 10.0).abs() < 1e-9);
+    assert!(rev.linearize(0.0).is_infinite());
+}
+
+#[test]
+fn the_second_layer_is_the_largest_other_cluster_sharing_with_the_first() {
+    let inf = f64::INFINITY;
+    let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
+    cpu.settings.layers = 2;
+    // A bar (z = 10) over the sky: median takes the sky (samples 1..3),
+    // the second layer is the bar's one sample.
+    let out = cpu.resolve_second_layer_at(&pixel(&[10.0, inf, inf, inf]), None);
+    assert_eq!(out.reference, Some(0));
+    assert_eq!(out.coverage, 0.25);
+    assert_eq!(out.weights, vec![1.0, 0.0, 0.0, 0.0]);
+    // Three clusters (10, 50, 200): the median's (50, samples 1 and 2),
+    // then the largest of the rest, ties to the nearer: 10 (sample 0).
+    let px = pixel(&[10.0, 50.0, 50.0, 200.0]);
+    let first = cpu.resolve_pixel(&px);
+    assert_eq!(first.weights, vec![0.0, 1.0, 1.0, 0.0]);
+    let out = cpu.resolve_second_layer_at(&px, None);
+    assert_eq!(out.reference, Some(0));
+    // Sample 3 (200) is in neither: it joins the nearer in depth, the
+    // first (50 is 150 away, 10 is 190), so the second keeps 1 of 4.
+    assert_eq!((out.coverage, out.joined), (0.25, [1, 0]));
+    // A third cluster nearer the second (12 beside 10): it joins the
+    // second, which then holds 2 of 4.
+    let out = cpu.resolve_second_layer_at(&pixel(&[10.0, 12.0, 50.0, 50.0]), None);
+    assert_eq!(out.reference, Some(0));
+    assert_eq!(out.weights, vec![1.0, 0.0, 0.0, 0.0]);
+    assert_eq!((out.coverage, out.joined), (0.5, [0, 1]));
+    // One cluster: no second layer, sample 0's values at the clear depth.
+    let out = cpu.resolve_second_layer_at(&pixel(&[10.0, 10.01, 10.0, 10.02]), None);
+    assert_eq!((out.reference, out.coverage, out.depth), (None, 0.0, 1.0));
+}
+
+#[test]
+fn normals_split_a_crease_with_one_layer_or_two() {
+    let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
+    // One depth, two orientations 90 degrees apart (attachment 0 holds
+    // the normals here): samples 0, 1 face +z, samples 2, 3 face +x.
+    let mut px = pixel(&[10.0, 10.01, 10.0, 10.01]);
+    px.attachments[0] = vec![
+        [0.0, 0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+        [1.0, 0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0, 0.0],
+    ];
+    // By depth alone the crease is one surface.
+    assert_eq!(cpu.resolve_pixel(&px).weights, vec![1.0; 4]);
+    // With the normals named it is two, with one layer and with two.
+    cpu.normal = Some((0, NormalEncoding::Xyz));
+    assert_eq!(cpu.resolve_pixel(&px).weights, vec![1.0, 1.0, 0.0, 0.0]);
+    cpu.settings.layers = 2;
+    let first = cpu.resolve_pixel(&px);
+    assert_eq!(first.weights, vec![1.0, 1.0, 0.0, 0.0]);
+    let second = cpu.resolve_second_layer_at(&px, None);
+    assert_eq!(second.reference, Some(2));
+    assert_eq!(second.coverage, 0.5);
+}
+
+#[test]
+fn a_side_sliver_joins_its_front_face_not_the_wall() {
+    // A thin box's silhouette pixel: its front face (+z, sample 0), its
+    // side face 0.06 behind it (+x, sample 1), a far wall (samples 2, 3).
+    let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
+    cpu.settings.layers = 2;
+    cpu.normal = Some((0, NormalEncoding::Xyz));
+    let mut px = pixel(&[10.0, 10.06, 200.0, 200.0]);
+    px.attachments[0] = vec![
+        [0.0, 0.0, 1.0, 0.0],
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+    ];
+    // The median is the wall; the front face and the side are two
+    // clusters of one sample, of which the nearer is the second layer.
+    assert_eq!(cpu.resolve_pixel(&px).weights, vec![0.0, 0.0, 1.0, 1.0]);
+    let second = cpu.resolve_second_layer_at(&px, None);
+    assert_eq!(second.reference, Some(0));
+    assert_eq!(second.weights, vec![1.0, 0.0, 0.0, 0.0]);
+    // The side joins the front face (0.06 away, the wall 189.94): the
+    // box keeps its two samples' share, and its layer the front
+    // face's values alone.
+    assert_eq!((second.coverage, second.joined), (0.5, [0, 1]));
+    // Equal distances go by orientation: a sample midway in depth that
+    // faces like the wall joins the first layer, like the bar the
+    // second.
+    let mut px = pixel(&[10.0, 105.0, 200.0, 200.0]);
+    px.attachments[0] = vec![
+        [0.0, 0.0, 1.0, 0.0],
+        [0.0, 0.6, 0.8, 0.0],
+        [0.0, 0.8, 0.6, 0.0],
+        [0.0, 0.8, 0.6, 0.0],
+    ];
+    let out = cpu.resolve_second_layer_at(&px, None);
+    assert_eq!((out.reference, out.joined), (Some(0), [1, 0]));
+    px.attachments[0][1] = [0.0, 0.28, 0.96, 0.0];
+    let out = cpu.resolve_second_layer_at(&px, None);
+    assert_eq!((out.reference, out.joined), (Some(0), [0, 1]));
+}
+
+#[test]
+fn with_two_layers_the_reference_moves_to_the_larger_face() {
+    // Front face twice, the side just behind it once, the wall: the
+    // median is the side (the 3rd of 4 by depth).
+    let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
+    cpu.normal = Some((0, NormalEncoding::Xyz));
+    let mut px = pixel(&[10.0, 10.0, 10.001, 200.0]);
+    px.attachments[0] = vec![
+        [0.0, 0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+    ];
+    // One layer keeps the median's face.
+    assert_eq!(cpu.resolve_pixel(&px).reference, 2);
+    // Two: the front face, which two samples share, is the first layer,
+    // the wall (another depth) the second, and the side joins the first.
+    cpu.settings.layers = 2;
+    let first = cpu.resolve_pixel(&px);
+    assert_eq!(
+        (first.reference, first.weights),
+        (0, vec![1.0, 1.0, 0.0, 0.0])
+    );
+    let second = cpu.resolve_second_layer_at(&px, None);
+    assert_eq!(second.reference, Some(3));
+    assert_eq!((second.coverage, second.joined), (0.25, [1, 0]));
+}
+
+#[test]
+fn normal_encodings_decode_to_the_stored_direction() {
+    let n = [0.48, -0.6, -0.64];
+    let unorm = [n[0] * 0.5 + 0.5, n[1] * 0.5 + 0.5, n[2] * 0.5 + 0.5, 0.0];
+    let d = NormalEncoding::Unorm.decode(unorm);
+    assert!((0..3).all(|c| (d[c] - n[c]).abs() < 1e-12));
+    // Octahedral: project onto |x| + |y| + |z| = 1, fold the lower half.
+    let l1 = n[0].abs() + n[1].abs() + n[2].abs();
+    let (px, py) = (n[0] / l1, n[1] / l1);
+    let sign = |c: f64| if c >= 0.0 { 1.0 } else { -1.0 };
+    let folded = [(1.0 - py.abs()) * sign(px), (1.0 - px.abs()) * sign(py)];
+    for (encoding, stored) in [
+        (NormalEncoding::Octahedral, [folded[0], folded[1], 0.0, 0.0]),
+        (
+            NormalEncoding::OctahedralUnorm,
+            [folded[0] * 0.5 + 0.5, folded[1] * 0.5 + 0.5, 0.0, 0.0],
+        ),
+    ] {
+        let d = encoding.decode(stored);
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        assert!(
+            (0..3).all(|c| (d[c] / len - n[c]).abs() < 1e-9),
+            "{encoding}: {d:?}"
+        );
+    }
+}
