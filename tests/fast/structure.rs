@@ -23,6 +23,7 @@ const CRATE_ROOTS: &[&str] = &[
     "crates/headless/src",
     "crates/capi/src",
     "crates/testkit/src",
+    "crates/inject/src",
 ];
 
 /// Where the size rule looks.

@@ -1,0 +1,61 @@
+//! The watched GL functions: their one list, and the types and slots of
+//! their real entry points, which both the wrappers and the handlers use.
+
+use super::loader::Slot;
+
+/// The watched GL functions with their arguments, handed to the macro
+/// `$then`: the real entry points and the wrappers are made from one list.
+macro_rules! watched_functions {
+    ($then:ident) => {
+        $then! {
+            glBindFramebuffer(target: u32, framebuffer: u32);
+            glDeleteFramebuffers(count: i32, framebuffers: *const u32);
+            glFramebufferTexture(target: u32, attachment: u32, texture: u32, level: i32);
+            glFramebufferTexture2D(target: u32, attachment: u32, textarget: u32, texture: u32, level: i32);
+            glFramebufferRenderbuffer(target: u32, attachment: u32, rbtarget: u32, renderbuffer: u32);
+            glNamedFramebufferTexture(framebuffer: u32, attachment: u32, texture: u32, level: i32);
+            glNamedFramebufferRenderbuffer(framebuffer: u32, attachment: u32, rbtarget: u32, renderbuffer: u32);
+            glBlitNamedFramebuffer(read: u32, draw: u32, sx0: i32, sy0: i32, sx1: i32, sy1: i32, dx0: i32, dy0: i32, dx1: i32, dy1: i32, mask: u32, filter: u32);
+            glBindTextureUnit(unit: u32, texture: u32);
+            glActiveTexture(unit: u32);
+            glBindTexture(target: u32, texture: u32);
+            glUseProgram(program: u32);
+            glGetUniformLocation(program: u32, name: *const c_char) -> i32;
+            glUniformMatrix4fv(location: i32, count: i32, transpose: u8, value: *const f32);
+            glGetIntegerv(pname: u32, data: *mut i32);
+            glClear(mask: u32);
+            glDrawArrays(mode: u32, first: i32, count: i32);
+            glDrawArraysInstanced(mode: u32, first: i32, count: i32, instances: i32);
+            glDrawElements(mode: u32, count: i32, kind: u32, indices: *const c_void);
+            glDrawElementsInstanced(mode: u32, count: i32, kind: u32, indices: *const c_void, instances: i32);
+            glDrawElementsBaseVertex(mode: u32, count: i32, kind: u32, indices: *const c_void, base: i32);
+            glDrawRangeElements(mode: u32, start: u32, end: u32, count: i32, kind: u32, indices: *const c_void);
+            glXSwapBuffers(display: *mut c_void, drawable: c_ulong);
+            glXDestroyContext(display: *mut c_void, context: *mut c_void);
+            eglDestroyContext(display: *mut c_void, context: *mut c_void) -> u32;
+            eglSwapBuffers(display: *mut c_void, surface: *mut c_void) -> u32;
+        }
+    };
+}
+pub(super) use watched_functions;
+
+/// Declares the watched functions' real types and slots.
+macro_rules! declare_real_entry_points {
+    ($( $name:ident ( $($arg:ident : $ty:ty),* ) $(-> $ret:ty)? ; )*) => {
+        /// The real entry points' types.
+        #[allow(non_camel_case_types)]
+        pub(crate) mod real_type {
+            use std::ffi::{c_char, c_ulong, c_void};
+            $( pub(crate) type $name = unsafe extern "system" fn($($ty),*) $(-> $ret)?; )*
+        }
+
+        /// The real entry points, as the program asked for them.
+        #[allow(non_upper_case_globals)]
+        pub(crate) mod real {
+            use super::Slot;
+            $( pub(crate) static $name: Slot = Slot::new(); )*
+        }
+    };
+}
+
+watched_functions!(declare_real_entry_points);

@@ -1,0 +1,131 @@
+//! The framebuffer binds the program makes and the attachments it changes,
+//! followed so that the twin stands in for the G-buffer and goes when it
+//! goes.
+
+use super::context::{Context, GL_DRAW_FRAMEBUFFER, GL_READ_FRAMEBUFFER, real_bind};
+use super::run::say_once;
+use deferred_msaa_capi as capi;
+
+const GL_FRAMEBUFFER: u32 = 0x8D40;
+
+impl Context {
+    pub(super) fn bind_framebuffer(&mut self, target: u32, name: u32, real: &dyn Fn(u32, u32)) {
+        // A pass ends at the first bind after it drew: the lighting's is
+        // replayed, an earlier one's let go.
+        if let Some(r) = self.recording.as_mut()
+            && !r.draws.is_empty()
+        {
+            if r.skip > 0 {
+                r.skip -= 1;
+                r.draws.clear();
+                r.target = None;
+            } else {
+                self.second_layer();
+            }
+        }
+        let draw = target == GL_FRAMEBUFFER || target == GL_DRAW_FRAMEBUFFER;
+        let read = target == GL_FRAMEBUFFER || target == GL_READ_FRAMEBUFFER;
+        let is_gbuffer = name != 0 && self.gbuffer == Some(name);
+        if draw && is_gbuffer {
+            if let Some(twin) = self.twin() {
+                real(target, twin);
+                self.twin_bound = true;
+                self.draw_fbo = name;
+                if read {
+                    self.read_fbo = name;
+                }
+                return;
+            }
+        }
+        real(target, name);
+        let left_twin = draw && self.twin_bound;
+        if draw {
+            self.draw_fbo = name;
+            self.twin_bound = false;
+        }
+        if read {
+            self.read_fbo = name;
+        }
+        // The resolve at the first bind that leaves the twin after drawing,
+        // or at a read of the G-buffer before that.
+        if self.twin_drawn && (left_twin || (read && is_gbuffer)) {
+            self.resolve();
+        }
+    }
+
+    pub(super) fn delete_framebuffers(&mut self, names: &[u32]) {
+        for name in names {
+            self.framebuffers.remove(name);
+            if self.gbuffer == Some(*name) {
+                // GL unbinds a deleted framebuffer: the twin goes too.
+                if self.twin_bound {
+                    real_bind(GL_DRAW_FRAMEBUFFER, 0);
+                    if self.read_fbo == *name {
+                        real_bind(GL_READ_FRAMEBUFFER, 0);
+                    }
+                    self.twin_bound = false;
+                }
+                self.twin_drawn = false;
+                if let Some(r) = self.retrofit.take() {
+                    // SAFETY: a handle the C API made, on its context.
+                    self.checked("dmsaa_destroy", |_| {
+                        unsafe { capi::dmsaa_destroy(r.handle) };
+                        capi::DmsaaStatus::Ok
+                    });
+                }
+                // A new G-buffer is looked for as at the start.
+                self.gbuffer = None;
+            }
+        }
+    }
+
+    /// Before an attachment of framebuffer `name` changes through direct
+    /// state access (the twin, bound or not, is not touched).
+    pub(super) fn named_attachment_changes(&mut self, name: u32) {
+        if let Some(f) = self.framebuffers.get_mut(&name) {
+            f.stale = true;
+        }
+        if name != 0 && self.gbuffer == Some(name) {
+            self.needs_refresh = true;
+        }
+    }
+
+    /// Before an attachment of the framebuffer bound at `target` changes.
+    pub(super) fn attachment_changes(&mut self, target: u32) {
+        let bound = if target == GL_READ_FRAMEBUFFER {
+            self.read_fbo
+        } else {
+            self.draw_fbo
+        };
+        if let Some(f) = self.framebuffers.get_mut(&bound) {
+            f.stale = true;
+        }
+        if self.gbuffer != Some(bound) || bound == 0 {
+            return;
+        }
+        // The twins are rebuilt from the G-buffer at its next bind.
+        self.needs_refresh = true;
+        if !self.twin_bound || target == GL_READ_FRAMEBUFFER {
+            return;
+        }
+        if self.twin_drawn {
+            // Drawn into the twin and not resolved: the frame's geometry
+            // would be lost either way.
+            say_once(
+                "reattach",
+                "the program changed its G-buffer's attachments after drawing into it; the retrofit is off for the rest of the run",
+            );
+            self.give_up();
+            return;
+        }
+        // The change would go to the twin, bound in the G-buffer's place
+        // (a program binds its G-buffer to reattach its textures after a
+        // resize): the G-buffer goes back under it, and this frame's
+        // drawing into it stays single-sampled.
+        real_bind(GL_DRAW_FRAMEBUFFER, bound);
+        if self.read_fbo == bound {
+            real_bind(GL_READ_FRAMEBUFFER, bound);
+        }
+        self.twin_bound = false;
+    }
+}

@@ -1,0 +1,232 @@
+//! The G-buffer found from the draws: the framebuffers drawn into are
+//! inspected, and at the end of a frame the one line for a program left
+//! alone (or `--learn`'s profile).
+//!
+//! The G-buffer, without a profile: a complete single-sample framebuffer
+//! with at least two colour textures and a depth attachment, drawn into,
+//! two or more of whose colour textures are bound at once for a draw into
+//! another framebuffer (a lighting pass reads them together; a bloom
+//! program's blur and composite read one at a time). With a profile, a
+//! drawn framebuffer matching its signature. Anything less sure leaves the
+//! program untouched and says so once.
+
+use super::context::{Context, Framebuffer, GL_DRAW_FRAMEBUFFER, Pass};
+use super::run::{say_once, settings};
+use crate::profile::Profile;
+use crate::replay::{DrawCall, RecordedDraw};
+use glow::HasContext;
+use std::collections::HashSet;
+
+impl Context {
+    /// Before a draw call: the twin is drawn; otherwise the framebuffer
+    /// drawn into is inspected, and the G-buffer looked for.
+    pub(super) fn before_draw(&mut self, call: DrawCall) {
+        if self.twin_bound {
+            self.twin_drawn = true;
+            return;
+        }
+        let d = self.draw_fbo;
+        if self
+            .recording
+            .as_ref()
+            .is_some_and(|r| r.target.is_none_or(|t| t == d))
+        {
+            // SAFETY: a query of the current context.
+            let vertex_array =
+                unsafe { self.gl().get_parameter_i32(glow::VERTEX_ARRAY_BINDING) } as u32;
+            let mut textures: Vec<(u32, u32)> = self
+                .unit_textures
+                .iter()
+                .filter(|(_, t)| **t != 0)
+                .map(|(u, t)| (*u, *t))
+                .collect();
+            textures.sort_unstable();
+            let program = self.program;
+            if let Some(r) = self.recording.as_mut() {
+                r.target = Some(d);
+                r.draws.push(RecordedDraw {
+                    call,
+                    program,
+                    vertex_array,
+                    textures,
+                });
+            }
+        }
+        if self.learning() {
+            match self.passes.last_mut() {
+                Some(p) if p.framebuffer == d && p.program == self.program => p.draws += 1,
+                _ => self.passes.push(Pass {
+                    framebuffer: d,
+                    program: self.program,
+                    draws: 1,
+                }),
+            }
+        }
+        if self.off {
+            return;
+        }
+        if d != 0 {
+            let fresh = self.framebuffers.get(&d).is_none_or(|f| f.stale);
+            if fresh {
+                let info = self.inspect();
+                self.framebuffers.insert(d, info);
+            }
+            if let Some(f) = self.framebuffers.get_mut(&d) {
+                f.drawn = true;
+            }
+        }
+        if self.gbuffer.is_none() {
+            self.find_gbuffer(d);
+        }
+    }
+
+    /// The bound draw framebuffer's attachments, read from GL.
+    fn inspect(&mut self) -> Framebuffer {
+        let gl = self.gl();
+        let mut f = Framebuffer::default();
+        // SAFETY: queries of the bound draw framebuffer, a user one.
+        unsafe {
+            f.complete =
+                gl.check_framebuffer_status(GL_DRAW_FRAMEBUFFER) == glow::FRAMEBUFFER_COMPLETE;
+            f.samples = gl.get_parameter_i32(glow::SAMPLES);
+            let max = gl
+                .get_parameter_i32(glow::MAX_COLOR_ATTACHMENTS)
+                .clamp(0, 8) as u32;
+            for k in 0..max {
+                let attachment = glow::COLOR_ATTACHMENT0 + k;
+                let param = |p| {
+                    gl.get_framebuffer_attachment_parameter_i32(GL_DRAW_FRAMEBUFFER, attachment, p)
+                };
+                let kind = param(glow::FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE) as u32;
+                if kind == glow::NONE {
+                    continue;
+                }
+                f.colour_attachments += 1;
+                let component = match param(glow::FRAMEBUFFER_ATTACHMENT_COMPONENT_TYPE) as u32 {
+                    glow::FLOAT => "float",
+                    glow::INT => "int",
+                    glow::UNSIGNED_INT => "uint",
+                    glow::SIGNED_NORMALIZED => "snorm",
+                    _ => "unorm",
+                };
+                let bits = param(glow::FRAMEBUFFER_ATTACHMENT_RED_SIZE);
+                f.formats.push(format!("{component}{bits}"));
+                if kind == glow::TEXTURE {
+                    let texture = param(glow::FRAMEBUFFER_ATTACHMENT_OBJECT_NAME) as u32;
+                    f.colour_textures.push((k, texture));
+                }
+            }
+            f.depth = gl.get_framebuffer_attachment_parameter_i32(
+                GL_DRAW_FRAMEBUFFER,
+                glow::DEPTH_ATTACHMENT,
+                glow::FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE,
+            ) as u32
+                != glow::NONE;
+        }
+        f
+    }
+
+    /// Whether framebuffer `f` is the one the profile names.
+    fn matches_profile(profile: &Profile, f: &Framebuffer) -> bool {
+        let Some(m) = &profile.framebuffer else {
+            return false;
+        };
+        f.complete
+            && f.samples == 0
+            && f.colour_textures.len() as u32 == m.colour_textures
+            && f.depth == m.depth
+            && (m.formats.is_empty() || m.formats == f.formats)
+    }
+
+    /// Look for the G-buffer at a draw into framebuffer `draw`.
+    fn find_gbuffer(&mut self, draw: u32) {
+        let profile = settings().profile.as_ref();
+        if let Some(p) = profile.filter(|p| p.framebuffer.is_some()) {
+            if let Some(f) = self.framebuffers.get(&draw)
+                && Self::matches_profile(p, f)
+            {
+                self.gbuffer = Some(draw);
+            }
+            return;
+        }
+        let bound: HashSet<u32> = self
+            .unit_textures
+            .values()
+            .copied()
+            .filter(|&t| t != 0)
+            .collect();
+        if bound.len() < 2 {
+            return;
+        }
+        let found: Vec<u32> = self
+            .framebuffers
+            .iter()
+            .filter(|(name, f)| {
+                **name != draw
+                    && f.drawn
+                    && f.looks_like_gbuffer()
+                    && f.colour_textures
+                        .iter()
+                        .filter(|(_, t)| bound.contains(t))
+                        .count()
+                        >= 2
+            })
+            .map(|(name, _)| *name)
+            .collect();
+        match found.as_slice() {
+            [] => {}
+            [g] => self.gbuffer = Some(*g),
+            many => {
+                say_once(
+                    "ambiguous",
+                    &format!(
+                        "framebuffers {many:?} all look like G-buffers; leaving the program untouched (a profile names which)"
+                    ),
+                );
+                self.off = true;
+            }
+        }
+    }
+
+    /// At a swap: the last resort's resolve, the frame's passes kept for
+    /// `--learn`, and the one line for a program left alone.
+    pub(super) fn end_frame(&mut self) {
+        if self.twin_drawn {
+            self.resolve();
+        }
+        if self
+            .recording
+            .as_ref()
+            .is_some_and(|r| !r.draws.is_empty() && r.skip == 0)
+        {
+            self.second_layer();
+        }
+        self.recording = None;
+        self.frames += 1;
+        self.last_frame = std::mem::take(&mut self.passes);
+        if self.learning() {
+            crate::learn::after_frame(self);
+            return;
+        }
+        if self.frames == 2 && self.gbuffer.is_none() && !self.off {
+            let unsure: Vec<u32> = self
+                .framebuffers
+                .iter()
+                .filter(|(_, f)| f.drawn && f.looks_like_gbuffer())
+                .map(|(n, _)| *n)
+                .collect();
+            let message = if unsure.is_empty() {
+                "no G-buffer found (no complete single-sample framebuffer with two or more colour textures and \
+                 depth was drawn into); leaving the program untouched"
+                    .to_string()
+            } else {
+                format!(
+                    "framebuffer(s) {unsure:?} have the shape of a G-buffer, but no later pass read two of their \
+                     colour textures together; not sure it is one, so leaving the program untouched (a profile \
+                     can name it)"
+                )
+            };
+            say_once("none", &message);
+        }
+    }
+}

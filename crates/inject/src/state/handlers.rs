@@ -1,0 +1,451 @@
+//! What each watched GL function does around its real call (the wrappers
+//! in [`crate::hooks`] call these), on the current context's state.
+
+// The handlers have the GL functions' own names.
+#![allow(non_snake_case)]
+
+use super::context::Context;
+use super::run::{say_once, settings};
+use crate::hooks::{current_context, real_type};
+use crate::replay::DrawCall;
+use std::collections::HashMap;
+use std::ffi::{CStr, c_char, c_ulong, c_void};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::Mutex;
+
+const GL_DRAW_FRAMEBUFFER_BINDING: u32 = 0x8CA6;
+const GL_READ_FRAMEBUFFER_BINDING: u32 = 0x8CAA;
+const GL_TEXTURE0: u32 = 0x84C0;
+const GL_TEXTURE_2D: u32 = 0x0DE1;
+
+static CONTEXTS: Mutex<Option<HashMap<usize, Context>>> = Mutex::new(None);
+
+thread_local! {
+    /// Whether this thread is inside [`with_context`] already (a driver
+    /// calling an exported GL symbol of this library's while it works).
+    static INSIDE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Clears [`INSIDE`] on every way out.
+struct Inside;
+
+impl Drop for Inside {
+    fn drop(&mut self) {
+        INSIDE.with(|i| i.set(false));
+    }
+}
+
+/// `f` on the current context's state, or `None` (the call passes through
+/// untouched) where there is no current context, the call comes from inside
+/// the library's own work on this thread, or the state is poisoned. Another
+/// thread's call waits for the state (each context's state stays whole).
+fn with_context<R>(f: impl FnOnce(&mut Context) -> R) -> Option<R> {
+    if INSIDE.with(|i| i.replace(true)) {
+        return None;
+    }
+    let _inside = Inside;
+    let (api, id) = current_context()?;
+    let mut guard = CONTEXTS.lock().ok()?;
+    let context = guard
+        .get_or_insert_with(HashMap::new)
+        .entry(id)
+        .or_insert_with(|| Context::new(api));
+    match catch_unwind(AssertUnwindSafe(|| f(context))) {
+        Ok(r) => Some(r),
+        Err(_) => {
+            say_once(
+                "panic",
+                "internal error; the retrofit is off for the rest of the run",
+            );
+            context.off = true;
+            None
+        }
+    }
+}
+
+pub(crate) fn glBindFramebuffer(real: real_type::glBindFramebuffer, target: u32, name: u32) {
+    // SAFETY (all handlers): the driver's function, with the program's
+    // arguments or the library's own framebuffer name.
+    let call = |t: u32, n: u32| unsafe { real(t, n) };
+    if with_context(|cx| cx.bind_framebuffer(target, name, &call)).is_none() {
+        call(target, name);
+    }
+}
+
+pub(crate) fn glDeleteFramebuffers(
+    real: real_type::glDeleteFramebuffers,
+    count: i32,
+    names: *const u32,
+) {
+    if count > 0 && !names.is_null() {
+        // SAFETY: GL's contract: `count` names.
+        let list = unsafe { std::slice::from_raw_parts(names, count as usize) };
+        with_context(|cx| cx.delete_framebuffers(list));
+    }
+    unsafe { real(count, names) }
+}
+
+pub(crate) fn glFramebufferTexture(
+    real: real_type::glFramebufferTexture,
+    t: u32,
+    a: u32,
+    tex: u32,
+    l: i32,
+) {
+    with_context(|cx| cx.attachment_changes(t));
+    unsafe { real(t, a, tex, l) }
+}
+
+pub(crate) fn glFramebufferTexture2D(
+    real: real_type::glFramebufferTexture2D,
+    t: u32,
+    a: u32,
+    tt: u32,
+    tex: u32,
+    l: i32,
+) {
+    with_context(|cx| cx.attachment_changes(t));
+    unsafe { real(t, a, tt, tex, l) }
+}
+
+pub(crate) fn glFramebufferRenderbuffer(
+    real: real_type::glFramebufferRenderbuffer,
+    t: u32,
+    a: u32,
+    rt: u32,
+    rb: u32,
+) {
+    with_context(|cx| cx.attachment_changes(t));
+    unsafe { real(t, a, rt, rb) }
+}
+
+pub(crate) fn glNamedFramebufferTexture(
+    real: real_type::glNamedFramebufferTexture,
+    framebuffer: u32,
+    a: u32,
+    tex: u32,
+    l: i32,
+) {
+    with_context(|cx| cx.named_attachment_changes(framebuffer));
+    unsafe { real(framebuffer, a, tex, l) }
+}
+
+pub(crate) fn glNamedFramebufferRenderbuffer(
+    real: real_type::glNamedFramebufferRenderbuffer,
+    framebuffer: u32,
+    a: u32,
+    rt: u32,
+    rb: u32,
+) {
+    with_context(|cx| cx.named_attachment_changes(framebuffer));
+    unsafe { real(framebuffer, a, rt, rb) }
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn glBlitNamedFramebuffer(
+    real: real_type::glBlitNamedFramebuffer,
+    read: u32,
+    draw: u32,
+    sx0: i32,
+    sy0: i32,
+    sx1: i32,
+    sy1: i32,
+    dx0: i32,
+    dy0: i32,
+    dx1: i32,
+    dy1: i32,
+    mask: u32,
+    filter: u32,
+) {
+    // A blit from the G-buffer reads it: resolved first.
+    with_context(|cx| {
+        if cx.twin_drawn && read != 0 && cx.gbuffer == Some(read) {
+            cx.resolve();
+        }
+    });
+    unsafe {
+        real(
+            read, draw, sx0, sy0, sx1, sy1, dx0, dy0, dx1, dy1, mask, filter,
+        )
+    }
+}
+
+pub(crate) fn glBindTextureUnit(real: real_type::glBindTextureUnit, unit: u32, texture: u32) {
+    unsafe { real(unit, texture) };
+    with_context(|cx| {
+        cx.unit_textures.insert(unit, texture);
+    });
+}
+
+pub(crate) fn glActiveTexture(real: real_type::glActiveTexture, unit: u32) {
+    unsafe { real(unit) };
+    with_context(|cx| cx.active_unit = unit.wrapping_sub(GL_TEXTURE0));
+}
+
+pub(crate) fn glBindTexture(real: real_type::glBindTexture, target: u32, texture: u32) {
+    unsafe { real(target, texture) };
+    if target == GL_TEXTURE_2D {
+        with_context(|cx| {
+            cx.unit_textures.insert(cx.active_unit, texture);
+        });
+    }
+}
+
+pub(crate) fn glUseProgram(real: real_type::glUseProgram, program: u32) {
+    unsafe { real(program) };
+    with_context(|cx| cx.program = program);
+}
+
+pub(crate) fn glGetUniformLocation(
+    real: real_type::glGetUniformLocation,
+    program: u32,
+    name: *const c_char,
+) -> i32 {
+    let location = unsafe { real(program, name) };
+    if location >= 0 && !name.is_null() {
+        // SAFETY: GL's contract: a C string.
+        let name = unsafe { CStr::from_ptr(name) }.to_string_lossy();
+        with_context(|cx| {
+            let profile = settings().profile.as_ref();
+            let projection = profile.map_or(Some("projection"), |p| p.projection_uniform());
+            let view = profile.map_or(Some("view"), |p| p.view_uniform());
+            if projection == Some(&*name) {
+                cx.matrix_uniforms.insert((program, location), true);
+            } else if view == Some(&*name) {
+                cx.matrix_uniforms.insert((program, location), false);
+            }
+            if cx.learning() {
+                cx.uniform_names
+                    .insert((program, location), name.to_string());
+            }
+        });
+    }
+    location
+}
+
+pub(crate) fn glUniformMatrix4fv(
+    real: real_type::glUniformMatrix4fv,
+    location: i32,
+    count: i32,
+    transpose: u8,
+    value: *const f32,
+) {
+    unsafe { real(location, count, transpose, value) };
+    if count < 1 || value.is_null() {
+        return;
+    }
+    with_context(|cx| {
+        let key = (cx.program, location);
+        if cx.learning()
+            && let Some(name) = cx.uniform_names.get(&key)
+            && !cx.matrices_set.contains(name)
+        {
+            let name = name.clone();
+            cx.matrices_set.push(name);
+        }
+        let Some(&is_projection) = cx.matrix_uniforms.get(&key) else {
+            return;
+        };
+        let mut m = [0f32; 16];
+        // SAFETY: GL's contract: 16 floats per matrix.
+        m.copy_from_slice(unsafe { std::slice::from_raw_parts(value, 16) });
+        if transpose != 0 {
+            let t = m;
+            for c in 0..4 {
+                for r in 0..4 {
+                    m[c * 4 + r] = t[r * 4 + c];
+                }
+            }
+        }
+        if is_projection {
+            cx.projection = Some(m);
+        } else {
+            cx.view = Some(m);
+        }
+    });
+}
+
+pub(crate) fn glGetIntegerv(real: real_type::glGetIntegerv, pname: u32, data: *mut i32) {
+    unsafe { real(pname, data) };
+    if data.is_null()
+        || (pname != GL_DRAW_FRAMEBUFFER_BINDING && pname != GL_READ_FRAMEBUFFER_BINDING)
+    {
+        return;
+    }
+    // The program asks what it bound: the G-buffer, not the twin.
+    with_context(|cx| {
+        if cx.twin_bound
+            && let Some(g) = cx.gbuffer
+        {
+            let seen = if pname == GL_DRAW_FRAMEBUFFER_BINDING {
+                cx.draw_fbo
+            } else {
+                cx.read_fbo
+            };
+            if seen == g {
+                // SAFETY: GL wrote one integer there.
+                unsafe { *data = g as i32 };
+            }
+        }
+    });
+}
+
+pub(crate) fn glClear(real: real_type::glClear, mask: u32) {
+    with_context(|cx| {
+        if cx.twin_bound {
+            cx.twin_drawn = true;
+        }
+    });
+    unsafe { real(mask) }
+}
+
+pub(crate) fn glDrawArrays(real: real_type::glDrawArrays, mode: u32, first: i32, count: i32) {
+    with_context(|cx| cx.before_draw(DrawCall::Arrays { mode, first, count }));
+    unsafe { real(mode, first, count) }
+}
+
+pub(crate) fn glDrawArraysInstanced(
+    real: real_type::glDrawArraysInstanced,
+    m: u32,
+    f: i32,
+    c: i32,
+    i: i32,
+) {
+    with_context(|cx| {
+        cx.before_draw(DrawCall::ArraysInstanced {
+            mode: m,
+            first: f,
+            count: c,
+            instances: i,
+        })
+    });
+    unsafe { real(m, f, c, i) }
+}
+
+pub(crate) fn glDrawElements(
+    real: real_type::glDrawElements,
+    m: u32,
+    c: i32,
+    k: u32,
+    p: *const c_void,
+) {
+    with_context(|cx| {
+        cx.before_draw(DrawCall::Elements {
+            mode: m,
+            count: c,
+            kind: k,
+            offset: p as usize,
+        })
+    });
+    unsafe { real(m, c, k, p) }
+}
+
+pub(crate) fn glDrawElementsInstanced(
+    real: real_type::glDrawElementsInstanced,
+    m: u32,
+    c: i32,
+    k: u32,
+    p: *const c_void,
+    i: i32,
+) {
+    with_context(|cx| {
+        cx.before_draw(DrawCall::ElementsInstanced {
+            mode: m,
+            count: c,
+            kind: k,
+            offset: p as usize,
+            instances: i,
+        })
+    });
+    unsafe { real(m, c, k, p, i) }
+}
+
+pub(crate) fn glDrawElementsBaseVertex(
+    real: real_type::glDrawElementsBaseVertex,
+    m: u32,
+    c: i32,
+    k: u32,
+    p: *const c_void,
+    b: i32,
+) {
+    with_context(|cx| {
+        cx.before_draw(DrawCall::ElementsBaseVertex {
+            mode: m,
+            count: c,
+            kind: k,
+            offset: p as usize,
+            base: b,
+        })
+    });
+    unsafe { real(m, c, k, p, b) }
+}
+
+pub(crate) fn glDrawRangeElements(
+    real: real_type::glDrawRangeElements,
+    m: u32,
+    s: u32,
+    e: u32,
+    c: i32,
+    k: u32,
+    p: *const c_void,
+) {
+    with_context(|cx| {
+        cx.before_draw(DrawCall::Elements {
+            mode: m,
+            count: c,
+            kind: k,
+            offset: p as usize,
+        })
+    });
+    unsafe { real(m, s, e, c, k, p) }
+}
+
+pub(crate) fn glXSwapBuffers(
+    real: real_type::glXSwapBuffers,
+    display: *mut c_void,
+    drawable: c_ulong,
+) {
+    with_context(Context::end_frame);
+    unsafe { real(display, drawable) }
+}
+
+/// A destroyed context's state is forgotten: its GL objects went with
+/// it, and the retrofit's handle is left unfreed (`dmsaa_destroy` would
+/// call GL without the context), a small allocation per context.
+fn forget_context(context: *mut c_void) {
+    if INSIDE.with(|i| i.get()) {
+        return;
+    }
+    if let Ok(mut guard) = CONTEXTS.lock()
+        && let Some(map) = guard.as_mut()
+    {
+        map.remove(&(context as usize));
+    }
+}
+
+pub(crate) fn glXDestroyContext(
+    real: real_type::glXDestroyContext,
+    display: *mut c_void,
+    context: *mut c_void,
+) {
+    forget_context(context);
+    unsafe { real(display, context) }
+}
+
+pub(crate) fn eglDestroyContext(
+    real: real_type::eglDestroyContext,
+    display: *mut c_void,
+    context: *mut c_void,
+) -> u32 {
+    forget_context(context);
+    unsafe { real(display, context) }
+}
+
+pub(crate) fn eglSwapBuffers(
+    real: real_type::eglSwapBuffers,
+    display: *mut c_void,
+    surface: *mut c_void,
+) -> u32 {
+    with_context(Context::end_frame);
+    unsafe { real(display, surface) }
+}

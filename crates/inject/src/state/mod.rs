@@ -1,0 +1,19 @@
+//! What the library keeps per GL context, and what each watched call does:
+//! find the G-buffer, bind the retrofit's framebuffer in its place, resolve
+//! when the program leaves it.
+//!
+//! The calls come in through [`handlers`]; the state they work on is
+//! [`context`]'s, and its parts are [`gbuffer`] (finding the G-buffer),
+//! [`framebuffers`] (the binds and attachments followed), [`retrofit`] (the
+//! C API's retrofit made, bound, resolved, its second layer) and [`run`]
+//! (the settings and messages of the whole run).
+
+mod context;
+mod framebuffers;
+mod gbuffer;
+pub(crate) mod handlers;
+mod retrofit;
+mod run;
+
+pub(crate) use context::Context;
+pub(crate) use run::{say_once, settings};

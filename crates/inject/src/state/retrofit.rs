@@ -1,0 +1,221 @@
+//! The retrofit driven through the C API: made for the G-buffer, its
+//! framebuffer (the twin) handed out to be bound in the G-buffer's place,
+//! resolved, and with two layers the recorded lighting drawn again.
+
+use super::context::{Context, Framebuffer, Retrofit};
+use super::run::{RESOLVES, say_once, settings};
+use crate::hooks::{Api, library_loader};
+use crate::replay::{self, Recording};
+use deferred_msaa_capi as capi;
+use glow::HasContext;
+use std::ffi::c_void;
+
+impl Context {
+    /// The framebuffer to bind in the G-buffer's place this frame, making
+    /// the retrofit first if it is not made yet.
+    pub(super) fn twin(&mut self) -> Option<u32> {
+        if self.off || self.learning() {
+            return None;
+        }
+        let g = self.gbuffer?;
+        if self.retrofit.is_none() {
+            if !self.attachments_exist(g) {
+                // The program is remaking its G-buffer (a resize deletes
+                // the old textures before it attaches new ones): made at a
+                // later bind, once its attachments are whole again.
+                return None;
+            }
+            self.make(g)?;
+        }
+        let handle = self.retrofit.as_ref()?.handle;
+        if self.needs_refresh {
+            self.needs_refresh = false;
+            // SAFETY: a live handle; this context current.
+            let status = self.checked("dmsaa_refresh", |_| unsafe { capi::dmsaa_refresh(handle) });
+            if status != capi::DmsaaStatus::Ok {
+                self.fail("dmsaa_refresh");
+                return None;
+            }
+        }
+        let mut twin = 0u32;
+        // SAFETY: a live handle and a writable u32.
+        let status = self.checked("dmsaa_framebuffer", |_| unsafe {
+            capi::dmsaa_framebuffer(handle, &mut twin)
+        });
+        if status != capi::DmsaaStatus::Ok || twin == 0 {
+            self.fail("dmsaa_framebuffer");
+            return None;
+        }
+        Some(twin)
+    }
+
+    /// Whether the colour textures framebuffer `g` was last seen with all
+    /// still exist.
+    fn attachments_exist(&mut self, g: u32) -> bool {
+        let textures: Vec<u32> = self
+            .framebuffers
+            .get(&g)
+            .map(|f| f.colour_textures.iter().map(|&(_, t)| t).collect())
+            .unwrap_or_default();
+        let gl = self.gl();
+        textures.iter().all(|&t| {
+            std::num::NonZeroU32::new(t)
+                // SAFETY: a query of the current context.
+                .is_some_and(|t| unsafe { gl.is_texture(glow::NativeTexture(t)) })
+        })
+    }
+
+    /// Make the retrofit of framebuffer `g`.
+    fn make(&mut self, g: u32) -> Option<()> {
+        let profile = settings().profile.as_ref();
+        let options = match profile {
+            Some(p) => p.options("the profile").ok()?,
+            None => capi::dmsaa_options_default(),
+        };
+        let world_space = options.world_space_position == 1;
+        if self.projection.is_none() {
+            say_once(
+                "projection",
+                &format!(
+                    "found the G-buffer (framebuffer {g}) but no projection matrix: no uniform named {:?} was set; \
+                     leaving the program untouched (a profile names the uniform or gives the matrix)",
+                    profile
+                        .and_then(|p| p.projection_uniform())
+                        .unwrap_or("projection")
+                ),
+            );
+            self.off = true;
+            return None;
+        }
+        if world_space && self.view.is_none() {
+            say_once(
+                "view",
+                "the profile declares world-space positions but no view matrix was seen; leaving the program untouched",
+            );
+            self.off = true;
+            return None;
+        }
+        let user: *mut c_void = match self.api {
+            Api::Glx => std::ptr::null_mut(),
+            Api::Egl => std::ptr::dangling_mut::<u8>().cast(),
+        };
+        let mut handle = std::ptr::null_mut();
+        // SAFETY: the loader gives this context's real entry points; the
+        // options and the out pointer live across the call.
+        let status = self.checked("dmsaa_retrofit_new", |_| unsafe {
+            capi::dmsaa_retrofit_new(Some(library_loader), user, g, &options, &mut handle)
+        });
+        if status != capi::DmsaaStatus::Ok || handle.is_null() {
+            self.fail("dmsaa_retrofit_new");
+            return None;
+        }
+        let mut samples = 0;
+        // SAFETY: a live handle and a writable u32.
+        unsafe { capi::dmsaa_samples(handle, &mut samples) };
+        let shape = self
+            .framebuffers
+            .get(&g)
+            .map(Framebuffer::describe)
+            .unwrap_or_default();
+        say_once(
+            "made",
+            &format!(
+                "retrofitting framebuffer {g} ({shape}) with {samples}x MSAA, {} layer(s), {}",
+                options.layers,
+                if profile.is_some() {
+                    "options from the profile"
+                } else {
+                    "default options"
+                }
+            ),
+        );
+        self.retrofit = Some(Retrofit {
+            handle,
+            world_space,
+            layers: options.layers,
+        });
+        Some(())
+    }
+
+    pub(super) fn resolve(&mut self) {
+        self.twin_drawn = false;
+        let Some(r) = self.retrofit.as_ref() else {
+            return;
+        };
+        let (handle, world_space, layers) = (r.handle, r.world_space, r.layers);
+        let (Some(projection), view) = (self.projection, self.view) else {
+            return;
+        };
+        let view_ptr = match (world_space, view.as_ref()) {
+            (true, Some(v)) => v.as_ptr(),
+            _ => std::ptr::null(),
+        };
+        // SAFETY: a live handle; 16 floats each, alive across the call.
+        let status = self.checked("dmsaa_resolve", |_| unsafe {
+            capi::dmsaa_resolve(handle, projection.as_ptr(), view_ptr)
+        });
+        if status == capi::DmsaaStatus::Ok {
+            RESOLVES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if layers == 2 {
+                let pass = settings()
+                    .profile
+                    .as_ref()
+                    .and_then(|p| p.lighting.as_ref())
+                    .map_or(1, |l| l.pass);
+                self.recording = Some(Recording {
+                    skip: pass.saturating_sub(1),
+                    ..Recording::default()
+                });
+            }
+        } else {
+            self.fail("dmsaa_resolve");
+        }
+    }
+
+    /// The second layer: the recorded lighting drawn again into the
+    /// retrofit's own target, the two layers mixed into the program's lit
+    /// target, and the state the replay changed put back.
+    pub(super) fn second_layer(&mut self) {
+        let Some(recording) = self.recording.take() else {
+            return;
+        };
+        let Some(handle) = self.retrofit.as_ref().map(|r| r.handle) else {
+            return;
+        };
+        let output = recording.target.unwrap_or(0);
+        let draws = recording.draws;
+        let mut failed = "the second layer";
+        let status = self.checked(
+            "the second layer (begin, the replayed lighting, finish)",
+            |gl| {
+                let mut own = 0u32;
+                // SAFETY: a live handle, a writable u32; this context current.
+                let status =
+                    unsafe { capi::dmsaa_begin_second_layer_own_target(handle, output, &mut own) };
+                if status != capi::DmsaaStatus::Ok {
+                    failed = "dmsaa_begin_second_layer_own_target";
+                    return status;
+                }
+                let Some(own) = std::num::NonZeroU32::new(own) else {
+                    return status;
+                };
+                let saved = replay::save(gl, &draws);
+                // SAFETY: the retrofit's framebuffer, bound for the replay.
+                unsafe {
+                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(glow::NativeFramebuffer(own)))
+                };
+                replay::draw(gl, &draws);
+                // SAFETY: as above; the output given to begin.
+                let status = unsafe { capi::dmsaa_finish_second_layer(handle, output) };
+                replay::restore(gl, &saved);
+                if status != capi::DmsaaStatus::Ok {
+                    failed = "dmsaa_finish_second_layer";
+                }
+                status
+            },
+        );
+        if status != capi::DmsaaStatus::Ok {
+            self.fail(failed);
+        }
+    }
+}
