@@ -22,7 +22,7 @@
 //! error is the mean of that over the bars, each bar counting alike:
 //! negative when a method draws the bars thinner than the reference.
 
-use super::srgb_to_linear;
+use crate::compare::srgb_to_linear;
 use crate::scene::{Bar, Camera, ImageBar};
 use glam::DVec2;
 use image::RgbaImage;
@@ -311,7 +311,7 @@ impl BarGauge {
 
 #[cfg(test)]
 mod tests {
-    use super::super::linear_to_srgb;
+    use super::super::pixels::linear_to_srgb;
     use super::*;
 
     const SIZE: (u32, u32) = (96, 64);

@@ -42,7 +42,6 @@ const NOT_YET_SPLIT: &[&str] = &[
     "crates/capi/tests/c/tutorial_host.c",
     "crates/core/src/resolve/cpu.rs",
     "crates/core/src/resolve/mod.rs",
-    "src/bench/mod.rs",
     "tests/common/property.rs",
     "tests/fast/resolve_layers.rs",
 ];
@@ -70,11 +69,6 @@ const KNOWN_CYCLES: &[&[&str]] = &[
         "src/scene/gltf_loader/primitives.rs",
         "src/scene/gltf_loader/walk.rs",
         "src/scene/mod.rs",
-    ],
-    &[
-        "src/bench/crops.rs",
-        "src/bench/mod.rs",
-        "src/bench/motion.rs",
     ],
     &[
         "src/cli/bench.rs",
