@@ -38,6 +38,7 @@
 //! ```
 
 pub mod bar_width;
+mod bar_width_error;
 
 mod animation;
 mod config;
