@@ -50,11 +50,11 @@ pub struct BenchConfig {
     pub progress: bool,
     /// After the timed frames, render `frames` more of each method that
     /// resolves with the retrofit profiling its steps (`glFinish` around
-    /// each), and report each step's median ([`Run::profile`]).
+    /// each), and report each step's median ([`Run::profile`](super::report::Run::profile)).
     pub profile: bool,
     /// Render a camera path instead of still frames (`--motion`): every
     /// method renders each of its frames, measured against the reference
-    /// of every frame ([`Run::motion`]); `frames` does not apply.
+    /// of every frame ([`Run::motion`](super::report::Run::motion)); `frames` does not apply.
     pub motion: Option<MotionSpec>,
 }
 
