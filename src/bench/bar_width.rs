@@ -22,7 +22,9 @@
 //! error is the mean of that over the bars, each bar counting alike:
 //! negative when a method draws the bars thinner than the reference.
 
-use super::srgb_to_linear;
+pub use super::bar_width_error::BarWidthError;
+
+use crate::compare::srgb_to_linear;
 use crate::scene::{Bar, Camera, ImageBar};
 use glam::DVec2;
 use image::RgbaImage;
@@ -35,57 +37,6 @@ pub const BAND_MARGIN_PX: f64 = 3.0;
 /// The smallest difference in linear luminance between a bar and what is
 /// behind it that its width is measured from.
 pub const MIN_CONTRAST: f64 = 0.05;
-
-/// Why a bar's width cannot be measured.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum BarWidthError {
-    /// There is no bar.
-    #[error("no bars to measure")]
-    NoBars,
-    /// A point of the bar is not in front of the camera.
-    #[error("bar {bar}: not in front of the camera")]
-    NotInView {
-        /// The bar's index.
-        bar: usize,
-    },
-    /// No band of the bar lies wholly inside the image.
-    #[error(
-        "bar {bar}: no scanline across its measured stretch lies wholly inside the {width}x{height} image"
-    )]
-    OutsideImage {
-        /// The bar's index.
-        bar: usize,
-        /// The image width.
-        width: u32,
-        /// The image height.
-        height: u32,
-    },
-    /// The reference shows the bar too close in luminance to what is
-    /// behind it (below [`MIN_CONTRAST`]).
-    #[error(
-        "bar {bar}: too little contrast to measure its width (linear luminance {bar_luminance:.3} on {behind_luminance:.3} in the reference)"
-    )]
-    LowContrast {
-        /// The bar's index.
-        bar: usize,
-        /// The bar's luminance as estimated from the reference.
-        bar_luminance: f64,
-        /// The luminance behind it.
-        behind_luminance: f64,
-    },
-    /// The measured image is not the reference's size.
-    #[error("the image is {width}x{height}, the reference {reference_width}x{reference_height}")]
-    SizeMismatch {
-        /// The measured image's width.
-        width: u32,
-        /// The measured image's height.
-        height: u32,
-        /// The reference's width.
-        reference_width: u32,
-        /// The reference's height.
-        reference_height: u32,
-    },
-}
 
 /// `bars` as a `width`×`height` image rendered from `camera` shows them.
 pub fn image_bars(
@@ -311,7 +262,7 @@ impl BarGauge {
 
 #[cfg(test)]
 mod tests {
-    use super::super::linear_to_srgb;
+    use super::super::pixels::linear_to_srgb;
     use super::*;
 
     const SIZE: (u32, u32) = (96, 64);

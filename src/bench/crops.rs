@@ -9,7 +9,7 @@
 //! the largest minus the smallest absolute luminance error among the runs),
 //! with the reference's own edge detail as a small tie-breaker.
 
-use super::BenchOutput;
+use super::output::BenchOutput;
 use super::plot::{FAMILY, load_font, plot_error, save_rgb};
 use crate::Result;
 use crate::compare::luminance;
@@ -236,7 +236,7 @@ pub(crate) fn side_by_side(output: &BenchOutput, path: &Path) -> Result<()> {
     let mut y = GAP;
     for (scene, reference) in &output.references {
         let (w, h) = reference.dimensions();
-        let runs: Vec<(&super::Run, &RgbaImage)> = report
+        let runs: Vec<(&super::report::Run, &RgbaImage)> = report
             .runs
             .iter()
             .zip(&output.images)

@@ -13,8 +13,10 @@
 //! masks and the bar gauge made for the still bench apply to it.
 
 use super::bar_width::{self, BarGauge};
+use super::config::{BenchConfig, REFERENCE_SCALE};
+use super::pixels::downsample_srgb;
+use super::pool::{Job, Pool, median, render_options};
 use super::report::MotionMeasures;
-use super::{BenchConfig, Job, Pool, REFERENCE_SCALE, downsample_srgb, median, render_options};
 use crate::compare;
 use crate::context::HeadlessContext;
 use crate::renderer::{AaMode, Renderer};
@@ -285,13 +287,13 @@ pub(super) fn measures(track: &Track, frames: u32, px: f64) -> MotionMeasures {
 /// temporal error and mean FLIP over the frames, and where the two-layer
 /// resolve stands against per-sample lighting, as Markdown bullets. Empty
 /// for a report of still frames.
-pub fn motion_summary(report: &super::Report) -> String {
+pub fn motion_summary(report: &super::report::Report) -> String {
     let Some(path) = &report.motion else {
         return String::new();
     };
     let mut out = String::new();
     for scene in report.scenes() {
-        let runs: Vec<(&super::Run, &MotionMeasures)> = report
+        let runs: Vec<(&super::report::Run, &MotionMeasures)> = report
             .runs_of(scene)
             .filter_map(|r| r.motion.as_ref().map(|m| (r, m)))
             .collect();

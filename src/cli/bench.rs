@@ -1,6 +1,6 @@
 //! `deferred-msaa bench`: error against run time for every method, in one run.
 
-use super::CommonArgs;
+use super::common::CommonArgs;
 use crate::bench::{self, BenchConfig, DEFAULT_SCENES};
 use crate::gbuffer::GBufferLayout;
 use crate::scene::MotionSpec;

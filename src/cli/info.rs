@@ -1,6 +1,6 @@
 //! `deferred-msaa info`: what the context offers.
 
-use super::CommonArgs;
+use super::common::CommonArgs;
 use crate::Result;
 use crate::context::{Backend, HeadlessContext};
 use crate::gl::{Capabilities, ExtraFns, Format, sample_positions};

@@ -2,10 +2,13 @@
 //! `src/main.rs` only calls [`main`].
 
 mod bench;
+mod common;
 pub mod first_run;
 mod info;
 mod inject;
 mod render;
+
+pub use common::CommonArgs;
 
 use crate::context::Backend;
 use crate::{Error, Result};
@@ -20,18 +23,6 @@ pub struct Cli {
     /// target/deferred-msaa/first-run.png).
     #[command(subcommand)]
     pub command: Option<Command>,
-}
-
-/// Options every subcommand takes.
-#[derive(Debug, Clone, clap::Args)]
-pub struct CommonArgs {
-    /// Headless context backend.
-    #[arg(long, default_value = "egl", value_parser = parse_backend)]
-    pub backend: Backend,
-}
-
-fn parse_backend(s: &str) -> std::result::Result<Backend, String> {
-    s.parse::<Backend>().map_err(|e| e.to_string())
 }
 
 /// The subcommands.

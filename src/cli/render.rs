@@ -1,6 +1,6 @@
 //! `deferred-msaa render` and `deferred-msaa dump`.
 
-use super::CommonArgs;
+use super::common::CommonArgs;
 use crate::context::HeadlessContext;
 use crate::gbuffer::{GBufferLayout, MemoryBudget};
 use crate::gl::TextureRef;
