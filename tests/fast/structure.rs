@@ -37,8 +37,7 @@ const DATA_TABLES: &[&str] = &["src/renderer/technique/smaa/tables.rs"];
 
 /// Files over [`MAX_LINES`] not split yet, each named so that no other
 /// file can pass the limit unnoticed. None is left.
-const NOT_YET_SPLIT: &[&str] = &[
-];
+const NOT_YET_SPLIT: &[&str] = &[];
 
 /// Import cycles among files that other work has open now, each the exact
 /// set of its files: to be broken when that work lands. None is left; a
