@@ -5,7 +5,7 @@ use crate::setup::*;
 use deferred_msaa::gbuffer::GBufferLayout;
 use deferred_msaa::gl::{Format, TextureRef};
 use deferred_msaa::readback::{Readback, SampleImage};
-use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
+use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
 use deferred_msaa::resolve::{KeySource, ResolveSlot};
 use deferred_msaa::{Error, MsaaRetrofit};
 use deferred_msaa_testkit::Host;
@@ -142,7 +142,12 @@ pub(crate) fn compare(
                     .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
                     .collect(),
             };
-            let want = cpu.resolve_pixel(&px);
+            let at = PixelPlace {
+                x,
+                y,
+                height: depth.height,
+            };
+            let want = cpu.resolve_pixel_at(&px, Some(at));
             c.pixels += 1;
             c.complex += usize::from(want.complex);
             // Within rounding of a window edge or a depth tie: either answer is right.

@@ -3,7 +3,7 @@
 
 use crate::common::quantile;
 use deferred_msaa_lab::readback::Readback;
-use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelSamples};
+use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
 use deferred_msaa_lab::resolve::{KeySource, ResolveParams};
 use deferred_msaa_lab::retrofit::MsaaRetrofit;
 
@@ -70,10 +70,15 @@ pub(crate) fn count_complex(
                     .collect(),
             };
             c.pixels += 1;
-            let resolved = cpu.resolve_pixel(&px);
+            let at = Some(PixelPlace {
+                x,
+                y,
+                height: depth.height,
+            });
+            let resolved = cpu.resolve_pixel_at(&px, at);
             let complex = resolved.complex;
             if with_option {
-                let want = cpu_exact.resolve_pixel(&px);
+                let want = cpu_exact.resolve_pixel_at(&px, at);
                 let mut worst = (resolved.depth - want.depth).abs();
                 for (a, b) in resolved.attachments.iter().zip(&want.attachments) {
                     for (x, y) in a.iter().zip(b) {

@@ -67,7 +67,12 @@ pub(super) fn cluster_masks(
                     .collect(),
             };
             // Samples of neither kept cluster, each joined to one of them.
-            let joined = cpu.resolve_second_layer_at(&px, None).joined;
+            let at = crate::resolve::cpu::PixelPlace {
+                x,
+                y,
+                height: depth.height,
+            };
+            let joined = cpu.resolve_second_layer_at(&px, Some(at)).joined;
             image::Luma([if joined[0] + joined[1] > 0 { 255 } else { 0 }])
         });
         // Two clusters or more: the second layer covers some of the pixel.

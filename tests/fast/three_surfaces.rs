@@ -11,7 +11,7 @@ use deferred_msaa::{ColorAttachment, LayerMix, NormalAttachment};
 use deferred_msaa_lab::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef, live_objects};
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::resolve::ResolveSettings;
-use deferred_msaa_lab::resolve::cpu::PixelSamples;
+use deferred_msaa_lab::resolve::cpu::{PixelPlace, PixelSamples};
 use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
 use deferred_msaa_testkit::Host;
 use deferred_msaa_testkit::projection::perspective;
@@ -201,7 +201,7 @@ fn a_front_face_a_side_sliver_and_a_wall_keep_their_shares() {
                     side += 1;
                 }
             }
-            let second = cpu.resolve_second_layer_at(&px, None);
+            let second = cpu.resolve_second_layer_at(&px, Some(PixelPlace { x, y, height: H }));
             if front + side + wall == n as usize && side > 0 && wall > 0 {
                 *seen.entry((front, side, wall)).or_default() += 1;
                 assert!(

@@ -107,7 +107,7 @@ typedef struct DmsaaRetrofit DmsaaRetrofit;
 typedef uint32_t DmsaaNormalEncoding;
 
 // How the reference sample of a pixel is chosen
-// (`DMSAA_METHOD_AVERAGE` … `DMSAA_METHOD_BACK`).
+// (`DMSAA_METHOD_AVERAGE` … `DMSAA_METHOD_UPPER_MEDIAN`).
 typedef uint32_t DmsaaMethod;
 
 // The closeness window (`DMSAA_WINDOW_HARD`, `DMSAA_WINDOW_SMOOTH`).
@@ -247,11 +247,16 @@ typedef const void *(*DmsaaGetProcAddress)(const char *name, void *user_data);
 // Reference: the nearest sample.
 #define DMSAA_METHOD_FRONT 1
 
-// Reference: the median sample by depth (the default).
+// Reference: the median sample by depth, the two middle ones of an even
+// count taking turns pixel by pixel (the default).
 #define DMSAA_METHOD_MEDIAN 2
 
 // Reference: the farthest sample.
 #define DMSAA_METHOD_BACK 3
+
+// Reference: the farther of the two middle samples by depth on every
+// pixel (FreeSpace Open's median).
+#define DMSAA_METHOD_UPPER_MEDIAN 4
 
 // Weight 1 within `window_c` pixel footprints, else 0.
 #define DMSAA_WINDOW_HARD 0

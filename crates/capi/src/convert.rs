@@ -107,6 +107,7 @@ pub(crate) fn convert(o: &DmsaaOptions) -> Result<Converted, Failure> {
             ("DMSAA_METHOD_FRONT", ResolveMethod::Front),
             ("DMSAA_METHOD_MEDIAN", ResolveMethod::Median),
             ("DMSAA_METHOD_BACK", ResolveMethod::Back),
+            ("DMSAA_METHOD_UPPER_MEDIAN", ResolveMethod::UpperMedian),
         ],
     )?;
     options.resolve.window = pick(

@@ -63,16 +63,20 @@ pub type DmsaaGetProcAddress =
     Option<unsafe extern "C" fn(name: *const c_char, user_data: *mut c_void) -> *const c_void>;
 
 /// How the reference sample of a pixel is chosen
-/// (`DMSAA_METHOD_AVERAGE` … `DMSAA_METHOD_BACK`).
+/// (`DMSAA_METHOD_AVERAGE` … `DMSAA_METHOD_UPPER_MEDIAN`).
 pub type DmsaaMethod = u32;
 /// Every sample weighs 1, as a hardware resolve.
 pub const DMSAA_METHOD_AVERAGE: DmsaaMethod = 0;
 /// Reference: the nearest sample.
 pub const DMSAA_METHOD_FRONT: DmsaaMethod = 1;
-/// Reference: the median sample by depth (the default).
+/// Reference: the median sample by depth, the two middle ones of an even
+/// count taking turns pixel by pixel (the default).
 pub const DMSAA_METHOD_MEDIAN: DmsaaMethod = 2;
 /// Reference: the farthest sample.
 pub const DMSAA_METHOD_BACK: DmsaaMethod = 3;
+/// Reference: the farther of the two middle samples by depth on every
+/// pixel (FreeSpace Open's median).
+pub const DMSAA_METHOD_UPPER_MEDIAN: DmsaaMethod = 4;
 
 /// The closeness window (`DMSAA_WINDOW_HARD`, `DMSAA_WINDOW_SMOOTH`).
 pub type DmsaaWindow = u32;

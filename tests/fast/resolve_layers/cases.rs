@@ -147,6 +147,26 @@ pub(super) fn normal_conditioning(values: &[[f64; 4]], weights: &[f64]) -> f64 {
     if len >= 1e-6 { magnitude / len } else { 1.0 }
 }
 
+/// Σ w_i |x_i| / |Σ w_i x_i| for component `c`: how much a weighted mean
+/// whose terms cancel amplifies the `f32` rounding of its terms and
+/// weights (1 where nothing cancels; terms that are not finite take no
+/// part, as in the blend).
+pub(super) fn blend_conditioning(values: &[[f64; 4]], weights: &[f64], c: usize) -> f64 {
+    let (mut sum, mut magnitude) = (0.0f64, 0.0f64);
+    for (v, &w) in values.iter().zip(weights) {
+        if w <= 0.0 || !v.iter().all(|x| x.is_finite()) {
+            continue;
+        }
+        sum += w * v[c];
+        magnitude += w * v[c].abs();
+    }
+    if sum.abs() > 0.0 {
+        (magnitude / sum.abs()).max(1.0)
+    } else {
+        1.0
+    }
+}
+
 pub(super) fn close(gpu: f32, cpu: f64) -> bool {
     if cpu.is_nan() {
         return gpu.is_nan();

@@ -282,7 +282,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
                         let at = PixelPlace { x, y, height: H };
                         let want = cpu.resolve_pixel_at(&px, Some(at));
                         if settings.selection.is_active() {
-                            let all = plain.resolve_pixel(&px);
+                            let all = plain.resolve_pixel_at(&px, Some(at));
                             outside_pixels += usize::from(all.complex && !want.complex);
                         } else {
                             complex_pixels += usize::from(want.complex);
@@ -383,8 +383,9 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
                         .map(|a| (0..n).map(|s| a.get(s, x, y).map(|c| c as f64)).collect())
                         .collect(),
                 };
-                let want_first = cpu.resolve_pixel(&px);
-                let want = cpu.resolve_second_layer_at(&px, None);
+                let at = Some(PixelPlace { x, y, height: H });
+                let want_first = cpu.resolve_pixel_at(&px, at);
+                let want = cpu.resolve_second_layer_at(&px, at);
                 second_pixels += usize::from(want.reference.is_some());
                 if want.ambiguous {
                     continue;

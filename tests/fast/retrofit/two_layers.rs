@@ -627,7 +627,7 @@ fn two_layers_on_wide_gbuffers_at_the_contexts_draw_buffers() {
                         .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
                         .collect(),
                 };
-                let want = cpu.resolve_second_layer_at(&px, None);
+                let want = cpu.resolve_second_layer_at(&px, Some(PixelPlace { x, y, height: H }));
                 if want.ambiguous {
                     continue;
                 }

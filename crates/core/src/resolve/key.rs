@@ -222,6 +222,7 @@ impl ResolveProgramKey {
             ResolveMethod::Front => "METHOD_FRONT",
             ResolveMethod::Median => "METHOD_MEDIAN",
             ResolveMethod::Back => "METHOD_BACK",
+            ResolveMethod::UpperMedian => "METHOD_UPPER_MEDIAN",
         };
         def("METHOD", method.into());
         if self.window == Window::Hard {

@@ -241,9 +241,7 @@ impl Resolver {
             outside_output: extra.outside,
             reference_output: extra.reference,
             selection: SelectionKey::of(&s.selection, inputs)?,
-            majority_reference: s.layers == 2
-                && normal.is_some()
-                && s.method != ResolveMethod::Average,
+            majority_reference: normal.is_some() && s.method != ResolveMethod::Average,
             normal,
             second_layer_output,
             written,

@@ -14,7 +14,8 @@
 //                          the key is -dot(u_view_row, (p, 1)), view space's -z
 //   KEY_SAMPLER, KEY_INDEX the position attachment's sampler and number, when
 //                          the key comes from it (its samples are fetched once)
-//   METHOD                 METHOD_AVERAGE, METHOD_FRONT, METHOD_MEDIAN or METHOD_BACK
+//   METHOD                 METHOD_AVERAGE, METHOD_FRONT, METHOD_MEDIAN, METHOD_BACK
+//                          or METHOD_UPPER_MEDIAN
 //   WINDOW_HARD            hard window (smooth otherwise)
 //   FAST_PATH              uniform pixels copy sample 0
 //   POSITION_UNIFORMITY    with FAST_PATH and KEY_SAMPLER: a pixel is uniform when
@@ -40,9 +41,10 @@
 //                          a normal attachment (one layer or two): samples whose
 //                          normals' cosine is below u_normal_threshold are
 //                          different surfaces (cpu.rs's same_normal)
-//   MAJORITY_REFERENCE     two layers with a normal attachment: the reference
+//   MAJORITY_REFERENCE     a normal attachment (one layer or two): the reference
 //                          moves to the orientation most samples within its
-//                          depth window share (cpu.rs's majority_reference)
+//                          depth window share, a tie by the pixel's parity
+//                          (cpu.rs's majority_reference)
 //   SECOND_LAYER_OUTPUT    write the second layer (cpu.rs's
 //                          resolve_second_layer_at), its coverage to
 //                          o_coverage and its depth to o_layer_depth, instead
@@ -61,6 +63,7 @@
 #define METHOD_FRONT 1
 #define METHOD_MEDIAN 2
 #define METHOD_BACK 3
+#define METHOD_UPPER_MEDIAN 4
 #define REGION_RECT 1
 #define REGION_ELLIPSE 2
 
@@ -231,6 +234,26 @@ void load_keys(ivec2 p) {
 // llvmpipe runs both sides of every branch that its lanes disagree on, and
 // masks every store made inside one.
 
+// The standard sample pattern (cpu.rs's standard_sample_positions):
+// offsets from the pixel centre in 1/16 pixel, x right, y up.
+#if NUM_SAMPLES == 2
+#define SAMPLE_PATTERN 1
+const vec2 SAMPLE_POS[2] = vec2[2](vec2(4.0, 4.0), vec2(-4.0, -4.0));
+#elif NUM_SAMPLES == 4
+#define SAMPLE_PATTERN 1
+const vec2 SAMPLE_POS[4] = vec2[4](vec2(-2.0, -6.0), vec2(6.0, -2.0), vec2(-6.0, 2.0), vec2(2.0, 6.0));
+#elif NUM_SAMPLES == 8
+#define SAMPLE_PATTERN 1
+const vec2 SAMPLE_POS[8] = vec2[8](vec2(1.0, -3.0), vec2(-1.0, 3.0), vec2(5.0, 1.0), vec2(-3.0, -5.0),
+                                   vec2(-5.0, 5.0), vec2(-7.0, -1.0), vec2(3.0, 7.0), vec2(7.0, -7.0));
+#elif NUM_SAMPLES == 16
+#define SAMPLE_PATTERN 1
+const vec2 SAMPLE_POS[16] = vec2[16](vec2(1.0, 1.0), vec2(-1.0, -3.0), vec2(-3.0, 2.0), vec2(4.0, -1.0),
+                                     vec2(-5.0, -2.0), vec2(2.0, 5.0), vec2(5.0, 3.0), vec2(3.0, -5.0),
+                                     vec2(-2.0, 6.0), vec2(0.0, -7.0), vec2(-4.0, -6.0), vec2(-6.0, 4.0),
+                                     vec2(-8.0, 0.0), vec2(7.0, -4.0), vec2(6.0, 7.0), vec2(-7.0, -8.0));
+#endif
+
 // The reference sample; 0 for a one-sample pixel.
 int reference_sample() {
     int r = 0;
@@ -258,8 +281,19 @@ int reference_sample() {
     }
 #else
     // Median (also the average's reference): the sample whose rank under
-    // key_less is N/2. Ranks are counted, not sorted, so every sample's own
-    // depth decides its place.
+    // key_less is the median's. Ranks are counted, not sorted, so every
+    // sample's own depth decides its place. For an even N the two middle
+    // ranks take turns by the pixel's parity (cpu.rs's median_rank), so a
+    // half-covered pixel goes to either surface alike; the upper median
+    // (FreeSpace Open's) always takes rank N/2.
+#if METHOD == METHOD_UPPER_MEDIAN
+    int median_rank = NUM_SAMPLES / 2;
+#else
+    ivec2 place = ivec2(gl_FragCoord.xy);
+    int median_rank = (NUM_SAMPLES - 1 + ((place.x + place.y) & 1)) / 2;
+#endif
+    int ranks[NUM_SAMPLES];
+    for (int k = 0; k < NUM_SAMPLES; ++k) ranks[k] = k;
     for (int i = g_zero; i < NUM_SAMPLES; ++i) {
         if (g_one) break;
         float si;
@@ -267,8 +301,10 @@ int reference_sample() {
         // key_less(j, i), with sample i's key picked once.
         int rank = 0;
         for (int j = 0; j < NUM_SAMPLES; ++j) rank += g_sort[j] < si || (g_sort[j] == si && j < i) ? 1 : 0;
-        r = rank == NUM_SAMPLES / 2 ? i : r;
+        for (int k = 0; k < NUM_SAMPLES; ++k) ranks[k] = k == i ? rank : ranks[k];
     }
+    for (int k = 0; k < NUM_SAMPLES; ++k) r = ranks[k] == median_rank ? k : r;
+    r = g_one ? 0 : r;
 #endif
     return r;
 }
@@ -474,21 +510,6 @@ bool keys_uniform() {
 // the depth samples lie on one plane over the standard sample pattern, and
 // the first blended attachment's samples are all equal. One triangle's
 // samples pass it; it does not prove that one fragment wrote the pixel.
-// Offsets from the pixel centre in 1/16 pixel, x right, y up.
-#if NUM_SAMPLES == 4
-#define PLANE_PATTERN 1
-const vec2 SAMPLE_POS[4] = vec2[4](vec2(-2.0, -6.0), vec2(6.0, -2.0), vec2(-6.0, 2.0), vec2(2.0, 6.0));
-#elif NUM_SAMPLES == 8
-#define PLANE_PATTERN 1
-const vec2 SAMPLE_POS[8] = vec2[8](vec2(1.0, -3.0), vec2(-1.0, 3.0), vec2(5.0, 1.0), vec2(-3.0, -5.0),
-                                   vec2(-5.0, 5.0), vec2(-7.0, -1.0), vec2(3.0, 7.0), vec2(7.0, -7.0));
-#elif NUM_SAMPLES == 16
-#define PLANE_PATTERN 1
-const vec2 SAMPLE_POS[16] = vec2[16](vec2(1.0, 1.0), vec2(-1.0, -3.0), vec2(-3.0, 2.0), vec2(4.0, -1.0),
-                                     vec2(-5.0, -2.0), vec2(2.0, 5.0), vec2(5.0, 3.0), vec2(3.0, -5.0),
-                                     vec2(-2.0, 6.0), vec2(0.0, -7.0), vec2(-4.0, -6.0), vec2(-6.0, 4.0),
-                                     vec2(-8.0, 0.0), vec2(7.0, -4.0), vec2(6.0, 7.0), vec2(-7.0, -8.0));
-#endif
 
 // Least squares over e_i = d_i - d_0 (exact where depths are close), with
 // positions and e centred; up to 3 samples always fit, a count without a
@@ -496,7 +517,7 @@ const vec2 SAMPLE_POS[16] = vec2[16](vec2(1.0, 1.0), vec2(-1.0, -3.0), vec2(-3.0
 bool plane_fits() {
 #if NUM_SAMPLES <= 3
     return true;
-#elif !defined(PLANE_PATTERN)
+#elif !defined(SAMPLE_PATTERN)
     return false;
 #else
     vec2 mean_pos = vec2(0.0);
@@ -646,11 +667,11 @@ void main() {
     vec3 n_r = vec3(0.0);
 #endif
 #ifdef MAJORITY_REFERENCE
-    // Two layers: the reference moves to the orientation most samples within
-    // its depth window share (cpu.rs's majority_reference). A crease, or a
+    // The reference moves to the orientation most samples within its depth
+    // window share (cpu.rs's majority_reference). A crease, or a
     // box's side face behind its front face, can put the median on the
     // smaller of two faces, which the larger's samples would then join, lit
-    // as it; ties keep the reference.
+    // as it; a tie goes by the pixel's parity.
     {
         vec3 ns[NUM_SAMPLES];
         for (int k = 0; k < NUM_SAMPLES; ++k) ns[k] = n_r;
@@ -676,9 +697,18 @@ void main() {
         int best = r;
         int best_size;
         PICK(best_size, sizes, r)
+        int r_size = best_size;
         float z_best = z_r;
         bool bg_best = bg_r;
         vec3 n_best = n_r;
+        // The first sample of another cluster within the window as large
+        // as the reference's: where none is larger, taken on pixels of odd
+        // parity (cpu.rs's majority_reference says what that does with
+        // the median's own tie).
+        int tied = -1;
+        float z_tied = z_r;
+        bool bg_tied = bg_r;
+        vec3 n_tied = n_r;
         for (int s = g_zero; s < NUM_SAMPLES; ++s) {
             if (g_one) break;
             bool near = closeness(g_key[s], g_bg[s], s == r, z_r, bg_r) > 0.0;
@@ -688,7 +718,19 @@ void main() {
             z_best = better ? g_key[s] : z_best;
             bg_best = better ? g_bg[s] : bg_best;
             n_best = better ? ns[s] : n_best;
+            bool tie = near && tied < 0 && sizes[s] == r_size
+                && !same_normal(ns[s], n_r, g_bg[s], bg_r);
+            tied = tie ? s : tied;
+            z_tied = tie ? g_key[s] : z_tied;
+            bg_tied = tie ? g_bg[s] : bg_tied;
+            n_tied = tie ? ns[s] : n_tied;
         }
+        ivec2 place = ivec2(gl_FragCoord.xy);
+        bool take_tie = best == r && tied >= 0 && ((place.x + place.y) & 1) == 1;
+        best = take_tie ? tied : best;
+        z_best = take_tie ? z_tied : z_best;
+        bg_best = take_tie ? bg_tied : bg_best;
+        n_best = take_tie ? n_tied : n_best;
         for (int i = 0; i < NUM_SAMPLES; ++i)
             reference_depth = i == best ? g_raw_depth[i] : reference_depth;
         r = best;

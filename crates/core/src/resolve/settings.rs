@@ -14,10 +14,20 @@ pub enum ResolveMethod {
     Average,
     /// Reference = nearest sample.
     Front,
-    /// Reference = the sample at position ⌊N/2⌋ when sorted by (depth, index).
+    /// Reference = the median sample by (depth, index), a tie unbiased: for
+    /// an even N the lower of the two middle samples (rank N/2 − 1) on
+    /// pixels whose window coordinates `x + y` are even, the upper (rank
+    /// N/2) on the others; rank ⌊N/2⌋ for an odd N. Half-covered silhouette
+    /// pixels then go to the nearer and the farther surface alike, so a
+    /// thin object is drawn as wide as it is (docs/resolve.md, "The math").
     Median,
     /// Reference = farthest sample.
     Back,
+    /// Reference = the sample at rank ⌊N/2⌋ by (depth, index) on every
+    /// pixel: FreeSpace Open's median, which for an even N always takes the
+    /// farther middle sample, so half-covered silhouette pixels go to what
+    /// lies behind (docs/freespace-open.md).
+    UpperMedian,
 }
 
 /// The closeness window of the depth-aware methods.
@@ -421,6 +431,7 @@ name_table!(ResolveMethod, "resolve method",
     ResolveMethod::Front => "front",
     ResolveMethod::Median => "median",
     ResolveMethod::Back => "back",
+    ResolveMethod::UpperMedian => "upper-median",
 );
 
 name_table!(Window, "window",

@@ -41,7 +41,9 @@ pub struct RetrofitOptions {
     /// The colour attachment holding normals, and how: samples whose
     /// normals differ are different surfaces even when close in depth, in
     /// the one-layer resolve as in both of two layers (`None`: by depth
-    /// alone). A host whose normals are packed (`n * 0.5 + 0.5` in an
+    /// alone), and the reference moves to the face most samples within its
+    /// depth window share, a tie by the pixel's parity (a crease's larger
+    /// face: docs/resolve.md, "The math"). A host whose normals are packed (`n * 0.5 + 0.5` in an
     /// unsigned normalised format) should name it with
     /// [`NormalEncoding::Unorm`]: without the test a crease pixel blends two
     /// packed normals into one that lights like neither face.

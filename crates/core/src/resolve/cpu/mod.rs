@@ -227,6 +227,15 @@ pub fn plane_fits(depth: &[f64]) -> (bool, bool) {
     (worst <= tolerance, ambiguous)
 }
 
+/// Whether the pixel at `at` has odd parity: its window coordinates (GL's,
+/// from the bottom-left, as `gl_FragCoord` has them) sum to an odd number.
+/// Without a place the pixel is taken to be at the origin (even). The
+/// median's tie and the majority reference's tie go by it.
+pub fn odd_pixel(at: Option<PixelPlace>) -> bool {
+    // x + (height − 1 − y) has the parity of x + y + height + 1.
+    at.is_some_and(|at| (at.x + at.y + at.height + 1) % 2 == 1)
+}
+
 impl CpuResolve {
     /// The opt-in plane test ([`ResolveSettings::plane_uniformity`]): every
     /// sample is geometry, the depths fit one plane ([`plane_fits`]) and the
@@ -269,8 +278,9 @@ impl CpuResolve {
         Keys { z, bg }
     }
 
-    /// The reference sample for a method, ties to the lower index.
-    fn reference(&self, keys: &Keys) -> usize {
+    /// The reference sample for a method at the pixel `at`, ties to the
+    /// lower index.
+    fn reference(&self, keys: &Keys, at: Option<PixelPlace>) -> usize {
         let n = keys.z.len();
         match self.settings.method {
             ResolveMethod::Front => (1..n).fold(0, |r, i| if keys.less(i, r) { i } else { r }),
@@ -278,7 +288,7 @@ impl CpuResolve {
                 let farther = !keys.bg[r] && (keys.bg[i] || keys.z[i] > keys.z[r]);
                 if farther { i } else { r }
             }),
-            ResolveMethod::Median | ResolveMethod::Average => {
+            ResolveMethod::Median | ResolveMethod::Average | ResolveMethod::UpperMedian => {
                 let mut order: Vec<usize> = (0..n).collect();
                 order.sort_by(|&a, &b| {
                     if keys.less(a, b) {
@@ -289,9 +299,22 @@ impl CpuResolve {
                         std::cmp::Ordering::Equal
                     }
                 });
-                order[n / 2]
+                order[self.median_rank(n, at)]
             }
         }
+    }
+
+    /// The rank (0 = nearest) the median's reference takes among the
+    /// samples in `order` (sorted by key, nearest first) at the pixel `at`.
+    /// [`ResolveMethod::UpperMedian`] and an odd count: ⌊n/2⌋. An even
+    /// count has two middle ranks: `n/2 − 1` on pixels of even parity
+    /// ([`odd_pixel`]), `n/2` on the others, so that half-covered pixels go
+    /// to either surface alike.
+    pub(crate) fn median_rank(&self, n: usize, at: Option<PixelPlace>) -> usize {
+        if self.settings.method == ResolveMethod::UpperMedian {
+            return n / 2;
+        }
+        (n + usize::from(odd_pixel(at))).saturating_sub(1) / 2
     }
 
     /// The closeness weight of sample `i` to reference `r`, and whether it is
@@ -422,7 +445,7 @@ impl CpuResolve {
             };
         }
 
-        let (r, mut ambiguous) = self.majority_reference(px, &keys, self.reference(&keys));
+        let (r, mut ambiguous) = self.majority_reference(px, &keys, self.reference(&keys, at), at);
         ambiguous |= selection_ambiguous;
         let mut weights = Vec::with_capacity(n);
         for i in 0..n {

@@ -100,45 +100,62 @@ impl CpuResolve {
         )
     }
 
-    /// With two layers and a normal attachment (any method but `Average`),
-    /// the reference `r` moves to the sample within its depth window whose
-    /// cluster (the samples within its window and of its orientation) is
-    /// the largest, if larger than its own: the first of those in index
-    /// order. A crease, or a box's side face just behind its front face, can
-    /// put the median on the smaller face; the larger's samples would then
-    /// join it and be lit as it. The second value: `f32` may decide
-    /// differently.
+    /// With a normal attachment (one layer or two; any method but
+    /// `Average`), the reference `r` moves to the sample within its depth
+    /// window whose cluster (the samples within its window and of its
+    /// orientation) is the largest, if larger than its own: the first of
+    /// those in index order. A crease, or a box's side face just behind its
+    /// front face, can put the median on the smaller face; the larger's
+    /// samples would then join it and be lit as it. Where no cluster is
+    /// larger than the reference's but another within its window is as
+    /// large (a crease through the middle of the pixel), the reference
+    /// stays on pixels of even parity and moves to the first sample of
+    /// that other face on odd ones ([`odd_pixel`](super::odd_pixel)).
+    /// With the median's own tie by parity, a crease whose two middle
+    /// samples by depth lie on different faces (a face holds the two
+    /// nearest) goes to the face of the nearest samples on every pixel,
+    /// and one whose middle samples share a face (the other face holds the
+    /// nearest and the farthest), which the median alone would take on
+    /// every pixel, alternates between the faces.
+    /// The second value: `f32` may decide differently.
     pub(super) fn majority_reference(
         &self,
         px: &PixelSamples,
         keys: &Keys,
         r: usize,
+        at: Option<PixelPlace>,
     ) -> (usize, bool) {
-        if self.settings.layers != 2
-            || self.splits_by_normal().is_none()
-            || self.settings.method == ResolveMethod::Average
-        {
+        if self.splits_by_normal().is_none() || self.settings.method == ResolveMethod::Average {
             return (r, false);
         }
         let n = px.depth.len();
         let mut ambiguous = false;
-        let mut size = |s: usize| {
-            let mut count = 0;
-            for j in 0..n {
-                let (inside, unsure) = self.member(px, keys, j, s);
-                count += usize::from(inside);
-                ambiguous |= unsure;
-            }
-            count
+        let mut member = |j: usize, s: usize| {
+            let (inside, unsure) = self.member(px, keys, j, s);
+            ambiguous |= unsure;
+            inside
         };
-        let sizes: Vec<usize> = (0..n).map(&mut size).collect();
+        let sizes: Vec<usize> = (0..n)
+            .map(|s| (0..n).filter(|&j| member(j, s)).count())
+            .collect();
+        let apart: Vec<bool> = (0..n).map(|s| !member(s, r)).collect();
+        let odd = super::odd_pixel(at);
         let mut best = r;
+        let mut tied: Option<usize> = None;
         for s in 0..n {
             let (w, near_edge) = self.closeness(keys, s, r);
             ambiguous |= near_edge;
             if w > 0.0 && sizes[s] > sizes[best] {
                 best = s;
             }
+            if w > 0.0 && sizes[s] == sizes[r] && apart[s] && tied.is_none() {
+                tied = Some(s);
+            }
+        }
+        // A tie between the reference's face and another: the median's on
+        // pixels of even parity, the other on odd ones.
+        if let (true, true, Some(t)) = (best == r, odd, tied) {
+            best = t;
         }
         (best, ambiguous)
     }

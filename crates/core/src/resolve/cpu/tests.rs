@@ -17,6 +17,16 @@ fn resolver(method: ResolveMethod, window: Window) -> CpuResolve {
     }
 }
 
+/// A pixel of even parity (`false`) or odd parity (`true`): the median's
+/// tie between its two middle samples goes by it.
+fn at(odd: bool) -> Option<PixelPlace> {
+    Some(PixelPlace {
+        x: u32::from(odd),
+        y: 0,
+        height: 1,
+    })
+}
+
 /// Colour = sample index, position z = −depths[i].
 fn pixel(depths: &[f64]) -> PixelSamples {
     PixelSamples {
@@ -35,14 +45,48 @@ fn pixel(depths: &[f64]) -> PixelSamples {
 
 #[test]
 fn median_is_the_median_by_depth_not_by_index() {
-    // Sorted by depth the samples are 3, 1, 0, 2: position 2 is sample 0.
-    // An index-comparing network (FreeSpace Open's bug) would return sample 2.
+    // Sorted by depth the samples are 3, 1, 0, 2: the middle two are
+    // samples 1 and 0. An index-comparing network (FreeSpace Open's bug)
+    // would return sample 1 or 2 whatever the depths.
     let cpu = resolver(ResolveMethod::Median, Window::Hard);
+    let upper = resolver(ResolveMethod::UpperMedian, Window::Hard);
     let px = pixel(&[30.0, 20.0, 40.0, 10.0]);
-    assert_eq!(cpu.resolve_pixel(&px).reference, 0);
+    assert_eq!(cpu.resolve_pixel_at(&px, at(false)).reference, 1);
+    assert_eq!(cpu.resolve_pixel_at(&px, at(true)).reference, 0);
+    assert_eq!(upper.resolve_pixel_at(&px, at(false)).reference, 0);
+    assert_eq!(upper.resolve_pixel_at(&px, at(true)).reference, 0);
     let px = pixel(&[5.0, 9.0, 1.0, 7.0, 3.0, 8.0, 2.0, 6.0]);
-    // Sorted: 1(s2) 2(s6) 3(s4) 5(s0) 6(s7) 7(s3) 8(s5) 9(s1); position 4 is s7.
-    assert_eq!(cpu.resolve_pixel(&px).reference, 7);
+    // Sorted: 1(s2) 2(s6) 3(s4) 5(s0) 6(s7) 7(s3) 8(s5) 9(s1); ranks 3 and 4
+    // are s0 and s7.
+    assert_eq!(cpu.resolve_pixel_at(&px, at(false)).reference, 0);
+    assert_eq!(cpu.resolve_pixel_at(&px, at(true)).reference, 7);
+    assert_eq!(upper.resolve_pixel_at(&px, at(false)).reference, 7);
+    // An odd count has one middle sample: rank 1 of 3, on either parity.
+    let px = pixel(&[30.0, 10.0, 20.0]);
+    assert_eq!(cpu.resolve_pixel_at(&px, at(false)).reference, 2);
+    assert_eq!(cpu.resolve_pixel_at(&px, at(true)).reference, 2);
+}
+
+#[test]
+fn a_half_covered_pixel_goes_to_either_surface_by_its_parity() {
+    // A bar (z = 10) over a wall (z = 50), two samples each: neighbouring
+    // pixels take the bar and the wall in turn, so a thin bar is drawn as
+    // wide as it is; FreeSpace Open's rank always takes the wall.
+    let cpu = resolver(ResolveMethod::Median, Window::Hard);
+    let upper = resolver(ResolveMethod::UpperMedian, Window::Hard);
+    let px = pixel(&[50.0, 10.0, 50.0, 10.0]);
+    let on = |cpu: &CpuResolve, x: u32, y: u32| {
+        let place = PixelPlace { x, y, height: 8 };
+        cpu.resolve_pixel_at(&px, Some(place)).reference
+    };
+    // Rows from the top: y = 0 is GL's row 7, so (0, 0) is odd.
+    assert_eq!([on(&cpu, 0, 0), on(&cpu, 1, 0), on(&cpu, 0, 1)], [0, 3, 3]);
+    assert_eq!(
+        [on(&upper, 0, 0), on(&upper, 1, 0), on(&upper, 0, 1)],
+        [0, 0, 0]
+    );
+    // Without a place the pixel counts as the origin: even, the nearer.
+    assert_eq!(cpu.resolve_pixel(&px).reference, 3);
 }
 
 #[test]
@@ -60,13 +104,10 @@ fn ties_break_to_the_lower_index() {
             .reference,
         0
     );
-    // Sorted (z, i): s1 s2 s0 s3 → position 2 is s0.
-    assert_eq!(
-        resolver(ResolveMethod::Median, Window::Hard)
-            .resolve_pixel(&px)
-            .reference,
-        0
-    );
+    // Sorted (z, i): s1 s2 s0 s3 → the middle two are s2 and s0.
+    let median = resolver(ResolveMethod::Median, Window::Hard);
+    assert_eq!(median.resolve_pixel_at(&px, at(false)).reference, 2);
+    assert_eq!(median.resolve_pixel_at(&px, at(true)).reference, 0);
 }
 
 #[test]
@@ -192,26 +233,33 @@ fn the_second_layer_is_the_largest_other_cluster_sharing_with_the_first() {
     cpu.settings.layers = 2;
     // A bar (z = 10) over the sky: median takes the sky (samples 1..3),
     // the second layer is the bar's one sample.
-    let out = cpu.resolve_second_layer_at(&pixel(&[10.0, inf, inf, inf]), None);
+    let out = cpu.resolve_second_layer_at(&pixel(&[10.0, inf, inf, inf]), at(true));
     assert_eq!(out.reference, Some(0));
     assert_eq!(out.coverage, 0.25);
     assert_eq!(out.weights, vec![1.0, 0.0, 0.0, 0.0]);
-    // Three clusters (10, 50, 200): the median's (50, samples 1 and 2),
+    // On a pixel of odd parity (the farther middle sample):
+    // three clusters (10, 50, 200): the median's (50, samples 1 and 2),
     // then the largest of the rest, ties to the nearer: 10 (sample 0).
     let px = pixel(&[10.0, 50.0, 50.0, 200.0]);
-    let first = cpu.resolve_pixel(&px);
+    let first = cpu.resolve_pixel_at(&px, at(true));
     assert_eq!(first.weights, vec![0.0, 1.0, 1.0, 0.0]);
-    let out = cpu.resolve_second_layer_at(&px, None);
+    let out = cpu.resolve_second_layer_at(&px, at(true));
     assert_eq!(out.reference, Some(0));
     // Sample 3 (200) is in neither: it joins the nearer in depth, the
     // first (50 is 150 away, 10 is 190), so the second keeps 1 of 4.
     assert_eq!((out.coverage, out.joined), (0.25, [1, 0]));
     // A third cluster nearer the second (12 beside 10): it joins the
     // second, which then holds 2 of 4.
-    let out = cpu.resolve_second_layer_at(&pixel(&[10.0, 12.0, 50.0, 50.0]), None);
+    let px = pixel(&[10.0, 12.0, 50.0, 50.0]);
+    let out = cpu.resolve_second_layer_at(&px, at(true));
     assert_eq!(out.reference, Some(0));
     assert_eq!(out.weights, vec![1.0, 0.0, 0.0, 0.0]);
     assert_eq!((out.coverage, out.joined), (0.5, [0, 1]));
+    // On an even pixel the median is the 12: the 50s are the second layer
+    // (the largest cluster outside) and the 10 joins the first, nearer.
+    let out = cpu.resolve_second_layer_at(&px, at(false));
+    assert_eq!(out.reference, Some(2));
+    assert_eq!((out.coverage, out.joined), (0.5, [1, 0]));
     // One cluster: no second layer, sample 0's values at the clear depth.
     let out = cpu.resolve_second_layer_at(&pixel(&[10.0, 10.01, 10.0, 10.02]), None);
     assert_eq!((out.reference, out.coverage, out.depth), (None, 0.0, 1.0));
@@ -222,6 +270,7 @@ fn normals_split_a_crease_with_one_layer_or_two() {
     let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
     // One depth, two orientations 90 degrees apart (attachment 0 holds
     // the normals here): samples 0, 1 face +z, samples 2, 3 face +x.
+    // Sorted (z, i): s0 s2 s1 s3, the middle two s2 and s1.
     let mut px = pixel(&[10.0, 10.01, 10.0, 10.01]);
     px.attachments[0] = vec![
         [0.0, 0.0, 1.0, 0.0],
@@ -231,14 +280,34 @@ fn normals_split_a_crease_with_one_layer_or_two() {
     ];
     // By depth alone the crease is one surface.
     assert_eq!(cpu.resolve_pixel(&px).weights, vec![1.0; 4]);
-    // With the normals named it is two, with one layer and with two.
+    // With the normals named it is two, with one layer and with two; the
+    // faces are a tie (two samples each): an even pixel keeps the
+    // median's (s2, +x), an odd one moves from the median's (s1, +z) to
+    // the other face's first sample (s2): the face of the nearest
+    // samples on both.
     cpu.normal = Some((0, NormalEncoding::Xyz));
-    assert_eq!(cpu.resolve_pixel(&px).weights, vec![1.0, 1.0, 0.0, 0.0]);
+    let even = cpu.resolve_pixel_at(&px, at(false));
+    assert_eq!(
+        (even.reference, even.weights),
+        (2, vec![0.0, 0.0, 1.0, 1.0])
+    );
+    let odd = cpu.resolve_pixel_at(&px, at(true));
+    assert_eq!((odd.reference, odd.weights), (2, vec![0.0, 0.0, 1.0, 1.0]));
+    // Where both middle samples are on one face (+z; +x holds the first
+    // and last by depth), the median alone would take it on every pixel:
+    // even pixels keep it (the median's own sample, s1), odd ones take +x.
+    let mut spans = px.clone();
+    spans.depth = vec![0.5; 4];
+    for (i, z) in [10.02, 10.01, 10.0, 10.03].into_iter().enumerate() {
+        spans.attachments[1][i] = [0.0, 0.0, -z, 1.0];
+    }
+    assert_eq!(cpu.resolve_pixel_at(&spans, at(false)).reference, 1);
+    assert_eq!(cpu.resolve_pixel_at(&spans, at(true)).reference, 2);
     cpu.settings.layers = 2;
-    let first = cpu.resolve_pixel(&px);
-    assert_eq!(first.weights, vec![1.0, 1.0, 0.0, 0.0]);
-    let second = cpu.resolve_second_layer_at(&px, None);
-    assert_eq!(second.reference, Some(2));
+    let first = cpu.resolve_pixel_at(&px, at(true));
+    assert_eq!(first.weights, vec![0.0, 0.0, 1.0, 1.0]);
+    let second = cpu.resolve_second_layer_at(&px, at(true));
+    assert_eq!(second.reference, Some(0));
     assert_eq!(second.coverage, 0.5);
 }
 
@@ -256,10 +325,14 @@ fn a_side_sliver_joins_its_front_face_not_the_wall() {
         [0.0, 0.0, 1.0, 0.0],
         [0.0, 0.0, 1.0, 0.0],
     ];
-    // The median is the wall; the front face and the side are two
-    // clusters of one sample, of which the nearer is the second layer.
-    assert_eq!(cpu.resolve_pixel(&px).weights, vec![0.0, 0.0, 1.0, 1.0]);
-    let second = cpu.resolve_second_layer_at(&px, None);
+    // On an odd pixel the median is the wall; the front face and the side
+    // are two clusters of one sample, of which the nearer is the second
+    // layer.
+    assert_eq!(
+        cpu.resolve_pixel_at(&px, at(true)).weights,
+        vec![0.0, 0.0, 1.0, 1.0]
+    );
+    let second = cpu.resolve_second_layer_at(&px, at(true));
     assert_eq!(second.reference, Some(0));
     assert_eq!(second.weights, vec![1.0, 0.0, 0.0, 0.0]);
     // The side joins the front face (0.06 away, the wall 189.94): the
@@ -276,19 +349,18 @@ fn a_side_sliver_joins_its_front_face_not_the_wall() {
         [0.0, 0.8, 0.6, 0.0],
         [0.0, 0.8, 0.6, 0.0],
     ];
-    let out = cpu.resolve_second_layer_at(&px, None);
+    let out = cpu.resolve_second_layer_at(&px, at(true));
     assert_eq!((out.reference, out.joined), (Some(0), [1, 0]));
     px.attachments[0][1] = [0.0, 0.28, 0.96, 0.0];
-    let out = cpu.resolve_second_layer_at(&px, None);
+    let out = cpu.resolve_second_layer_at(&px, at(true));
     assert_eq!((out.reference, out.joined), (Some(0), [0, 1]));
 }
 
 #[test]
-fn with_two_layers_the_reference_moves_to_the_larger_face() {
-    // Front face twice, the side just behind it once, the wall: the
-    // median is the side (the 3rd of 4 by depth).
+fn the_reference_moves_to_the_larger_face_with_one_layer_or_two() {
+    // Front face twice, the side just behind it once, the wall: on an odd
+    // pixel the median is the side (the 3rd of 4 by depth).
     let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
-    cpu.normal = Some((0, NormalEncoding::Xyz));
     let mut px = pixel(&[10.0, 10.0, 10.001, 200.0]);
     px.attachments[0] = vec![
         [0.0, 0.0, 1.0, 0.0],
@@ -296,17 +368,21 @@ fn with_two_layers_the_reference_moves_to_the_larger_face() {
         [1.0, 0.0, 0.0, 0.0],
         [0.0, 0.0, 1.0, 0.0],
     ];
-    // One layer keeps the median's face.
-    assert_eq!(cpu.resolve_pixel(&px).reference, 2);
-    // Two: the front face, which two samples share, is the first layer,
-    // the wall (another depth) the second, and the side joins the first.
+    // By depth alone the median's sample stays.
+    assert_eq!(cpu.resolve_pixel_at(&px, at(true)).reference, 2);
+    // With the normals named, one layer takes the front face, which two
+    // samples share, and so does the first of two; the wall (another
+    // depth) is the second, and the side joins the first.
+    cpu.normal = Some((0, NormalEncoding::Xyz));
+    let one = cpu.resolve_pixel_at(&px, at(true));
+    assert_eq!((one.reference, one.weights), (0, vec![1.0, 1.0, 0.0, 0.0]));
     cpu.settings.layers = 2;
-    let first = cpu.resolve_pixel(&px);
+    let first = cpu.resolve_pixel_at(&px, at(true));
     assert_eq!(
         (first.reference, first.weights),
         (0, vec![1.0, 1.0, 0.0, 0.0])
     );
-    let second = cpu.resolve_second_layer_at(&px, None);
+    let second = cpu.resolve_second_layer_at(&px, at(true));
     assert_eq!(second.reference, Some(3));
     assert_eq!((second.coverage, second.joined), (0.25, [1, 0]));
 }
