@@ -48,6 +48,7 @@ mod masks;
 mod measure;
 pub mod methods;
 pub mod motion;
+pub mod one_layer;
 mod output;
 mod pixels;
 mod plot;

@@ -27,7 +27,7 @@ pub struct RenderArgs {
     /// Samples per pixel (the driver's real count is used and reported).
     #[arg(long, default_value_t = 4)]
     samples: u32,
-    /// none, average, front, median, back, per-sample, complex, gbaa,
+    /// none, average, front, median, back, upper-median, per-sample, complex, gbaa,
     /// sparse or smaa (`none` with --smaa).
     #[arg(long, default_value = "median")]
     method: String,
@@ -182,13 +182,13 @@ impl RenderArgs {
         let selective = matches!(aa, AaMode::Resolve(_) | AaMode::Sparse(_));
         if !selective && (self.aa_region.is_some() || self.aa_max_depth.is_some()) {
             return Err(Error::invalid(format!(
-                "--aa-region and --aa-max-depth select pixels for the resolve methods (average, front, median, back) and sparse, not `{}`",
+                "--aa-region and --aa-max-depth select pixels for the resolve methods (average, front, median, back, upper-median) and sparse, not `{}`",
                 self.method
             )));
         }
         if self.layers != 1 && !matches!(aa, AaMode::Resolve(_)) {
             return Err(Error::invalid(format!(
-                "--layers is an option of the resolve methods (front, median, back), not `{}`",
+                "--layers is an option of the resolve methods (front, median, back, upper-median), not `{}`",
                 self.method
             )));
         }
@@ -220,7 +220,7 @@ impl RenderArgs {
                 };
                 if self.layers == 2 && method == ResolveMethod::Average {
                     return Err(Error::invalid(
-                        "--layers 2 needs front, median or back: average weighs every sample, so it has one cluster",
+                        "--layers 2 needs front, median, back or upper-median: average weighs every sample, so it has one cluster",
                     ));
                 }
                 if !(self.c.is_finite() && self.c > 0.0) {
@@ -412,7 +412,7 @@ fn complex_view(session: &mut Session) -> Result<image::RgbaImage> {
         .ok_or_else(|| Error::invalid("the renderer is gone"))?;
     let mask = renderer.read_complex_pixels(ctx.gl())?.ok_or_else(|| {
         Error::invalid(format!(
-            "the `complex` view needs a multisampled method (average, front, median, back, per-sample or complex); this frame ran `{}`",
+            "the `complex` view needs a multisampled method (average, front, median, back, upper-median, per-sample or complex); this frame ran `{}`",
             renderer.effective_options().aa.name()
         ))
     })?;
@@ -435,7 +435,7 @@ fn layers_view(session: &mut Session) -> Result<image::RgbaImage> {
         .ok_or_else(|| Error::invalid("the renderer is gone"))?;
     let coverage = renderer.read_second_layer_coverage(ctx.gl())?.ok_or_else(|| {
         Error::invalid(
-            "the `layers` view shows the second layer's coverage; use it with --layers 2 and front, median or back",
+            "the `layers` view shows the second layer's coverage; use it with --layers 2 and front, median, back or upper-median",
         )
     })?;
     Ok(image::RgbaImage::from_fn(

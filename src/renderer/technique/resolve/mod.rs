@@ -307,7 +307,7 @@ impl super::kind::Kind for Kind {
     }
 
     fn methods(&self) -> &'static [&'static str] {
-        &["average", "front", "median", "back"]
+        &["average", "front", "median", "back", "upper-median"]
     }
 
     fn renders(&self, aa: &AaMode) -> bool {
@@ -355,7 +355,7 @@ impl super::kind::Kind for Kind {
                     };
                     if settings.layers == 2 && method == ResolveMethod::Average {
                         return Err(Error::invalid(format!(
-                            "method `{spec}`: average weighs every sample, so it has one cluster and no second layer; use front, median or back"
+                            "method `{spec}`: average weighs every sample, so it has one cluster and no second layer; use front, median, back or upper-median"
                         )));
                     }
                 }
