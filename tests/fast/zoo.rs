@@ -147,6 +147,40 @@ fn no_host_gains_halo_pixels_with_two_layers() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// The halo check catches a real halo: the tutorial's program with a small
+/// bright light in the gap behind the floating triangle, its G-buffer
+/// resolved as a blit resolves it (every sample averaged, positions and
+/// normals too), lights averaged positions between the triangle's edge and
+/// the panel, light no mix of the pixel's own surfaces at its coverage
+/// gives; resolved by the median, it has fewer. (Were this to stop
+/// holding, the halo check, which forgives coverage quantisation, would
+/// test nothing.)
+#[test]
+fn a_blit_resolved_gbuffer_has_halo_pixels() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let averaged = zoo::learnopengl::outcome_gap_lit(&ctx, true);
+    let median = zoo::learnopengl::outcome_gap_lit(&ctx, false);
+    for o in [&averaged, &median] {
+        eprintln!(
+            "{}: {} halo pixels, {} new over its image without MSAA ({} over the 16x image, quantisation included)",
+            o.host, o.halos_resolved, o.new_halos, o.over_reference
+        );
+    }
+    assert!(
+        averaged.halo_failure.is_some(),
+        "{}: a blit-resolved G-buffer shows no new halo pixel",
+        averaged.host
+    );
+    assert!(
+        median.new_halos < averaged.new_halos,
+        "the median resolve gains as many halo pixels ({}) as the averaged one ({})",
+        median.new_halos,
+        averaged.new_halos
+    );
+}
+
 /// What the second layer mends: with one layer, silhouette pixels whose
 /// samples are half background take the median reference's surface whole,
 /// and some host's image gains halo pixels its own image does not have.
