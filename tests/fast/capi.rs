@@ -562,7 +562,7 @@ fn a_c_engine_with_six_attachments_retrofitted_from_the_docs() {
         // The declaration docs/hosts.md gives this style is the best one.
         assert!(
             two <= flip && two_edges <= edges,
-            "declared {declared}, two layers measure {flip:.4} ({edges:.4} over edges), below the tonemap's Curve {two:.4} ({two_edges:.4})"
+            "declared {declared}, two layers measure {flip:.4} ({edges:.4} over edges), closer than with the tonemap declared (Curve) {two:.4} ({two_edges:.4})"
         );
     }
     assert!(

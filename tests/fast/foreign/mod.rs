@@ -424,8 +424,14 @@ fn glow017_host_mixes_right_with_nothing_declared() {
         measured.push((mix, whole, edge));
     }
     let (_, auto, auto_edges) = measured[0].clone();
-    let best = measured[1..].iter().map(|m| m.1).fold(f32::INFINITY, f32::min);
-    let best_edges = measured[1..].iter().map(|m| m.2).fold(f64::INFINITY, f64::min);
+    let best = measured[1..]
+        .iter()
+        .map(|m| m.1)
+        .fold(f32::INFINITY, f32::min);
+    let best_edges = measured[1..]
+        .iter()
+        .map(|m| m.2)
+        .fold(f64::INFINITY, f64::min);
     if auto > 1.1 * best {
         failures.push(format!(
             "Auto {auto:.4} is above 1.1x the best declaration's {best:.4}"

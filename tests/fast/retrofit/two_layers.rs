@@ -37,6 +37,7 @@ fn second_layer_calls_out_of_order_are_errors() {
             layers: 2,
             ..ResolveSettings::default()
         },
+        layer_mix: LayerMix::Tonemapped, // an RGBA16F lit output: its tonemap declared
         normal_attachment: Some(NormalAttachment {
             attachment: ColorAttachment(2),
             encoding: NormalEncoding::Xyz,
@@ -312,7 +313,10 @@ fn nothing_declared_into_a_float_output_is_refused() {
             "LayerMix::Tonemapped",
             "LayerMix::Linear",
         ] {
-            assert!(message.contains(named), "{call}: {message} names no {named}");
+            assert!(
+                message.contains(named),
+                "{call}: {message} names no {named}"
+            );
         }
     };
     let state = crate::common::gl_state::GlState::capture(gl);
@@ -325,7 +329,10 @@ fn nothing_declared_into_a_float_output_is_refused() {
         "begin_forward",
     );
     let changed = state.differences(&crate::common::gl_state::GlState::capture(gl));
-    assert!(changed.is_empty(), "the refusals changed GL state: {changed:?}");
+    assert!(
+        changed.is_empty(),
+        "the refusals changed GL state: {changed:?}"
+    );
     assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
     // Declared, the same retrofit runs the second layer.
     options.layer_mix = LayerMix::Tonemapped;
@@ -368,6 +375,7 @@ fn without_restoring_the_first_layer_the_lit_image_is_the_same() {
             layers: 2,
             ..ResolveSettings::default()
         },
+        layer_mix: LayerMix::Tonemapped, // an RGBA16F lit output: its tonemap declared
         normal_attachment: Some(NormalAttachment {
             attachment: ColorAttachment(2),
             encoding: NormalEncoding::Xyz,
@@ -667,6 +675,7 @@ fn two_layers_on_wide_gbuffers_at_the_contexts_draw_buffers() {
                 layers: 2,
                 ..ResolveSettings::default()
             },
+            layer_mix: LayerMix::Tonemapped, // an RGBA16F lit output: its tonemap declared
             ..one_layer
         };
         let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options)
@@ -807,6 +816,7 @@ fn the_second_layer_leaves_out_the_attachments_the_host_names() {
             encoding: NormalEncoding::Xyz,
         }),
         second_layer_omits: vec![ColorAttachment(5), ColorAttachment(6)],
+        layer_mix: LayerMix::Tonemapped, // an RGBA16F lit output: its tonemap declared
         ..RetrofitOptions::default()
     };
     options.resolve.layers = 2;

@@ -679,7 +679,12 @@ impl ZooHost for GapLit {
         let p = host.shader_lighting_pass;
         unsafe {
             gl.use_program(Some(p));
-            set_vec3(gl, p, "lights[0].Position", glam::Vec3::new(0.85, 0.8, -0.2));
+            set_vec3(
+                gl,
+                p,
+                "lights[0].Position",
+                glam::Vec3::new(0.85, 0.8, -0.2),
+            );
             set_vec3(gl, p, "lights[0].Color", glam::Vec3::splat(3.0));
             set_float(gl, p, "lights[0].Linear", 0.0);
             set_float(gl, p, "lights[0].Quadratic", 6.0);

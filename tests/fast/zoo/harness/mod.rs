@@ -506,8 +506,7 @@ pub fn run<T: ZooHost>(
     // twins' coverage steps, not merely over the 16x image.
     let bounds = halo::bounds(&big, SS, samples);
     let (halos_none, _) = halo::count(&bounds, &none_image, &none_image, HALO_THRESHOLD);
-    let (halos_resolved, new_halos) =
-        halo::count(&bounds, &image, &none_image, HALO_THRESHOLD);
+    let (halos_resolved, new_halos) = halo::count(&bounds, &image, &none_image, HALO_THRESHOLD);
     let over_reference = halo_pixels(&reference, &image, HALO_THRESHOLD);
     let mut halo_failure = None;
     if new_halos > 0 {
