@@ -13,7 +13,9 @@
 //!   geometry pass does not write are untouched;
 //! - the lit image is closer (FLIP mean) to the host's own 16x supersampled
 //!   image than the host's image without MSAA, with no halo pixels the
-//!   no-MSAA image does not have;
+//!   no-MSAA image does not have (a halo: brighter than the 16x image by
+//!   more than the pixel's coverage quantisation explains,
+//!   `harness/halo.rs`);
 //! - the GL state the host left is as it was after `new` and `resolve`,
 //!   and the host's lighting, which bound its G-buffer to texture units
 //!   once at start-up, still works;
@@ -115,8 +117,9 @@ fn an_already_multisampled_gbuffer_is_refused_in_one_line() {
 }
 
 /// With the second layer, no host's retrofitted image has a halo pixel
-/// (luminance over the supersampled reference by more than the threshold)
-/// that its own image without MSAA does not have, and every other check of
+/// (luminance over the brightest its surfaces give at its sample coverage
+/// by more than the threshold: `harness/halo.rs`) that its own image
+/// without MSAA does not have, and every other check of
 /// the harness holds around the three second-layer calls. With one layer
 /// it does not hold: on silhouettes against the brighter sky, a pixel whose
 /// samples are half background takes the median reference's surface whole,
@@ -145,6 +148,45 @@ fn no_host_gains_halo_pixels_with_two_layers() {
         .filter_map(|o| o.halo_failure.clone().map(|f| format!("{}: {f}", o.host)))
         .collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The halo check catches a real halo: the tutorial's program with a small
+/// bright light in the gap behind the floating triangle, its G-buffer
+/// resolved as a blit resolves it (every sample averaged, positions and
+/// normals too), lights averaged positions between the triangle's edge and
+/// the panel, light no mix of the pixel's own surfaces at its coverage
+/// gives; resolved by the median, it has fewer. (Were this to stop
+/// holding, the halo check, which forgives coverage quantisation, would
+/// test nothing.)
+#[test]
+fn a_blit_resolved_gbuffer_has_halo_pixels() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let averaged = zoo::learnopengl::outcome_gap_lit(&ctx, true);
+    if let Some(why) = &averaged.not_run {
+        // The GL 3.2 floor run: the tutorial's shaders are GLSL 3.30.
+        eprintln!("{}: {why}", averaged.host);
+        return;
+    }
+    let median = zoo::learnopengl::outcome_gap_lit(&ctx, false);
+    for o in [&averaged, &median] {
+        eprintln!(
+            "{}: {} halo pixels, {} new over its image without MSAA ({} over the 16x image, quantisation included)",
+            o.host, o.halos_resolved, o.new_halos, o.over_reference
+        );
+    }
+    assert!(
+        averaged.halo_failure.is_some(),
+        "{}: a blit-resolved G-buffer shows no new halo pixel",
+        averaged.host
+    );
+    assert!(
+        median.new_halos < averaged.new_halos,
+        "the median resolve gains as many halo pixels ({}) as the averaged one ({})",
+        median.new_halos,
+        averaged.new_halos
+    );
 }
 
 /// What the second layer mends: with one layer, silhouette pixels whose

@@ -95,6 +95,14 @@ typedef enum {
   // then, by the next `dmsaa_resolve` (which has still resolved its
   // frame).
   DMSAA_STATUS_SECOND_LIGHTING = 9,
+  // Two lit layers (or the forward target's samples) would be mixed in a
+  // floating-point output with `DMSAA_LAYER_MIX_AUTO`: GL state cannot
+  // tell the output's tonemap, which decides the domain. Declare
+  // `layer_mix` (`DMSAA_LAYER_MIX_CURVE`, `_TONEMAPPED` or `_LINEAR`; the
+  // message says which fits which tonemap). Returned by
+  // `dmsaa_begin_second_layer` and `dmsaa_begin_forward`, having done
+  // nothing.
+  DMSAA_STATUS_LAYER_MIX_UNDECLARED = 10,
 } DmsaaStatus;
 
 // A host G-buffer retrofitted with MSAA: the multisampled twins, the
@@ -303,10 +311,12 @@ typedef const void *(*DmsaaGetProcAddress)(const char *name, void *user_data);
 // `glBlitFramebuffer`: the sample the driver picks.
 #define DMSAA_STENCIL_BLIT 3
 
-// Inferred (the default): tonemapped for a floating-point output; in
-// linear light for an sRGB output the host writes with
-// `GL_FRAMEBUFFER_SRGB` on; as stored otherwise (a host whose 8-bit
-// output holds display values declares `DMSAA_LAYER_MIX_SRGB_ENCODED`).
+// Inferred (the default) where GL state can tell: in linear light for an
+// sRGB output the host writes with `GL_FRAMEBUFFER_SRGB` on; as sRGB-encoded
+// display values (`DMSAA_LAYER_MIX_SRGB_ENCODED`) for any other 8-bit
+// (or other unorm) output, framebuffer 0 included. A floating-point output's tonemap decides
+// its domain and GL cannot see it: the first call that mixes into it returns
+// `DMSAA_STATUS_LAYER_MIX_UNDECLARED`, naming the declarations to choose from.
 #define DMSAA_LAYER_MIX_AUTO 0
 
 // Linear values (linear light, or any values to be mixed as they are):
@@ -485,7 +495,9 @@ DmsaaStatus dmsaa_resolve(DmsaaRetrofit *retrofit,
 // [`dmsaa_resolve`] or when already begun; `DMSAA_STATUS_INVALID_ARGUMENT`
 // for an output the second layer cannot use (no framebuffer, or
 // incomplete); `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the G-buffer
-// changed since it was read, as for [`dmsaa_resolve`]; `DMSAA_STATUS_GL`.
+// changed since it was read, as for [`dmsaa_resolve`];
+// `DMSAA_STATUS_LAYER_MIX_UNDECLARED` for a floating-point output with
+// `DMSAA_LAYER_MIX_AUTO` (declare the output's tonemap); `DMSAA_STATUS_GL`.
 DmsaaStatus dmsaa_begin_second_layer(DmsaaRetrofit *retrofit,
                                      uint32_t output_fbo,
                                      bool *run_lighting);
@@ -533,7 +545,8 @@ DmsaaStatus dmsaa_begin_second_layer_own_target(DmsaaRetrofit *retrofit,
 // `DMSAA_STATUS_OUT_OF_ORDER` between the second layer's begin and finish
 // or when already begun; `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` for an
 // output of another size or without a colour draw buffer;
-// `DMSAA_STATUS_UNSUPPORTED`, `DMSAA_STATUS_GL`.
+// `DMSAA_STATUS_LAYER_MIX_UNDECLARED` for a floating-point output with
+// `DMSAA_LAYER_MIX_AUTO`; `DMSAA_STATUS_UNSUPPORTED`, `DMSAA_STATUS_GL`.
 DmsaaStatus dmsaa_begin_forward(DmsaaRetrofit *retrofit, uint32_t output_fbo, uint32_t *out_fbo);
 
 // After the host drew its forward objects into [`dmsaa_begin_forward`]'s

@@ -48,6 +48,7 @@ impl Failure {
             | Error::UnsupportedFormat { .. } => DmsaaStatus::Unsupported,
             Error::MemoryBudget { .. } => DmsaaStatus::MemoryBudget,
             Error::SecondLighting(_) => DmsaaStatus::SecondLighting,
+            Error::LayerMixUndeclared { .. } => DmsaaStatus::LayerMixUndeclared,
             _ => DmsaaStatus::Gl,
         };
         Failure::new(status, error.to_string())

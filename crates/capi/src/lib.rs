@@ -359,7 +359,9 @@ pub unsafe extern "C" fn dmsaa_resolve(
 /// [`dmsaa_resolve`] or when already begun; `DMSAA_STATUS_INVALID_ARGUMENT`
 /// for an output the second layer cannot use (no framebuffer, or
 /// incomplete); `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the G-buffer
-/// changed since it was read, as for [`dmsaa_resolve`]; `DMSAA_STATUS_GL`.
+/// changed since it was read, as for [`dmsaa_resolve`];
+/// `DMSAA_STATUS_LAYER_MIX_UNDECLARED` for a floating-point output with
+/// `DMSAA_LAYER_MIX_AUTO` (declare the output's tonemap); `DMSAA_STATUS_GL`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn dmsaa_begin_second_layer(
     retrofit: *mut DmsaaRetrofit,
@@ -463,7 +465,8 @@ pub unsafe extern "C" fn dmsaa_begin_second_layer_own_target(
 /// `DMSAA_STATUS_OUT_OF_ORDER` between the second layer's begin and finish
 /// or when already begun; `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` for an
 /// output of another size or without a colour draw buffer;
-/// `DMSAA_STATUS_UNSUPPORTED`, `DMSAA_STATUS_GL`.
+/// `DMSAA_STATUS_LAYER_MIX_UNDECLARED` for a floating-point output with
+/// `DMSAA_LAYER_MIX_AUTO`; `DMSAA_STATUS_UNSUPPORTED`, `DMSAA_STATUS_GL`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn dmsaa_begin_forward(
     retrofit: *mut DmsaaRetrofit,

@@ -52,6 +52,14 @@ pub enum DmsaaStatus {
     /// then, by the next `dmsaa_resolve` (which has still resolved its
     /// frame).
     SecondLighting = 9,
+    /// Two lit layers (or the forward target's samples) would be mixed in a
+    /// floating-point output with `DMSAA_LAYER_MIX_AUTO`: GL state cannot
+    /// tell the output's tonemap, which decides the domain. Declare
+    /// `layer_mix` (`DMSAA_LAYER_MIX_CURVE`, `_TONEMAPPED` or `_LINEAR`; the
+    /// message says which fits which tonemap). Returned by
+    /// `dmsaa_begin_second_layer` and `dmsaa_begin_forward`, having done
+    /// nothing.
+    LayerMixUndeclared = 10,
 }
 
 /// The GL loader a host already has: returns the address of the GL entry
@@ -124,10 +132,12 @@ pub const DMSAA_STENCIL_BLIT: DmsaaStencilCopy = 3;
 /// mixed by the second layer's coverage (and the forward target's samples
 /// averaged).
 pub type DmsaaLayerMix = u32;
-/// Inferred (the default): tonemapped for a floating-point output; in
-/// linear light for an sRGB output the host writes with
-/// `GL_FRAMEBUFFER_SRGB` on; as stored otherwise (a host whose 8-bit
-/// output holds display values declares `DMSAA_LAYER_MIX_SRGB_ENCODED`).
+/// Inferred (the default) where GL state can tell: in linear light for an
+/// sRGB output the host writes with `GL_FRAMEBUFFER_SRGB` on; as sRGB-encoded
+/// display values (`DMSAA_LAYER_MIX_SRGB_ENCODED`) for any other 8-bit
+/// (or other unorm) output, framebuffer 0 included. A floating-point output's tonemap decides
+/// its domain and GL cannot see it: the first call that mixes into it returns
+/// `DMSAA_STATUS_LAYER_MIX_UNDECLARED`, naming the declarations to choose from.
 pub const DMSAA_LAYER_MIX_AUTO: DmsaaLayerMix = 0;
 /// Linear values (linear light, or any values to be mixed as they are):
 /// `mix(first, second, a)` as the output stores them.

@@ -151,6 +151,17 @@ pub enum Error {
     /// layer: what it drew, and how to set it up instead.
     #[error("{0}")]
     SecondLighting(String),
+
+    /// Two lit layers (or the forward target's samples) would be mixed in
+    /// a floating-point output with [`LayerMix::Auto`](crate::LayerMix::Auto):
+    /// the right domain is the host's tonemap, which GL state cannot tell.
+    #[error(
+        "the lit output is {format}, whose tonemap GL state cannot tell, so LayerMix::Auto does not know how to mix it: declare `layer_mix` (C `DmsaaOptions::layer_mix`): LayerMix::Curve with the host's tonemap and its inverse (DMSAA_LAYER_MIX_CURVE; for a linear tonemap that clamps, `clamp(x * exposure, 0, 1)` and `y / exposure`), LayerMix::Tonemapped for a Reinhard-like tonemap (DMSAA_LAYER_MIX_TONEMAPPED), or LayerMix::Linear where the values reach the screen as they are, never clamped (DMSAA_LAYER_MIX_LINEAR); docs/hosts.md, \"Per engine style\""
+    )]
+    LayerMixUndeclared {
+        /// The output's format, e.g. `RGBA16F`.
+        format: &'static str,
+    },
 }
 
 fn fmt_counts(counts: &[u32]) -> String {

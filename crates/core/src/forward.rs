@@ -134,7 +134,7 @@ impl ForwardTarget {
             )?);
             fill.program()
                 .set_at_setup(gl, |p| p.set_i32(gl, "u_lit", 0));
-            let kind = MixKind::of(mix, &output);
+            let kind = MixKind::of(mix, &output)?;
             let curve = match mix {
                 LayerMix::Curve(source) => Some(source.as_str()),
                 _ => None,

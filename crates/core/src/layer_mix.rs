@@ -5,6 +5,7 @@
 use crate::gl::ShaderSource;
 use crate::gl::format::ComponentType;
 use crate::lit_output::LitOutput;
+use crate::{Error, Result};
 use glow::HasContext;
 
 /// What the host's lit values mean, and so how the two lit layers are
@@ -15,13 +16,23 @@ use glow::HasContext;
 /// styles).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub enum LayerMix {
-    /// Inferred (default): [`LayerMix::Tonemapped`] for a floating-point
-    /// (HDR) output; linear light for an sRGB output the host writes with
-    /// `GL_FRAMEBUFFER_SRGB` on (GL decodes and encodes); else
-    /// [`LayerMix::Linear`], the values as stored. A host whose 8-bit
-    /// output holds display values (no tonemap after it, or its shader
-    /// encodes) declares [`LayerMix::SrgbEncoded`]: on every host of the
-    /// zoo that mixes closer to the 16x image (docs/hosts.md).
+    /// Inferred (default) where GL state can tell what the values mean,
+    /// refused where it cannot:
+    /// - an sRGB output the host writes with `GL_FRAMEBUFFER_SRGB` on (GL
+    ///   decodes and encodes): linear light;
+    /// - an 8-bit (or other fixed-point) output written as stored (`RGBA8`,
+    ///   framebuffer 0, or an sRGB image with `GL_FRAMEBUFFER_SRGB` off):
+    ///   [`LayerMix::SrgbEncoded`], since such an output holds display
+    ///   values (the host's shader encodes, or no tonemap follows);
+    /// - a floating-point (HDR) output: its tonemap decides the domain and
+    ///   GL cannot see it, so the first call that mixes into it
+    ///   ([`MsaaRetrofit::begin_second_layer`](crate::MsaaRetrofit::begin_second_layer),
+    ///   `begin_forward`) returns [`Error::LayerMixUndeclared`](crate::Error::LayerMixUndeclared)
+    ///   naming the declarations to choose from
+    ///   ([`LayerMix::Curve`], [`LayerMix::Tonemapped`], [`LayerMix::Linear`]).
+    ///
+    /// docs/hosts.md measures each engine style with `Auto` and with each
+    /// declaration.
     #[default]
     Auto,
     /// Linear values: `mix(first, second, α)` as the output stores them
@@ -68,18 +79,24 @@ impl MixKind {
 
     /// The domain `mix` blends `output`'s values in, as the crate reads
     /// them (where the host's writes went through GL's sRGB encoding, the
-    /// crate's reads are decoded: linear light already).
-    pub(crate) fn of(mix: &LayerMix, output: &LitOutput) -> MixKind {
+    /// crate's reads are decoded: linear light already), or, for
+    /// [`LayerMix::Auto`] into a floating-point output, the error naming
+    /// what to declare.
+    pub(crate) fn of(mix: &LayerMix, output: &LitOutput) -> Result<MixKind> {
         let float = matches!(output.format.properties().component, ComponentType::Float);
-        match mix {
+        Ok(match mix {
             LayerMix::Curve(_) => MixKind::Curve,
             LayerMix::Tonemapped => MixKind::Tonemapped,
             LayerMix::Linear => MixKind::Linear,
             LayerMix::SrgbEncoded | LayerMix::Auto if output.srgb_writes => MixKind::Linear,
             LayerMix::SrgbEncoded => MixKind::SrgbEncoded,
-            LayerMix::Auto if float => MixKind::Tonemapped,
-            LayerMix::Auto => MixKind::Linear,
-        }
+            LayerMix::Auto if float => {
+                return Err(Error::LayerMixUndeclared {
+                    format: output.format.name(),
+                });
+            }
+            LayerMix::Auto => MixKind::SrgbEncoded,
+        })
     }
 }
 

@@ -29,7 +29,7 @@ use crate::common;
 use crate::common::gl_state::GlState;
 use deferred_msaa::foreign::ForeignRetrofit;
 use deferred_msaa::resolve::NormalEncoding;
-use deferred_msaa::{ColorAttachment, Frame, NormalAttachment, RetrofitOptions};
+use deferred_msaa::{ColorAttachment, Frame, LayerMix, NormalAttachment, RetrofitOptions};
 use deferred_msaa_lab::compare::flip;
 use glow017::HasContext;
 use host::*;
@@ -43,6 +43,7 @@ fn retrofitted(
     ctx: &deferred_msaa_lab::context::HeadlessContext,
     gl: &glow017::Context,
     layers: u32,
+    layer_mix: LayerMix,
 ) -> (RgbaImage, RgbaImage, Vec<String>) {
     let state = ctx.gl(); // the lab's glow 0.18, for the state snapshot only
     let mut failures = Vec::new();
@@ -63,8 +64,7 @@ fn retrofitted(
             attachment: ColorAttachment(1),
             encoding: NormalEncoding::Xyz,
         }),
-        // As docs/hosts.md says for an engine encoding sRGB in its shader.
-        layer_mix: deferred_msaa::LayerMix::SrgbEncoded,
+        layer_mix,
         ..RetrofitOptions::default()
     };
     options.resolve.layers = layers;
@@ -219,7 +219,9 @@ fn glow017_host_retrofits_through_the_foreign_entry_point() {
     let mut flips = Vec::new();
     let mut own_flips = Vec::new();
     for layers in [1, 2] {
-        let (image, own_image, f) = retrofitted(&ctx, &gl, layers);
+        // Nothing declared: an RGBA8 target, inferred as the display values
+        // the engine's shader encodes (docs/hosts.md).
+        let (image, own_image, f) = retrofitted(&ctx, &gl, layers, LayerMix::Auto);
         failures.extend(f.into_iter().map(|f| format!("{layers} layer(s): {f}")));
         flips.push(flip(&reference, &image).expect("flip").mean);
         own_flips.push(flip(&reference, &own_image).expect("flip").mean);
@@ -228,7 +230,7 @@ fn glow017_host_retrofits_through_the_foreign_entry_point() {
     // Over the frame's edge pixels, two layers against no MSAA.
     let mask = edges(&gl);
     let (none_edges, two_edges) = {
-        let two = retrofitted(&ctx, &gl, 2).0;
+        let two = retrofitted(&ctx, &gl, 2, LayerMix::Auto).0;
         let by = |i: &RgbaImage| {
             deferred_msaa_lab::compare::flip_by_mask(&reference, i, &mask)
                 .expect("sizes")
@@ -377,4 +379,68 @@ fn a_wrapper_that_drops_the_crates_framebuffer_is_an_error_then_refresh() {
     msaa.destroy();
     host.destroy(&gl);
     assert_eq!(deferred_msaa::gl::live_objects().total(), 0);
+}
+
+/// With nothing declared (`LayerMix::Auto`), two layers come within 1.1x
+/// of the best declaration's FLIP against the host's 16x image, over the
+/// whole frame and over its edge pixels: the engine's shader encodes sRGB
+/// into `RGBA8`, which `Auto` mixes as sRGB-encoded display values.
+#[test]
+fn glow017_host_mixes_right_with_nothing_declared() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    // SAFETY: the context is current on this thread.
+    let gl = unsafe { glow017::Context::from_loader_function(|name| ctx.get_proc_address(name)) };
+    let reference = host_image(&gl, 4);
+    let none = host_image(&gl, 1);
+    let mask = edges(&gl);
+    let measure = |i: &RgbaImage| {
+        let whole = flip(&reference, i).expect("flip").mean;
+        let edge = deferred_msaa_lab::compare::flip_by_mask(&reference, i, &mask)
+            .expect("sizes")
+            .marked
+            .expect("edge pixels");
+        (whole, edge)
+    };
+    let (none_flip, none_edges) = measure(&none);
+    println!("foreign, two layers by layer_mix: none {none_flip:.4} ({none_edges:.4} over edges)");
+    let mut failures = Vec::new();
+    let mut measured = Vec::new();
+    for mix in [
+        LayerMix::Auto,
+        LayerMix::SrgbEncoded,
+        LayerMix::Linear,
+        LayerMix::Tonemapped,
+    ] {
+        let (image, _, f) = retrofitted(&ctx, &gl, 2, mix.clone());
+        failures.extend(f.into_iter().map(|f| format!("{mix:?}: {f}")));
+        let (whole, edge) = measure(&image);
+        println!(
+            "foreign, two layers, {mix:?}: {whole:.4} ({:.2}x none), over edges {edge:.4} ({:.2}x)",
+            whole / none_flip,
+            edge / none_edges
+        );
+        measured.push((mix, whole, edge));
+    }
+    let (_, auto, auto_edges) = measured[0].clone();
+    let best = measured[1..]
+        .iter()
+        .map(|m| m.1)
+        .fold(f32::INFINITY, f32::min);
+    let best_edges = measured[1..]
+        .iter()
+        .map(|m| m.2)
+        .fold(f64::INFINITY, f64::min);
+    if auto > 1.1 * best {
+        failures.push(format!(
+            "Auto {auto:.4} is above 1.1x the best declaration's {best:.4}"
+        ));
+    }
+    if auto_edges > 1.1 * best_edges {
+        failures.push(format!(
+            "Auto over edges {auto_edges:.4} is above 1.1x the best declaration's {best_edges:.4}"
+        ));
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }

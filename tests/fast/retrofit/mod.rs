@@ -509,6 +509,7 @@ fn profiling_times_each_step_and_changes_nothing() {
             layers: 2,
             ..ResolveSettings::default()
         },
+        layer_mix: LayerMix::Tonemapped, // an RGBA16F lit output: its tonemap declared
         ..RetrofitOptions::default()
     };
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();

@@ -37,6 +37,7 @@ fn second_layer_calls_out_of_order_are_errors() {
             layers: 2,
             ..ResolveSettings::default()
         },
+        layer_mix: LayerMix::Tonemapped, // an RGBA16F lit output: its tonemap declared
         normal_attachment: Some(NormalAttachment {
             attachment: ColorAttachment(2),
             encoding: NormalEncoding::Xyz,
@@ -134,9 +135,10 @@ fn two_layers_take_a_host_without_draw_buffers_to_spare() {
 }
 
 /// The two lit layers mix by the second layer's coverage in the domain the
-/// host chose, on an HDR (RGBA16F) and an LDR (RGBA8) output: `Auto` is the
-/// tonemapped domain on the first and linear on the second, `Curve` is the
-/// host's own curve. Pixels the second layer does not cover keep the first
+/// host chose, on an HDR (RGBA16F) and an LDR (RGBA8) output: `Auto` is
+/// the sRGB-encoded display values' domain on the second (on the first it
+/// is refused: `nothing_declared_into_a_float_output_is_refused`), `Curve`
+/// is the host's own curve. Pixels the second layer does not cover keep the first
 /// lighting bit for bit. The toy host lights by a gain of 6, so the HDR
 /// values are where the domains differ.
 #[test]
@@ -167,12 +169,11 @@ fn the_lit_layers_mix_by_coverage_in_the_chosen_domain() {
         |x| x.map(|c| common::srgb::decode((c.clamp(0.0, 1.0) * 255.0).round() as u8)),
         |y| y.map(|l| common::srgb::encode(l) / 255.0),
     );
-    let cases: [(Format, LayerMix, (Domain, Domain)); 7] = [
-        (Format::Rgba16f, LayerMix::Auto, tonemap),
+    let cases: [(Format, LayerMix, (Domain, Domain)); 6] = [
         (Format::Rgba16f, LayerMix::Tonemapped, tonemap),
         (Format::Rgba16f, LayerMix::Linear, (identity, identity)),
         (Format::Rgba16f, LayerMix::Curve(curve.into()), reinhard),
-        (Format::Rgba8, LayerMix::Auto, (identity, identity)),
+        (Format::Rgba8, LayerMix::Auto, srgb),
         (Format::Rgba8, LayerMix::SrgbEncoded, srgb),
         (Format::Rgba8, LayerMix::Linear, (identity, identity)),
     ];
@@ -268,6 +269,88 @@ fn the_lit_layers_mix_by_coverage_in_the_chosen_domain() {
     assert_eq!(live_objects(), before, "GL objects leaked");
 }
 
+/// Two layers (and the forward target) into a floating-point output with
+/// nothing declared: the tonemap that decides the mix's domain is the
+/// host's, which GL state cannot tell, so `begin_second_layer` and
+/// `begin_forward` return `Error::LayerMixUndeclared` naming the
+/// declarations, having changed no GL state and left no GL error; the
+/// same retrofit, its mix declared, then runs the second layer.
+#[test]
+fn nothing_declared_into_a_float_output_is_refused() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let host = host(gl);
+    let (output, fbo) = lit_output(gl, Format::Rgba16f);
+    let mut options = RetrofitOptions {
+        position_attachment: Some(ColorAttachment(1)),
+        resolve: ResolveSettings {
+            layers: 2,
+            ..ResolveSettings::default()
+        },
+        normal_attachment: Some(NormalAttachment {
+            attachment: ColorAttachment(2),
+            encoding: NormalEncoding::Xyz,
+        }),
+        ..RetrofitOptions::default()
+    };
+    assert_eq!(options.layer_mix, LayerMix::Auto, "the default");
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    host.draw(gl, &projection(), false);
+    msaa.resolve(gl, &frame()).unwrap();
+    host.light(gl, fbo.raw(), 1.0);
+    let refused = |e: Error, call: &str| {
+        let message = e.to_string();
+        assert!(
+            matches!(e, Error::LayerMixUndeclared { format: "RGBA16F" }),
+            "{call}: {e:?}"
+        );
+        for named in [
+            "LayerMix::Curve",
+            "LayerMix::Tonemapped",
+            "LayerMix::Linear",
+        ] {
+            assert!(
+                message.contains(named),
+                "{call}: {message} names no {named}"
+            );
+        }
+    };
+    let state = crate::common::gl_state::GlState::capture(gl);
+    refused(
+        msaa.begin_second_layer(gl, Some(fbo.raw())).unwrap_err(),
+        "begin_second_layer",
+    );
+    refused(
+        msaa.begin_forward(gl, Some(fbo.raw())).unwrap_err(),
+        "begin_forward",
+    );
+    let changed = state.differences(&crate::common::gl_state::GlState::capture(gl));
+    assert!(
+        changed.is_empty(),
+        "the refusals changed GL state: {changed:?}"
+    );
+    assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
+    // Declared, the same retrofit runs the second layer.
+    options.layer_mix = LayerMix::Tonemapped;
+    msaa.set_options(gl, &options).unwrap();
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    host.draw(gl, &projection(), false);
+    msaa.resolve(gl, &frame()).unwrap();
+    host.light(gl, fbo.raw(), 1.0);
+    assert!(msaa.begin_second_layer(gl, Some(fbo.raw())).unwrap());
+    host.light(gl, fbo.raw(), 1.0);
+    msaa.finish_second_layer(gl, Some(fbo.raw())).unwrap();
+    msaa.destroy(gl);
+    fbo.destroy(gl);
+    output.destroy(gl);
+    host.destroy(gl);
+    assert_eq!(live_objects(), before, "GL objects leaked");
+}
+
 /// `restore_first_layer: Nothing`, for hosts that read nothing of their
 /// G-buffer after lighting, and `DepthAndStencil`, for hosts that only
 /// depth-test against it: the lit image is bit for bit the one with the
@@ -292,6 +375,7 @@ fn without_restoring_the_first_layer_the_lit_image_is_the_same() {
             layers: 2,
             ..ResolveSettings::default()
         },
+        layer_mix: LayerMix::Tonemapped, // an RGBA16F lit output: its tonemap declared
         normal_attachment: Some(NormalAttachment {
             attachment: ColorAttachment(2),
             encoding: NormalEncoding::Xyz,
@@ -591,6 +675,7 @@ fn two_layers_on_wide_gbuffers_at_the_contexts_draw_buffers() {
                 layers: 2,
                 ..ResolveSettings::default()
             },
+            layer_mix: LayerMix::Tonemapped, // an RGBA16F lit output: its tonemap declared
             ..one_layer
         };
         let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options)
@@ -731,6 +816,7 @@ fn the_second_layer_leaves_out_the_attachments_the_host_names() {
             encoding: NormalEncoding::Xyz,
         }),
         second_layer_omits: vec![ColorAttachment(5), ColorAttachment(6)],
+        layer_mix: LayerMix::Tonemapped, // an RGBA16F lit output: its tonemap declared
         ..RetrofitOptions::default()
     };
     options.resolve.layers = 2;

@@ -667,6 +667,75 @@ pub fn outcome_world_key(
     )
 }
 
+/// The tutorial's program with its first light moved into the gap between
+/// the floating triangle and the panel behind it, its falloff steep (a
+/// small bright light, as an engine places for a lamp): what the paper's
+/// halo needs, a position between an edge's two surfaces lit as neither is.
+struct GapLit(LearnOpenGl);
+
+impl ZooHost for GapLit {
+    fn new(gl: &glow::Context, width: u32, height: u32) -> Self {
+        let host = LearnOpenGl::new(gl, width, height);
+        let p = host.shader_lighting_pass;
+        unsafe {
+            gl.use_program(Some(p));
+            set_vec3(
+                gl,
+                p,
+                "lights[0].Position",
+                glam::Vec3::new(0.85, 0.8, -0.2),
+            );
+            set_vec3(gl, p, "lights[0].Color", glam::Vec3::splat(3.0));
+            set_float(gl, p, "lights[0].Linear", 0.0);
+            set_float(gl, p, "lights[0].Quadratic", 6.0);
+            gl.use_program(None);
+        }
+        GapLit(host)
+    }
+    fn gbuffer(&self) -> glow::Framebuffer {
+        self.0.gbuffer()
+    }
+    fn screen(&self) -> glow::Framebuffer {
+        self.0.screen()
+    }
+    fn units(&self) -> u32 {
+        self.0.units()
+    }
+    fn geometry_pass(&self, gl: &glow::Context, fbo: glow::Framebuffer) {
+        self.0.geometry_pass(gl, fbo)
+    }
+    fn lighting_pass(&self, gl: &glow::Context) {
+        self.0.lighting_pass(gl)
+    }
+    fn read_gbuffer(&self, gl: &glow::Context) -> Vec<Plane> {
+        self.0.read_gbuffer(gl)
+    }
+    fn destroy(self, gl: &glow::Context) {
+        self.0.destroy(gl)
+    }
+}
+
+/// [`GapLit`] with its G-buffer resolved as `glBlitFramebuffer` resolves a
+/// multisampled one (`ResolveMethod::Average`: every sample of every
+/// attachment averaged, positions and normals too; one layer), or by the
+/// default median (`averaged` false). Averaged, its lighting lights
+/// positions between the triangle's edge and the panel, close to the
+/// light: the halos the zoo's halo check exists to catch
+/// (`zoo::a_blit_resolved_gbuffer_has_halo_pixels`).
+pub fn outcome_gap_lit(
+    ctx: &deferred_msaa_lab::context::HeadlessContext,
+    averaged: bool,
+) -> harness::Outcome {
+    let mut options = world_key_options();
+    let name = if averaged {
+        options.resolve.method = deferred_msaa::resolve::ResolveMethod::Average;
+        "learnopengl-gap-lit, averaged"
+    } else {
+        "learnopengl-gap-lit"
+    };
+    harness::run::<GapLit>(ctx, name, &options, |h| h.0.frame_with_view())
+}
+
 /// The host run through the harness with the default depth key.
 pub fn outcome_depth_key(
     ctx: &deferred_msaa_lab::context::HeadlessContext,

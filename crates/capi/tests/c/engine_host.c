@@ -18,12 +18,16 @@
  *
  * Retrofitted as docs/hosts.md says for this style: two layers with every
  * attachment kept (the octahedral normals and the packed byte selected,
- * the normals named for the clusters), the radiance declared linear
- * (DMSAA_LAYER_MIX_LINEAR: the engine's tonemap is linear), its clear
- * values declared and the frame begun with dmsaa_begin_frame.
+ * the normals named for the clusters), the radiance's tonemap declared
+ * (DMSAA_LAYER_MIX_CURVE: exposure, then clamp; with nothing declared the
+ * library cannot tell it and refuses), its clear values declared and the
+ * frame begun with dmsaa_begin_frame.
  *
  * Writes raw RGBA8 images (rows bottom-up) into OUT_DIR: none.rgba,
- * msaa.rgba (one layer), layers.rgba (two layers), reference.rgba (the
+ * msaa.rgba (one layer), layers.rgba (two layers, the tonemap declared),
+ * layers-linear.rgba, layers-tonemapped.rgba, layers-srgb.rgba (two
+ * layers, each other declaration), layers-auto.rgba (nothing declared:
+ * refused, so the one-layer frame), reference.rgba (the
  * engine at 4x the width and height, averaged 4x4 in linear light), and
  * edges.mask (one byte a pixel, 255 where the engine's own frame has a
  * depth or normal edge). Exits non-zero with a line saying why on any
@@ -575,7 +579,7 @@ static void write_reference(const char *dir)
 }
 
 /* The options docs/hosts.md gives this engine's style. */
-static DmsaaOptions engine_options(uint32_t layers)
+static DmsaaOptions engine_options(uint32_t layers, DmsaaLayerMix mix)
 {
     DmsaaOptions o = dmsaa_options_default();
     o.layers = layers;
@@ -589,6 +593,11 @@ static DmsaaOptions engine_options(uint32_t layers)
     o.layer_mix = DMSAA_LAYER_MIX_CURVE;
     o.layer_mix_curve = "vec3 dmsaa_curve(vec3 x) { return clamp(x * 0.8, 0.0, 1.0); }\n"
                         "vec3 dmsaa_curve_inverse(vec3 y) { return y / 0.8; }\n";
+    /* The test's other declarations (and none), to measure against. */
+    if (mix != DMSAA_LAYER_MIX_CURVE) {
+        o.layer_mix = mix;
+        o.layer_mix_curve = NULL;
+    }
     o.clear_twins = 1;
     o.clear_colors[1][0] = o.clear_colors[1][1] = 0.5f;
     o.clear_colors[2][0] = o.clear_colors[2][1] = 0.5f;
@@ -599,9 +608,15 @@ static DmsaaOptions engine_options(uint32_t layers)
     return o;
 }
 
-static void retrofitted_frame(Engine *e, uint32_t layers, const char *dir, const char *name)
+/* With `mix` DMSAA_LAYER_MIX_AUTO and two layers, the library cannot
+ * infer the RGBA16F radiance's domain: dmsaa_begin_second_layer must
+ * refuse with DMSAA_STATUS_LAYER_MIX_UNDECLARED, having done nothing (the
+ * frame is the one-layer frame), and the message must name the
+ * declarations. */
+static void retrofitted_frame(Engine *e, uint32_t layers, DmsaaLayerMix mix, const char *dir, const char *name)
 {
-    DmsaaOptions options = engine_options(layers);
+    DmsaaOptions options = engine_options(layers, mix);
+    bool refused = layers == 2 && mix == DMSAA_LAYER_MIX_AUTO;
     DmsaaRetrofit *msaa = NULL;
     if (!ok(dmsaa_retrofit_new(load_gl, NULL, e->gbuffer, &options, &msaa), "dmsaa_retrofit_new"))
         return;
@@ -613,8 +628,21 @@ static void retrofitted_frame(Engine *e, uint32_t layers, const char *dir, const
         ok(dmsaa_resolve(msaa, e->projection, NULL), "dmsaa_resolve");
         lighting_pass(e);
         bool run = false;
-        ok(dmsaa_begin_second_layer(msaa, e->hdr_fbo, &run), "dmsaa_begin_second_layer");
-        CHECK(run == (layers == 2), "%s: run_lighting %d with %u layers", name, run, layers);
+        if (refused) {
+            DmsaaStatus status = dmsaa_begin_second_layer(msaa, e->hdr_fbo, &run);
+            const char *message = status == DMSAA_STATUS_OK ? "" : dmsaa_last_error();
+            if (frame == 0)
+                printf("layer_mix auto into RGBA16F: status %d: %s\n", (int)status, message);
+            CHECK(status == DMSAA_STATUS_LAYER_MIX_UNDECLARED && !run,
+                  "%s: two layers, nothing declared, into RGBA16F: status %d, run_lighting %d", name, (int)status,
+                  run);
+            CHECK(strstr(message, "DMSAA_LAYER_MIX_CURVE") && strstr(message, "DMSAA_LAYER_MIX_TONEMAPPED") &&
+                      strstr(message, "DMSAA_LAYER_MIX_LINEAR"),
+                  "%s: the refusal does not name the declarations: %s", name, message);
+        } else {
+            ok(dmsaa_begin_second_layer(msaa, e->hdr_fbo, &run), "dmsaa_begin_second_layer");
+            CHECK(run == (layers == 2), "%s: run_lighting %d with %u layers", name, run, layers);
+        }
         if (run) {
             lighting_pass(e);
             ok(dmsaa_finish_second_layer(msaa, e->hdr_fbo), "dmsaa_finish_second_layer");
@@ -655,8 +683,13 @@ int main(int argc, char **argv)
     gl_errors("the engine's own frame");
     write_screen(&e, dir, "none.rgba");
     write_edges(&e, dir);
-    retrofitted_frame(&e, 1, dir, "msaa.rgba");
-    retrofitted_frame(&e, 2, dir, "layers.rgba");
+    retrofitted_frame(&e, 1, DMSAA_LAYER_MIX_CURVE, dir, "msaa.rgba");
+    retrofitted_frame(&e, 2, DMSAA_LAYER_MIX_CURVE, dir, "layers.rgba");
+    /* The other declarations, and none, for the test to measure. */
+    retrofitted_frame(&e, 2, DMSAA_LAYER_MIX_LINEAR, dir, "layers-linear.rgba");
+    retrofitted_frame(&e, 2, DMSAA_LAYER_MIX_TONEMAPPED, dir, "layers-tonemapped.rgba");
+    retrofitted_frame(&e, 2, DMSAA_LAYER_MIX_SRGB_ENCODED, dir, "layers-srgb.rgba");
+    retrofitted_frame(&e, 2, DMSAA_LAYER_MIX_AUTO, dir, "layers-auto.rgba");
     engine_free(&e);
     write_reference(dir);
     gl_errors("the supersampled frame");

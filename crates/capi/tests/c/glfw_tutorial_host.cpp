@@ -36,6 +36,10 @@
 //                        the gamma-correct variant: no MSAA; two layers and
 //                        the forward target into framebuffer 0; the same
 //                        lit into an SRGB8_ALPHA8 framebuffer of the host's
+//   layers-forward-{auto,linear,tonemapped}.rgba, srgb-layers-{auto,linear,tonemapped}.rgba
+//                        two layers and the forward target with layer_mix
+//                        left to DMSAA_LAYER_MIX_AUTO or declared otherwise,
+//                        for the test to measure against the declaration
 //   reference.rgba, srgb-reference.rgba
 //                        each variant's own 16x image: the frame at 4x the
 //                        width and height in a framebuffer of its own,
@@ -74,9 +78,10 @@ struct Variant {
     uint32_t layers = 0;      // 0: no retrofit
     bool forward = false;     // the light cubes into the forward target
     GLuint litFbo = 0;        // the lighting's target: 0, or an FBO of the host's (blitted to 0)
+    int mix = -1;             // -1: the program's layer_mix; else a DMSAA_LAYER_MIX_* to measure
 };
 
-static DmsaaOptions tutorialOptions(uint32_t layers)
+static DmsaaOptions tutorialOptions(uint32_t layers, int mix = -1)
 {
     // As docs/capi.md and docs/hosts.md say for this program: world-space
     // positions in gPosition are the depth key, gNormal holds normals
@@ -91,6 +96,8 @@ static DmsaaOptions tutorialOptions(uint32_t layers)
     // Its lighting writes display values as they are (no tonemap, no
     // encoding by GL unless the gamma-correct variant turns it on).
     options.layer_mix = DMSAA_LAYER_MIX_SRGB_ENCODED;
+    if (mix >= 0)
+        options.layer_mix = static_cast<DmsaaLayerMix>(mix);
     return options;
 }
 
@@ -267,7 +274,7 @@ static std::vector<unsigned char> render(Engine &e, const Variant &v, const char
 {
     DmsaaRetrofit *msaa = nullptr;
     if (v.layers > 0) {
-        DmsaaOptions options = tutorialOptions(v.layers);
+        DmsaaOptions options = tutorialOptions(v.layers, v.mix);
         if (!ok(dmsaa_retrofit_new(loadForLibrary, nullptr, e.gBuffer, &options, &msaa), "dmsaa_retrofit_new"))
             msaa = nullptr;
     }
@@ -374,6 +381,12 @@ int main(int argc, char **argv)
         writeImage(dir, "layers.rgba", render(e, Variant{2, false, 0}, "two layers"));
         writeImage(dir, "layers-forward.rgba", render(e, Variant{2, true, 0}, "two layers, forward target"));
         writeImage(dir, "layers-fbo.rgba", render(e, Variant{2, false, rgba8.fbo}, "two layers lit into RGBA8"));
+        writeImage(dir, "layers-forward-auto.rgba",
+                   render(e, Variant{2, true, 0, DMSAA_LAYER_MIX_AUTO}, "two layers, forward target, nothing declared"));
+        writeImage(dir, "layers-forward-linear.rgba",
+                   render(e, Variant{2, true, 0, DMSAA_LAYER_MIX_LINEAR}, "two layers, forward target, linear"));
+        writeImage(dir, "layers-forward-tonemapped.rgba",
+                   render(e, Variant{2, true, 0, DMSAA_LAYER_MIX_TONEMAPPED}, "two layers, forward target, tonemapped"));
         naiveSecondLighting(e);
         freeScreen(rgba8);
         engineFree(e);
@@ -386,6 +399,12 @@ int main(int argc, char **argv)
         writeImage(dir, "srgb-layers.rgba", render(e, Variant{2, true, 0}, "gamma-correct, two layers"));
         writeImage(dir, "srgb-layers-fbo.rgba",
                    render(e, Variant{2, true, srgb.fbo}, "gamma-correct, two layers lit into SRGB8_ALPHA8"));
+        writeImage(dir, "srgb-layers-auto.rgba",
+                   render(e, Variant{2, true, 0, DMSAA_LAYER_MIX_AUTO}, "gamma-correct, two layers, nothing declared"));
+        writeImage(dir, "srgb-layers-linear.rgba",
+                   render(e, Variant{2, true, 0, DMSAA_LAYER_MIX_LINEAR}, "gamma-correct, two layers, linear"));
+        writeImage(dir, "srgb-layers-tonemapped.rgba",
+                   render(e, Variant{2, true, 0, DMSAA_LAYER_MIX_TONEMAPPED}, "gamma-correct, two layers, tonemapped"));
         freeScreen(srgb);
         engineFree(e);
     }

@@ -48,7 +48,12 @@ pub struct RetrofitOptions {
     /// [`NormalEncoding::Unorm`]: without the test a crease pixel blends two
     /// packed normals into one that lights like neither face.
     pub normal_attachment: Option<NormalAttachment>,
-    /// How [`MsaaRetrofit::finish_second_layer`](crate::MsaaRetrofit::finish_second_layer) mixes the two lit layers.
+    /// What the host's lit values mean, and so how
+    /// [`MsaaRetrofit::finish_second_layer`](crate::MsaaRetrofit::finish_second_layer)
+    /// mixes the two lit layers and
+    /// [`MsaaRetrofit::finish_forward`](crate::MsaaRetrofit::finish_forward)
+    /// averages samples. [`LayerMix::Auto`] (the default) infers it for 8-bit
+    /// outputs and refuses a floating-point one, whose tonemap it cannot see.
     pub layer_mix: LayerMix,
     /// What [`MsaaRetrofit::finish_second_layer`](crate::MsaaRetrofit::finish_second_layer) puts back of the first
     /// layer in the host's G-buffer ([`FirstLayerRestore`]; by default

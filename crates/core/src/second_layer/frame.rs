@@ -168,6 +168,8 @@ impl SecondLayer {
             destroy_object(gl, old);
         }
         let output = LitOutput::inspect(gl, host, framebuffer_srgb, (self.width, self.height))?;
+        // Refused before anything is made: a mix that cannot be inferred.
+        MixKind::of(&self.mix, &output)?;
         let (w, h) = (self.width, self.height);
         let format = output.copy_format();
         let stencil = (Attachment::DepthStencil, TextureRef::from(&self.stencil));
@@ -458,7 +460,7 @@ impl SecondLayer {
         let Some(o) = &self.output else {
             return Ok(());
         };
-        let pass = match (MixKind::of(&self.mix, &o.output), &self.mix_curve) {
+        let pass = match (MixKind::of(&self.mix, &o.output)?, &self.mix_curve) {
             (MixKind::Curve, Some(curve)) => curve,
             (MixKind::Tonemapped, _) => &self.mix_tonemapped,
             (MixKind::SrgbEncoded, _) => &self.mix_srgb,

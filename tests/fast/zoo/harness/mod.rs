@@ -7,13 +7,14 @@
 //! the way their engines are, with raw glow calls; this module only drives
 //! them through [`ZooHost`].
 
+mod halo;
 mod planes;
 
 pub use crate::common::gl_state::GlState;
 use deferred_msaa::gl::live_objects;
 use deferred_msaa::{Frame, MsaaRetrofit, NormalAttachment, RetrofitOptions};
 use deferred_msaa_lab::bench::{HALO_THRESHOLD, downsample_srgb};
-use deferred_msaa_lab::compare::{flip, halo_pixels, luminance};
+use deferred_msaa_lab::compare::{flip, halo_pixels};
 use deferred_msaa_lab::context::HeadlessContext;
 use glow::HasContext;
 use image::RgbaImage;
@@ -238,12 +239,15 @@ pub struct Outcome {
     pub flip_none: f32,
     /// FLIP mean of the retrofitted image against the reference.
     pub flip_resolved: f32,
-    /// Halo pixels (against the reference) of each image.
+    /// Halo pixels (halo.rs: beyond coverage quantisation) of the no-MSAA image.
     pub halos_none: usize,
     /// Halo pixels of the retrofitted image.
     pub halos_resolved: usize,
     /// Halo pixels of the retrofitted image where the no-MSAA image has none.
     pub new_halos: usize,
+    /// Pixels of the retrofitted image over the 16x image by more than the
+    /// threshold, halo or coverage quantisation (halo.rs tells them apart).
+    pub over_reference: usize,
     /// Inside-face pixels compared.
     pub inside: usize,
     /// Distinct faces (by their constant planes) with inside pixels.
@@ -265,6 +269,7 @@ impl Outcome {
             halos_none: 0,
             halos_resolved: 0,
             new_halos: 0,
+            over_reference: 0,
             inside: 0,
             faces: 0,
             failures: Vec::new(),
@@ -280,13 +285,14 @@ impl Outcome {
             return;
         }
         eprintln!(
-            "{}: FLIP none {:.4} resolved {:.4} (reference 0); halos none {} resolved {} new {}; {} inside pixels over {} faces",
+            "{}: FLIP none {:.4} resolved {:.4} (reference 0); halos none {} resolved {} new {} ({} over the 16x image, quantisation included); {} inside pixels over {} faces",
             self.host,
             self.flip_none,
             self.flip_resolved,
             self.halos_none,
             self.halos_resolved,
             self.new_halos,
+            self.over_reference,
             self.inside,
             self.faces
         );
@@ -420,8 +426,9 @@ pub fn run<T: ZooHost>(
         clutter.reset(gl);
         let big = read_image(gl, host.screen(), W * SS, H * SS);
         host.destroy(gl);
-        downsample_srgb(&big, SS).expect("downsample")
+        (downsample_srgb(&big, SS).expect("downsample"), big)
     };
+    let (reference, big) = reference;
 
     // The host as it is.
     let (none_planes, none_image) = {
@@ -450,6 +457,7 @@ pub fn run<T: ZooHost>(
     for d in before_new.differences(&GlState::capture(gl)) {
         failures.push(format!("MsaaRetrofit::new changed the host's state: {d}"));
     }
+    let samples = msaa.samples();
     host.geometry_pass(gl, msaa.framebuffer());
     clutter.apply(ctx, &host);
     let before = GlState::capture(gl);
@@ -494,23 +502,16 @@ pub fn run<T: ZooHost>(
             "the retrofitted image is no closer to the supersampled one than the host's own: FLIP {flip_resolved:.4} vs {flip_none:.4}"
         ));
     }
-    let halos_none = halo_pixels(&reference, &none_image, HALO_THRESHOLD);
-    let halos_resolved = halo_pixels(&reference, &image, HALO_THRESHOLD);
-    // The retrofitted image with the no-MSAA image's halo pixels put back
-    // to the reference: what halos remain are new.
-    let masked = RgbaImage::from_fn(W, H, |x, y| {
-        let (r, n) = (reference.get_pixel(x, y), none_image.get_pixel(x, y));
-        if luminance(n) - luminance(r) > HALO_THRESHOLD {
-            *r
-        } else {
-            *image.get_pixel(x, y)
-        }
-    });
-    let new_halos = halo_pixels(&reference, &masked, HALO_THRESHOLD);
+    // Halo pixels (halo.rs): over the brightest their surfaces give at the
+    // twins' coverage steps, not merely over the 16x image.
+    let bounds = halo::bounds(&big, SS, samples);
+    let (halos_none, _) = halo::count(&bounds, &none_image, &none_image, HALO_THRESHOLD);
+    let (halos_resolved, new_halos) = halo::count(&bounds, &image, &none_image, HALO_THRESHOLD);
+    let over_reference = halo_pixels(&reference, &image, HALO_THRESHOLD);
     let mut halo_failure = None;
     if new_halos > 0 {
         halo_failure = Some(format!(
-            "{new_halos} halo pixels (luminance over the reference by more than {HALO_THRESHOLD}) that the host's own image does not have"
+            "{new_halos} halo pixels (luminance over the brightest its surfaces give at {samples}x coverage by more than {HALO_THRESHOLD}) that the host's own image does not have"
         ));
     }
     if std::env::var_os("ZOO_DUMP").is_some() {
@@ -533,6 +534,7 @@ pub fn run<T: ZooHost>(
         halos_none,
         halos_resolved,
         new_halos,
+        over_reference,
         halo_failure,
         not_run: None,
         inside,
