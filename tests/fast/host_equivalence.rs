@@ -5,7 +5,8 @@
 
 use crate::common;
 
-use deferred_msaa::ColorAttachment;
+use deferred_msaa::resolve::NormalEncoding;
+use deferred_msaa::{ColorAttachment, NormalAttachment};
 use deferred_msaa_lab::gbuffer::GBufferLayout;
 use deferred_msaa_lab::gl::{
     Attachment, Buffer, Format, Framebuffer, Program, ShaderStage, Texture2d, TextureRef,
@@ -426,6 +427,11 @@ fn a_host_retrofitted_through_the_public_api_matches_the_builtin_pipeline() {
             other => panic!("the demo layout keys on view-space position, not {other:?}"),
         },
         resolve: settings,
+        // The layout's normals, xyz, named as the renderer names them.
+        normal_attachment: layout.index_of("normal").map(|k| NormalAttachment {
+            attachment: ColorAttachment(k as u32),
+            encoding: NormalEncoding::Xyz,
+        }),
         ..RetrofitOptions::default()
     };
     assert_eq!(

@@ -33,8 +33,8 @@ use crate::{Error, Result};
 use glow::HasContext;
 use std::collections::HashMap;
 
-/// The resolve's fragment shader body; it needs [`COMPLEX_GLSL`] in front
-/// of it (see [`resolve_fragment_source`]).
+/// The resolve's fragment shader body; it needs [`COMPLEX_GLSL`] and
+/// [`NORMALS_GLSL`] in front of it (see [`resolve_fragment_source`]).
 pub const RESOLVE_FRAG: &str = include_str!("resolve.frag");
 
 /// The shared definitions of a complex pixel and of the selective-AA
@@ -57,11 +57,17 @@ pub const COMPLEX_GLSL: &str = include_str!("complex.glsl");
 /// The name [`COMPLEX_GLSL`] goes by in shader messages.
 pub const COMPLEX_GLSL_NAME: &str = "complex.glsl";
 
-/// The resolve's fragment stage: `header`, then [`COMPLEX_GLSL`] and
-/// [`RESOLVE_FRAG`] as two parts (so messages name the right file).
+/// How the resolve decodes a stored normal and tests two samples' normals
+/// (`normals.glsl`), the part before [`RESOLVE_FRAG`].
+pub const NORMALS_GLSL: &str = include_str!("normals.glsl");
+
+/// The resolve's fragment stage: `header`, then [`COMPLEX_GLSL`],
+/// [`NORMALS_GLSL`] and [`RESOLVE_FRAG`] as three parts (so messages name
+/// the right file).
 pub fn resolve_fragment_source(header: &str) -> ShaderSource {
     ShaderSource::with_header(header)
         .part(COMPLEX_GLSL_NAME, COMPLEX_GLSL)
+        .part("normals.glsl", NORMALS_GLSL)
         .part("resolve.frag", RESOLVE_FRAG)
 }
 

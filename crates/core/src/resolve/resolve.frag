@@ -92,9 +92,6 @@ uniform vec4 u_region;           // rect (x0, y0, x1, y1); ellipse (cx, cy, 1/rx
 #ifdef SELECT_MAX_DEPTH
 uniform float u_max_depth;
 #endif
-#ifdef CLUSTER_NORMALS
-uniform float u_normal_threshold;
-#endif
 
 // uniform ATTk_SAMPLER u_attk; out ATTk_VEC o_attk; for every attachment k.
 ATTACHMENT_DECLARATIONS
@@ -336,43 +333,7 @@ float closeness(float z, bool bg, bool is_ref, float z_r, bool bg_r) {
 #endif
 }
 
-#define NORMAL_XYZ 0
-#define NORMAL_UNORM 1
-#define NORMAL_OCTAHEDRAL 2
-#define NORMAL_OCTAHEDRAL_UNORM 3
-
-// A stored normal as a vector (cpu.rs: NormalEncoding::decode).
-vec3 decode_normal(vec4 v) {
-#if !defined(NORMAL_ENCODING) || NORMAL_ENCODING == NORMAL_XYZ
-    return v.xyz;
-#elif NORMAL_ENCODING == NORMAL_UNORM
-    return v.xyz * 2.0 - 1.0;
-#else
-#if NORMAL_ENCODING == NORMAL_OCTAHEDRAL
-    vec2 e = v.xy;
-#else
-    vec2 e = v.xy * 2.0 - 1.0;
-#endif
-    float z = 1.0 - abs(e.x) - abs(e.y);
-    vec2 s = vec2(e.x >= 0.0 ? 1.0 : -1.0, e.y >= 0.0 ? 1.0 : -1.0);
-    vec2 folded = (1.0 - abs(e.yx)) * s;
-    return vec3(z < 0.0 ? folded : e, z);
-#endif
-}
-
-// Samples with normals a and b (background flags bg_a, bg_b) may be one
-// surface: background, a normal that is not finite or is shorter than 1e-6,
-// or a cosine of at least the threshold (cpu.rs's same_normal).
-bool same_normal(vec3 a, vec3 b, bool bg_a, bool bg_b) {
-#ifdef CLUSTER_NORMALS
-    float la = length(a);
-    float lb = length(b);
-    bool unusable = !(la >= 1e-6) || !(lb >= 1e-6) || isinf(la) || isinf(lb);
-    return bg_a || bg_b || unusable || dot(a, b) / (la * lb) >= u_normal_threshold;
-#else
-    return true;
-#endif
-}
+// decode_normal and same_normal: normals.glsl, the part before this one.
 
 #ifdef SECOND_LAYER_OUTPUT
 // A sample of neither kept cluster joins the second layer (seeded at z_s)
