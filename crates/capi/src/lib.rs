@@ -88,6 +88,8 @@ pub extern "C" fn dmsaa_options_default() -> DmsaaOptions {
         memory_budget_bytes: DMSAA_MEMORY_BUDGET_NONE,
         memory_budget_strict: 0,
         depth_mode: DMSAA_DEPTH_STANDARD,
+        has_lit_clear: 0,
+        lit_clear_color: [0.0; 4],
     }
 }
 
@@ -612,6 +614,39 @@ pub unsafe extern "C" fn dmsaa_refresh(retrofit: *mut DmsaaRetrofit) -> DmsaaSta
     entry(F, || {
         with_handle(F, retrofit, |h| {
             h.msaa.refresh()?;
+            h.phase = Phase::Idle;
+            Ok(())
+        })
+    })
+}
+
+/// [`dmsaa_refresh`] for a host that made its G-buffer anew under another
+/// framebuffer name (deleted the old framebuffer and generated a new one):
+/// the handle reads `host_fbo` from now on and rebuilds its twins, second
+/// layer and forward target for it, keeping its options (ask
+/// [`dmsaa_framebuffer`] again). On error the handle keeps working as
+/// before.
+///
+/// Threading: the host's context current on the calling thread. The host's
+/// GL state is as it was.
+/// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit`;
+/// `DMSAA_STATUS_INVALID_ARGUMENT` for `host_fbo` 0; those of
+/// [`dmsaa_retrofit_new`] for `host_fbo`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn dmsaa_refresh_with(
+    retrofit: *mut DmsaaRetrofit,
+    host_fbo: u32,
+) -> DmsaaStatus {
+    const F: &str = "dmsaa_refresh_with";
+    entry(F, || {
+        let Some(fbo) = NonZeroU32::new(host_fbo) else {
+            return Err(Failure::invalid(format!(
+                "{F}: host_fbo is 0, the default framebuffer, which has no G-buffer textures to \
+                 retrofit: pass the G-buffer framebuffer the geometry pass draws into"
+            )));
+        };
+        with_handle(F, retrofit, |h| {
+            h.msaa.refresh_with(fbo)?;
             h.phase = Phase::Idle;
             Ok(())
         })

@@ -79,6 +79,16 @@ pub struct RetrofitOptions {
     /// less work), and during the second lighting the host's image holds
     /// the first layer's value there. Default: none.
     pub second_layer_omits: Vec<ColorAttachment>,
+    /// With two layers: the colour the host's lit target shows where its
+    /// lighting writes nothing (its clear colour, for a host that leaves its
+    /// sky or background to `glClear`). The own target of
+    /// [`MsaaRetrofit::begin_second_layer_own_target`](crate::MsaaRetrofit::begin_second_layer_own_target)
+    /// starts cleared to it. `None` (the default): the own target starts as
+    /// a copy of the output's lit first layer, as the output holds it for a
+    /// second lighting into it without a clear; a pixel the second lighting
+    /// leaves unwritten then mixes to the first layer's value. Never the
+    /// host's last `glClearColor`, which may be another target's.
+    pub lit_clear: Option<[f32; 4]>,
 }
 
 /// The values a host clears its G-buffer to, for
@@ -132,6 +142,7 @@ impl Default for RetrofitOptions {
             check_second_lighting: true,
             twin_clear: None,
             second_layer_omits: Vec::new(),
+            lit_clear: None,
         }
     }
 }

@@ -211,7 +211,9 @@ impl SecondLayer {
             ))
         })?;
         let (target, masked, lit_first, lit_second, lit_first_fbo, lit_second_fbo) = made;
+        let shares_depth = host.is_some_and(|f| shares_depth(gl, f, self.host_depth));
         self.output = Some(OutputTarget {
+            shares_depth,
             output,
             target,
             masked,
@@ -276,28 +278,68 @@ impl SecondLayer {
         })
     }
 
-    /// The crate's own target for the second lighting, prepared: the
-    /// lit second layer's copy (cleared to the host's clear colour) with
-    /// the selection stencil (its depth cleared to the host's clear depth;
-    /// its stencil [`SECOND_LAYER_SELECTED`] on every pixel where no
-    /// selection was made). The caller keeps the host's state.
-    fn prepare_own_target(&self, gl: &glow::Context) -> Option<glow::Framebuffer> {
+    /// The crate's own target for the second lighting, prepared (the
+    /// caller keeps the host's state): the lit second layer's copy, which
+    /// starts cleared to the declared `lit_clear`, or else as the lit first
+    /// layer (so a pixel the second lighting does not write mixes to the
+    /// first layer's value; never to a colour the host happened to clear
+    /// last), with the selection stencil
+    /// ([`SECOND_LAYER_SELECTED`] on every pixel where no selection was
+    /// made) and a depth as the output's would be during a second
+    /// lighting into it: the second layer's depth where the output shares
+    /// the G-buffer's depth, else the host's clear depth
+    /// (`glClearDepth`), as a lit target cleared before its lighting holds.
+    fn prepare_own_target(
+        &self,
+        gl: &glow::Context,
+        lit_clear: Option<[f32; 4]>,
+    ) -> Option<glow::Framebuffer> {
         let o = self.output.as_ref()?;
+        let (w, h) = (self.width as i32, self.height as i32);
         unsafe {
-            let mut colour = [0.0f32; 4];
-            gl.get_parameter_f32_slice(glow::COLOR_CLEAR_VALUE, &mut colour);
             let depth = gl.get_parameter_f32(glow::DEPTH_CLEAR_VALUE);
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(o.lit_second_fbo.raw()));
             gl.disable(glow::SCISSOR_TEST);
-            gl.disable(glow::FRAMEBUFFER_SRGB);
             gl.color_mask(true, true, true, true);
+            match lit_clear {
+                Some(colour) => {
+                    gl.bind_framebuffer(glow::FRAMEBUFFER, Some(o.lit_second_fbo.raw()));
+                    // The colour as glClearColor takes it: encoded on
+                    // the way in where the host's writes are.
+                    set_srgb(gl, o.output.srgb_writes);
+                    gl.clear_buffer_f32_slice(glow::COLOR, 0, &colour);
+                    gl.disable(glow::FRAMEBUFFER_SRGB);
+                }
+                None => {
+                    gl.disable(glow::FRAMEBUFFER_SRGB);
+                    gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(o.lit_first_fbo.raw()));
+                    gl.read_buffer(glow::COLOR_ATTACHMENT0);
+                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(o.lit_second_fbo.raw()));
+                    gl.blit_framebuffer(
+                        0,
+                        0,
+                        w,
+                        h,
+                        0,
+                        0,
+                        w,
+                        h,
+                        glow::COLOR_BUFFER_BIT,
+                        glow::NEAREST,
+                    );
+                }
+            }
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(o.lit_second_fbo.raw()));
             gl.depth_mask(true);
-            gl.clear_buffer_f32_slice(glow::COLOR, 0, &colour);
-            gl.clear_buffer_f32_slice(glow::DEPTH, 0, &[depth]);
+            if !o.shares_depth {
+                gl.clear_buffer_f32_slice(glow::DEPTH, 0, &[depth]);
+            }
             if !self.selected.get() {
                 gl.stencil_mask(0xFF);
                 gl.clear_buffer_i32_slice(glow::STENCIL, 0, &[i32::from(SELECTED)]);
             }
+        }
+        if o.shares_depth {
+            self.write_layer_depth(gl, &o.lit_second_fbo);
         }
         Some(o.lit_second_fbo.raw())
     }
@@ -311,7 +353,7 @@ impl SecondLayer {
         gl: &glow::Context,
         output: Option<glow::Framebuffer>,
         restore: FirstLayerRestore,
-        own_target: bool,
+        own_target: Option<Option<[f32; 4]>>,
         profile: &mut StepProfile,
     ) -> Result<Option<glow::Framebuffer>> {
         if self.lighting {
@@ -352,10 +394,11 @@ impl SecondLayer {
         profile.time(gl, "second layer: depth into host", || {
             self.depth_into_host(gl)
         });
-        let own = if own_target {
-            self.prepare_own_target(gl)
-        } else {
-            None
+        let own = match own_target {
+            Some(lit_clear) => profile.time(gl, "second layer: own target", || {
+                self.prepare_own_target(gl, lit_clear)
+            }),
+            None => None,
         };
         check_error(gl, "keeping the first layer and copying in the second")?;
         self.lighting = true;
@@ -440,8 +483,14 @@ impl SecondLayer {
         if self.depth_bits == 0 {
             return;
         }
+        self.write_layer_depth(gl, &self.host_target);
+    }
+
+    /// The second layer's depth into `target`'s depth (its stencil and
+    /// colours untouched).
+    fn write_layer_depth(&self, gl: &glow::Context, target: &Framebuffer) {
         unsafe {
-            self.host_target.bind(gl);
+            target.bind(gl);
             crate::gl::SavedState::prepare_fullscreen_pass(gl);
             gl.color_mask(false, false, false, false);
             gl.enable(glow::DEPTH_TEST);
@@ -525,5 +574,36 @@ impl SecondLayer {
         }
         pass.draw(gl, &self.vao);
         Ok(())
+    }
+}
+
+/// Whether host framebuffer `output`'s depth attachment is `depth` (the
+/// G-buffer's depth image). The caller keeps the host's state.
+fn shares_depth(
+    gl: &glow::Context,
+    output: glow::Framebuffer,
+    depth: crate::host::HostImageKind,
+) -> bool {
+    use crate::host::HostImageKind;
+    let (kind, name) = match depth {
+        HostImageKind::Texture2d(t) | HostImageKind::TextureLayer { texture: t, .. } => {
+            (glow::TEXTURE, t.0.get())
+        }
+        HostImageKind::Renderbuffer(r) => (glow::RENDERBUFFER, r.0.get()),
+    };
+    unsafe {
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(output));
+        let p = |pname| {
+            gl.get_framebuffer_attachment_parameter_i32(
+                glow::FRAMEBUFFER,
+                glow::DEPTH_ATTACHMENT,
+                pname,
+            ) as u32
+        };
+        let shared = p(glow::FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE) == kind
+            && p(glow::FRAMEBUFFER_ATTACHMENT_OBJECT_NAME) == name;
+        // Nothing attached: the name query is an error, not the host's.
+        let _ = gl.get_error();
+        shared
     }
 }

@@ -121,6 +121,9 @@ pub(crate) struct SecondLayer {
     /// The host's depth format has stencil, which the second layer's
     /// depth must not overwrite.
     host_stencil: bool,
+    /// The host's depth image: a lit output that has it attached shares
+    /// the G-buffer's depth.
+    host_depth: crate::host::HostImageKind,
     colors: usize,
     depth_bits: u32,
     width: u32,
@@ -358,6 +361,7 @@ impl SecondLayer {
                 host_target,
                 host_images,
                 host_stencil: host.depth.format.has_stencil(),
+                host_depth: host.depth.image,
                 colors: host.colors.len(),
                 depth_bits: host.depth.format.properties().depth_bits,
                 width: w,
@@ -380,6 +384,41 @@ impl SecondLayer {
                 resolved: false,
             })
         })
+    }
+
+    /// The crate's own target, while the host lights into it (between
+    /// `begin_second_layer_own_target` and `finish_second_layer`).
+    pub(crate) fn own_target_framebuffer(&self) -> Option<glow::Framebuffer> {
+        let o = self.output.as_ref()?;
+        (self.lighting && self.own_target).then(|| o.lit_second_fbo.raw())
+    }
+
+    /// What of the own target (made for the last output) someone other
+    /// than the crate deleted, in words naming it; `None` while it exists
+    /// or was not made.
+    pub(crate) fn own_target_deleted(&self, gl: &glow::Context) -> Option<String> {
+        let o = self.output.as_ref()?;
+        let fbo = o.lit_second_fbo.raw();
+        unsafe {
+            if !gl.is_framebuffer(fbo) {
+                return Some(format!(
+                    "the second lighting's own target, framebuffer {} (the one MsaaRetrofit::begin_second_layer_own_target returns)",
+                    fbo.0
+                ));
+            }
+            for (what, t) in [
+                ("lit second layer", o.lit_second.raw()),
+                ("selection stencil", self.stencil.raw()),
+            ] {
+                if !gl.is_texture(t) {
+                    return Some(format!(
+                        "the own target's {what} texture {} (attached to framebuffer {}, which begin_second_layer_own_target returns)",
+                        t.0, fbo.0
+                    ));
+                }
+            }
+        }
+        None
     }
 
     /// The first resolve's outside flag, where it has a draw buffer.

@@ -84,6 +84,11 @@ pub(super) struct OutputTarget {
     /// crate's own target for the second lighting
     /// ([`MsaaRetrofit::begin_second_layer_own_target`](crate::MsaaRetrofit::begin_second_layer_own_target)).
     pub(super) lit_second_fbo: Framebuffer,
+    /// The output's depth attachment is the G-buffer's depth image (a
+    /// lighting whose depth test reads the G-buffer's depth): the own
+    /// target's depth then holds the second layer's depth, as the
+    /// output's would during a second lighting into it.
+    pub(super) shares_depth: bool,
 }
 
 impl GlObject for OutputTarget {
