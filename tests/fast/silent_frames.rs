@@ -50,7 +50,8 @@ fn host(gl: &glow::Context, width: u32) -> Host {
     );
     let mut host =
         Host::new(gl, width, H, Format::Rgba32f, Format::Depth32f).expect("the toy host");
-    host.set_triangles(gl, &v).expect("the toy host's triangles");
+    host.set_triangles(gl, &v)
+        .expect("the toy host's triangles");
     host
 }
 
@@ -278,8 +279,14 @@ fn a_read_back_right_after_a_finish_reads_the_output() {
     );
     // Both bindings are the output's.
     let binding = |pname| unsafe { gl.get_parameter_i32(pname) } as u32;
-    assert_eq!(binding(glow::DRAW_FRAMEBUFFER_BINDING), lit.fbo.raw().0.get());
-    assert_eq!(binding(glow::READ_FRAMEBUFFER_BINDING), lit.fbo.raw().0.get());
+    assert_eq!(
+        binding(glow::DRAW_FRAMEBUFFER_BINDING),
+        lit.fbo.raw().0.get()
+    );
+    assert_eq!(
+        binding(glow::READ_FRAMEBUFFER_BINDING),
+        lit.fbo.raw().0.get()
+    );
     unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, None) };
     assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
     msaa.destroy(gl);
@@ -343,7 +350,9 @@ fn a_lighting_tested_against_the_gbuffer_depth_lights_the_own_target_as_the_outp
     msaa.finish_second_layer(gl, Some(lit.fbo.raw())).unwrap();
     let own_image = lit_pixels(gl, &lit);
     let off = differing(&own_image, &into_output);
-    eprintln!("G-buffer-depth lighting: the second layer changed {changed} pixels; the own target differs at {off}");
+    eprintln!(
+        "G-buffer-depth lighting: the second layer changed {changed} pixels; the own target differs at {off}"
+    );
     assert_eq!(
         off, 0,
         "the own target lit the second layer otherwise than the output (as sky?)"
@@ -445,6 +454,88 @@ fn the_own_targets_background_is_declared_never_the_last_clear_colour() {
     lighting.destroy(gl);
     bloom.destroy(gl);
     lit.destroy(gl);
+    host.destroy(gl);
+    assert_eq!(live_objects(), before, "GL objects leaked");
+}
+
+/// The lighting of an engine whose lit target has a depth of its own,
+/// cleared before lighting, into which the lighting writes the G-buffer's
+/// depth for the forward pass after it.
+const DEPTH_WRITING: &str = "uniform sampler2D u_color;\nuniform sampler2D u_depth;\nout vec4 o_color;\n\
+     void main() {\n\
+         ivec2 p = ivec2(gl_FragCoord.xy);\n\
+         gl_FragDepth = texelFetch(u_depth, p, 0).r;\n\
+         o_color = vec4(texelFetch(u_color, p, 0).rgb, 1.0);\n\
+     }\n";
+
+/// The output's depth after a second lighting into it that clears and
+/// writes it: the first lighting's, as a forward pass drawn into the
+/// output afterwards tests against (before, the second layer's: the clear
+/// depth wherever a pixel has one surface, and forward objects were drawn
+/// over nearer surfaces).
+#[test]
+fn the_outputs_own_depth_is_the_first_lightings_after_the_second() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let before = live_objects();
+    let host = host(gl, W);
+    let depth = Texture2d::new(gl, "lit depth", Format::Depth24, W, H).unwrap();
+    let lit = LitTarget::new(gl, Some(&depth));
+    let lighting = Pass::new(gl, "depth-writing lighting", 0.0, DEPTH_WRITING);
+    let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options(2)).unwrap();
+    let light = || unsafe {
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(lit.fbo.raw()));
+        gl.clear_color(0.0, 0.0, 0.0, 1.0);
+        gl.clear_depth_f64(1.0);
+        gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
+        gl.enable(glow::DEPTH_TEST);
+        gl.depth_func(glow::ALWAYS);
+        lighting.draw(gl, &host);
+        gl.depth_func(glow::LESS);
+        gl.disable(glow::DEPTH_TEST);
+    };
+    let read_depth = || {
+        let mut bytes = vec![0u8; (W * H * 4) as usize];
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(lit.fbo.raw()));
+            gl.read_pixels(
+                0,
+                0,
+                W as i32,
+                H as i32,
+                glow::DEPTH_COMPONENT,
+                glow::FLOAT,
+                glow::PixelPackData::Slice(Some(&mut bytes)),
+            );
+        }
+        bytes
+    };
+    geometry(gl, &host, &mut msaa).unwrap();
+    light();
+    let first = read_depth();
+    assert!(msaa.begin_second_layer(gl, Some(lit.fbo.raw())).unwrap());
+    light();
+    let during = read_depth();
+    msaa.finish_second_layer(gl, Some(lit.fbo.raw())).unwrap();
+    let after = read_depth();
+    let reset = differing(&during, &first);
+    eprintln!("the output's depth: the second lighting changed {reset} pixels");
+    assert!(
+        reset > 0,
+        "the second lighting left the depth as it was: the test shows nothing"
+    );
+    assert_eq!(
+        differing(&after, &first),
+        0,
+        "after finish_second_layer the output's depth is not the first lighting's"
+    );
+    assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
+    msaa.destroy(gl);
+    lighting.destroy(gl);
+    lit.destroy(gl);
+    depth.destroy(gl);
     host.destroy(gl);
     assert_eq!(live_objects(), before, "GL objects leaked");
 }
@@ -573,14 +664,10 @@ fn a_gbuffer_made_anew_under_a_new_name_is_taken_by_refresh_with() {
     assert_eq!(msaa.host().size(), (W / 2, H));
     geometry(gl, &new, &mut msaa).unwrap();
     let mut readback = deferred_msaa_lab::readback::Readback::new(gl).unwrap();
-    let got = readback
-        .read(gl, TextureRef::from(new.color()), 1)
-        .unwrap();
+    let got = readback.read(gl, TextureRef::from(new.color()), 1).unwrap();
     let mut fresh = MsaaRetrofit::new(gl, new.fbo.raw(), &options(1)).unwrap();
     geometry(gl, &new, &mut fresh).unwrap();
-    let want = readback
-        .read(gl, TextureRef::from(new.color()), 1)
-        .unwrap();
+    let want = readback.read(gl, TextureRef::from(new.color()), 1).unwrap();
     assert!(
         got.data == want.data,
         "refresh_with resolved otherwise than a retrofit made for the new G-buffer"

@@ -212,8 +212,26 @@ impl SecondLayer {
         })?;
         let (target, masked, lit_first, lit_second, lit_first_fbo, lit_second_fbo) = made;
         let shares_depth = host.is_some_and(|f| shares_depth(gl, f, self.host_depth));
+        let depth_kept = match host {
+            Some(f) if !shares_depth => output_depth_copy(gl, f, (w, h)),
+            _ => Ok(None),
+        };
+        let depth_kept = match depth_kept {
+            Ok(kept) => kept,
+            Err(e) => {
+                for f in [target, masked].into_iter().flatten() {
+                    f.destroy(gl);
+                }
+                lit_first_fbo.destroy(gl);
+                lit_second_fbo.destroy(gl);
+                lit_first.destroy(gl);
+                lit_second.destroy(gl);
+                return Err(e);
+            }
+        };
         self.output = Some(OutputTarget {
             shares_depth,
+            depth_kept,
             output,
             target,
             masked,
@@ -256,6 +274,36 @@ impl SecondLayer {
                 glow::COLOR_BUFFER_BIT,
                 glow::NEAREST,
             );
+        }
+    }
+
+    /// Copy the output's own depth (and stencil) aside (`keep`), or back
+    /// into the output; nothing where it has none of its own.
+    fn keep_output_depth(&self, gl: &glow::Context, keep: bool) {
+        let Some(o) = &self.output else {
+            return;
+        };
+        let (Some((texture, copy)), Some(host)) = (&o.depth_kept, o.output.host) else {
+            return;
+        };
+        let bits = if texture.format.has_stencil() {
+            glow::DEPTH_BUFFER_BIT | glow::STENCIL_BUFFER_BIT
+        } else {
+            glow::DEPTH_BUFFER_BIT
+        };
+        let (from, to) = if keep {
+            (host, copy.raw())
+        } else {
+            (copy.raw(), host)
+        };
+        let (w, h) = (self.width as i32, self.height as i32);
+        unsafe {
+            gl.disable(glow::SCISSOR_TEST);
+            gl.depth_mask(true);
+            gl.stencil_mask(0xFF);
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(from));
+            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(to));
+            gl.blit_framebuffer(0, 0, w, h, 0, 0, w, h, bits, glow::NEAREST);
         }
     }
 
@@ -373,6 +421,11 @@ impl SecondLayer {
         profile.time(gl, "second layer: keep lit first layer", || {
             self.keep_lit(gl, true)
         });
+        if own_target.is_none() {
+            profile.time(gl, "second layer: keep output depth", || {
+                self.keep_output_depth(gl, true)
+            });
+        }
         match restore {
             FirstLayerRestore::Everything => {
                 profile.time(gl, "second layer: save host G-buffer", || {
@@ -459,6 +512,11 @@ impl SecondLayer {
             });
         }
         profile.time(gl, "second layer: mix", || self.draw_mix(gl))?;
+        if !self.own_target {
+            profile.time(gl, "second layer: restore output depth", || {
+                self.keep_output_depth(gl, false)
+            });
+        }
         // Depth and stencil as they were before the second lighting.
         match self.host_saved {
             FirstLayerRestore::Everything => {
@@ -606,4 +664,37 @@ fn shares_depth(
         let _ = gl.get_error();
         shared
     }
+}
+
+/// A texture of host framebuffer `output`'s depth format and a framebuffer
+/// of it, to keep the output's depth in (`None` where it has no depth
+/// attachment). The caller keeps the host's state.
+fn output_depth_copy(
+    gl: &glow::Context,
+    output: glow::Framebuffer,
+    (w, h): (u32, u32),
+) -> Result<Option<(Texture2d, Framebuffer)>> {
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(output)) };
+    let Some(depth) = crate::host::introspect_point(gl, Attachment::Depth)? else {
+        return Ok(None);
+    };
+    Made::build(gl, |made| {
+        let texture = made.keep(Texture2d::new(
+            gl,
+            "second layer: the output's depth kept",
+            depth.format,
+            w,
+            h,
+        )?);
+        let fbo = made.keep(Framebuffer::new(
+            gl,
+            "second layer: the output's depth kept",
+            &[(
+                Attachment::for_depth_format(depth.format),
+                TextureRef::from(&texture),
+            )],
+            &[],
+        )?);
+        Ok(Some((texture, fbo)))
+    })
 }

@@ -524,10 +524,12 @@ impl SecondLayer {
         .flatten()
         .map(|t| u64::from(t.format.bytes_per_texel()))
         .sum();
-        let lit = self
-            .output
-            .as_ref()
-            .map_or(0, |o| 2 * u64::from(o.lit_first.format.bytes_per_texel()));
+        let lit = self.output.as_ref().map_or(0, |o| {
+            2 * u64::from(o.lit_first.format.bytes_per_texel())
+                + o.depth_kept
+                    .as_ref()
+                    .map_or(0, |(t, _)| u64::from(t.format.bytes_per_texel()))
+        });
         texels * (2 * colours + ours + lit)
     }
 }
