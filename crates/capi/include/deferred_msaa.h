@@ -232,6 +232,16 @@ typedef struct {
   uint8_t memory_budget_strict;
   // `DMSAA_DEPTH_*` (default standard): how the host stores depth.
   DmsaaDepthMode depth_mode;
+  // With two layers, 1: the host's lit target shows `lit_clear_color`
+  // where its lighting writes nothing (a sky left to its `glClear`), and
+  // [`dmsaa_begin_second_layer_own_target`]'s target starts cleared to
+  // it. 0 (default): that target starts as a copy of the output's lit
+  // first layer (a pixel the second lighting leaves unwritten mixes to
+  // the first layer's value); never the host's last `glClearColor`.
+  uint8_t has_lit_clear;
+  // With `has_lit_clear`: the lit target's clear colour (RGBA, as
+  // `glClearColor` takes it).
+  float lit_clear_color[4];
 } DmsaaOptions;
 
 // The GL loader a host already has: returns the address of the GL entry
@@ -579,6 +589,20 @@ DmsaaStatus dmsaa_set_options(DmsaaRetrofit *retrofit, const DmsaaOptions *optio
 // Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit`; those of
 // [`dmsaa_retrofit_new`].
 DmsaaStatus dmsaa_refresh(DmsaaRetrofit *retrofit);
+
+// [`dmsaa_refresh`] for a host that made its G-buffer anew under another
+// framebuffer name (deleted the old framebuffer and generated a new one):
+// the handle reads `host_fbo` from now on and rebuilds its twins, second
+// layer and forward target for it, keeping its options (ask
+// [`dmsaa_framebuffer`] again). On error the handle keeps working as
+// before.
+//
+// Threading: the host's context current on the calling thread. The host's
+// GL state is as it was.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit`;
+// `DMSAA_STATUS_INVALID_ARGUMENT` for `host_fbo` 0; those of
+// [`dmsaa_retrofit_new`] for `host_fbo`.
+DmsaaStatus dmsaa_refresh_with(DmsaaRetrofit *retrofit, uint32_t host_fbo);
 
 // Free every GL object the handle made (never the host's) and the handle
 // itself; `retrofit` is invalid afterwards. Null is accepted and does
