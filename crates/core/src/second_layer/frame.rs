@@ -277,6 +277,12 @@ impl SecondLayer {
         }
     }
 
+    /// Whether the output has a depth of its own that is kept across the
+    /// second lighting into it.
+    fn keeps_output_depth(&self) -> bool {
+        self.output.as_ref().is_some_and(|o| o.depth_kept.is_some())
+    }
+
     /// Copy the output's own depth (and stencil) aside (`keep`), or back
     /// into the output; nothing where it has none of its own.
     fn keep_output_depth(&self, gl: &glow::Context, keep: bool) {
@@ -421,7 +427,7 @@ impl SecondLayer {
         profile.time(gl, "second layer: keep lit first layer", || {
             self.keep_lit(gl, true)
         });
-        if own_target.is_none() {
+        if own_target.is_none() && self.keeps_output_depth() {
             profile.time(gl, "second layer: keep output depth", || {
                 self.keep_output_depth(gl, true)
             });
@@ -512,7 +518,7 @@ impl SecondLayer {
             });
         }
         profile.time(gl, "second layer: mix", || self.draw_mix(gl))?;
-        if !self.own_target {
+        if !self.own_target && self.keeps_output_depth() {
             profile.time(gl, "second layer: restore output depth", || {
                 self.keep_output_depth(gl, false)
             });
