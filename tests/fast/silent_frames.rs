@@ -357,6 +357,71 @@ fn a_lighting_tested_against_the_gbuffer_depth_lights_the_own_target_as_the_outp
         off, 0,
         "the own target lit the second layer otherwise than the output (as sky?)"
     );
+
+    // The same engine clearing the own target's depth with its colour, as
+    // a lighting that clears its target does: the second layer is lit as
+    // sky, and the check says so (at that finish where the GPU has the
+    // count, else at the next).
+    let mut reported = Vec::new();
+    for frame_number in 0..2 {
+        geometry(gl, &host, &mut msaa).unwrap();
+        lighting(lit.fbo.raw(), true);
+        let own = msaa
+            .begin_second_layer_own_target(gl, Some(lit.fbo.raw()))
+            .unwrap()
+            .unwrap();
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(own));
+            gl.clear_depth_f64(1.0);
+            gl.clear(glow::DEPTH_BUFFER_BIT);
+        }
+        lighting(own, true);
+        let finished = msaa.finish_second_layer(gl, Some(lit.fbo.raw()));
+        let lit_as_sky = lit_pixels(gl, &lit);
+        assert!(
+            differing(&lit_as_sky, &into_output) > 0,
+            "frame {frame_number}: the cleared depth changed nothing: the test shows nothing"
+        );
+        match finished {
+            Err(Error::SecondLighting(message)) => {
+                assert!(
+                    message.contains("depth") && message.contains("background"),
+                    "frame {frame_number}: the message names neither the depth nor the sky: {message}"
+                );
+                reported.push(frame_number);
+            }
+            Ok(()) => {}
+            other => panic!("frame {frame_number}: {other:?}"),
+        }
+    }
+    eprintln!("a second layer lit as background: reported at the finish of frames {reported:?}");
+    assert!(
+        reported.contains(&1),
+        "two frames with the second layer lit as background, and the second's finish said nothing"
+    );
+    // And a right frame after it: no error left over.
+    geometry(gl, &host, &mut msaa).unwrap();
+    lighting(lit.fbo.raw(), true);
+    let own = msaa
+        .begin_second_layer_own_target(gl, Some(lit.fbo.raw()))
+        .unwrap()
+        .unwrap();
+    lighting(own, false);
+    let after = msaa.finish_second_layer(gl, Some(lit.fbo.raw()));
+    assert!(
+        matches!(after, Ok(()) | Err(Error::SecondLighting(_))),
+        "{after:?}"
+    );
+    geometry(gl, &host, &mut msaa).unwrap();
+    lighting(lit.fbo.raw(), true);
+    let own = msaa
+        .begin_second_layer_own_target(gl, Some(lit.fbo.raw()))
+        .unwrap()
+        .unwrap();
+    lighting(own, false);
+    msaa.finish_second_layer(gl, Some(lit.fbo.raw()))
+        .expect("a right frame after the cleared ones");
+    assert_eq!(differing(&lit_pixels(gl, &lit), &into_output), 0);
     assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
     msaa.destroy(gl);
     compose.destroy(gl);

@@ -56,7 +56,9 @@ pub struct RetrofitOptions {
     /// what the host's first and second lighting draw, and return
     /// [`Error::SecondLighting`](crate::Error::SecondLighting) where the first drew and the second drew
     /// nothing (its own depth or stencil test rejected it) though pixels
-    /// have a second layer (default `true`). The queries are active from
+    /// have a second layer, and where a second lighting into the own
+    /// target cleared or wrote the second layer's depth it holds (so lit
+    /// the second layer as background) (default `true`). The queries are active from
     /// the end of `resolve` to the start of `begin_second_layer` and from
     /// its end to the start of `finish_second_layer`; a host that runs
     /// occlusion queries of its own there, or whose second lighting draws

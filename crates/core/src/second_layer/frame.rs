@@ -517,6 +517,12 @@ impl SecondLayer {
                 self.keep_lit(gl, false)
             });
         }
+        let probed = if self.own_target && self.output.as_ref().is_some_and(|o| o.shares_depth) {
+            self.probe_own_depth(gl)
+        } else {
+            Ok(())
+        };
+        let checked = checked.and(probed);
         profile.time(gl, "second layer: mix", || self.draw_mix(gl))?;
         if !self.own_target && self.keeps_output_depth() {
             profile.time(gl, "second layer: restore output depth", || {
@@ -539,6 +545,72 @@ impl SecondLayer {
         }
         check_error(gl, "mixing the two lit layers")?;
         checked
+    }
+
+    /// The check that the own target's depth, the second layer's, is what
+    /// the host's second lighting tested against: a count of the selected
+    /// pixels where it no longer holds it (a lighting that cleared or wrote
+    /// it, and so lit the second layer as background where it tests the
+    /// depth). The last frame's count, if still pending, is read first
+    /// (a frame old, it waits); this one's now if the GPU has it, or on the
+    /// first check, else at the next finish. The caller keeps the host's
+    /// state.
+    fn probe_own_depth(&mut self, gl: &glow::Context) -> Result<()> {
+        let last = self.settle_probe(gl, true);
+        let (Some(probe), Some(o)) = (&self.depth_probe, &self.output) else {
+            return last;
+        };
+        probe.begin(gl);
+        // Another occlusion query of the host's is active: no count.
+        if unsafe { gl.get_error() } != glow::NO_ERROR {
+            return last;
+        }
+        unsafe {
+            o.lit_second_fbo.bind(gl);
+            crate::gl::SavedState::prepare_fullscreen_pass(gl);
+            gl.color_mask(false, false, false, false);
+            gl.enable(glow::DEPTH_TEST);
+            gl.depth_func(glow::NOTEQUAL);
+            gl.depth_mask(false);
+            gl.enable(glow::STENCIL_TEST);
+            gl.stencil_func(glow::EQUAL, i32::from(SELECTED), 0xFF);
+            gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+            gl.stencil_mask(0);
+            self.write_depth.program().bind(gl);
+            TextureRef::from(&self.depth).bind(gl, 0);
+        }
+        self.write_depth.draw(gl, &self.vao);
+        unsafe { gl.color_mask(true, true, true, true) };
+        probe.end(gl);
+        self.probe_pending = true;
+        let wait = !self.probe_waited;
+        last.and(self.settle_probe(gl, wait))
+    }
+
+    /// Read a pending count of the depth probe when it is there, or when
+    /// `wait`.
+    fn settle_probe(&mut self, gl: &glow::Context, wait: bool) -> Result<()> {
+        let Some(probe) = self.depth_probe.as_ref().filter(|_| self.probe_pending) else {
+            return Ok(());
+        };
+        let available = wait
+            || unsafe { gl.get_query_parameter_u32(probe.raw, glow::QUERY_RESULT_AVAILABLE) } != 0;
+        if !available {
+            return Ok(());
+        }
+        self.probe_pending = false;
+        self.probe_waited = true;
+        let changed = probe.result(gl);
+        if changed > 0 {
+            return Err(Error::SecondLighting(format!(
+                "the host's second lighting changed the own target's depth at {changed} samples of pixels with a second layer: \
+                 that depth is the second layer's, as the G-buffer's depth the output shares holds it, for a lighting that tests \
+                 against it, and a lighting that cleared it (glClear with GL_DEPTH_BUFFER_BIT) or wrote it lit the second layer \
+                 as background there. In begin_second_layer_own_target's framebuffer clear colour only (or nothing) and leave \
+                 depth writes off, or light into the output with begin_second_layer"
+            )));
+        }
+        Ok(())
     }
 
     /// The second layer's depth into the host's depth attachment (its

@@ -141,6 +141,15 @@ pub(crate) struct SecondLayer {
     /// `None` where the host turned the check off
     /// ([`RetrofitOptions::check_second_lighting`](crate::RetrofitOptions::check_second_lighting)).
     check: Option<LightingCheck>,
+    /// With the check: counts the pixels with a second layer where the own
+    /// target's depth, set to the second layer's for a lighting that tests
+    /// the G-buffer's depth, no longer holds it after the second lighting
+    /// (a lighting that cleared it lit the second layer as background).
+    depth_probe: Option<crate::gl::SamplesPassedQuery>,
+    /// The probe's count is not read yet; a count was read once (from then
+    /// on a count is read when the GPU has it, or at the next finish).
+    probe_pending: bool,
+    probe_waited: bool,
     vao: VertexArray,
     output: Option<OutputTarget>,
     /// `begin_second_layer` ran and `finish_second_layer` has not.
@@ -178,6 +187,7 @@ impl GlObject for SecondLayer {
         self.mix_curve.handles(out);
         self.count.handles(out);
         self.check.handles(out);
+        self.depth_probe.handles(out);
         self.vao.handles(out);
         self.output.handles(out);
     }
@@ -327,6 +337,11 @@ impl SecondLayer {
             } else {
                 None
             };
+            let depth_probe = if check_lighting {
+                Some(made.keep(crate::gl::SamplesPassedQuery::new(gl)?))
+            } else {
+                None
+            };
             let write_depth = made.keep(single_input_pass(
                 gl,
                 "second layer depth",
@@ -375,6 +390,9 @@ impl SecondLayer {
                 mix: mix.clone(),
                 count,
                 check,
+                depth_probe,
+                probe_pending: false,
+                probe_waited: false,
                 vao,
                 output: None,
                 lighting: false,
