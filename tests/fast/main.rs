@@ -31,6 +31,7 @@ mod resolve_layers;
 mod retrofit;
 mod scene;
 mod selective;
+mod silent_frames;
 mod smaa;
 mod sparse;
 mod stability;

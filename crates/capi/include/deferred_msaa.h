@@ -240,6 +240,16 @@ typedef struct {
   uint8_t memory_budget_strict;
   // `DMSAA_DEPTH_*` (default standard): how the host stores depth.
   DmsaaDepthMode depth_mode;
+  // With two layers, 1: the host's lit target shows `lit_clear_color`
+  // where its lighting writes nothing (a sky left to its `glClear`), and
+  // [`dmsaa_begin_second_layer_own_target`]'s target starts cleared to
+  // it. 0 (default): that target starts as a copy of the output's lit
+  // first layer (a pixel the second lighting leaves unwritten mixes to
+  // the first layer's value); never the host's last `glClearColor`.
+  uint8_t has_lit_clear;
+  // With `has_lit_clear`: the lit target's clear colour (RGBA, as
+  // `glClearColor` takes it).
+  float lit_clear_color[4];
 } DmsaaOptions;
 
 // The GL loader a host already has: returns the address of the GL entry
@@ -505,14 +515,19 @@ DmsaaStatus dmsaa_begin_second_layer(DmsaaRetrofit *retrofit,
 // [`dmsaa_begin_second_layer`], for a host that lights the second layer
 // into the library's own target instead of `output_fbo`: `*out_fbo` is a
 // framebuffer of `output_fbo`'s colour format and the G-buffer's size,
-// whose colour is cleared to the host's clear colour (`glClearColor`),
-// whose depth is cleared to the host's clear depth (`glClearDepth`), and
-// whose stencil is `DMSAA_SECOND_LAYER_SELECTED` exactly where a pixel has
-// a second layer (every pixel where no selection could be made). The host
+// holding what `output_fbo` would for a second lighting into it: its
+// colour the options' `lit_clear_color` with `has_lit_clear`, else a copy
+// of the lit first layer (never the host's last `glClearColor`); its depth
+// the second layer's where `output_fbo`'s depth attachment is the
+// G-buffer's depth (a lighting that depth-tests against it), else the
+// host's clear depth (`glClearDepth`); its stencil
+// `DMSAA_SECOND_LAYER_SELECTED` exactly where a pixel has a second layer
+// (every pixel where no selection could be made). The host
 // binds it where it would bind `output_fbo` for its second lighting,
 // changing nothing else; with `glStencilFunc(GL_EQUAL,
 // DMSAA_SECOND_LAYER_SELECTED, 0xFF)` and `glStencilMask(0)` it lights only
-// the pixels the mix reads. It must not clear the stencil. This is the
+// the pixels the mix reads. It must not clear the stencil (nor a depth
+// that is the second layer's). This is the
 // route for a host lighting into the default framebuffer (0), to which no
 // texture attaches, and one whose lighting keeps its depth test on. Then
 // [`dmsaa_finish_second_layer`] with the same `output_fbo`. With one layer
@@ -521,7 +536,8 @@ DmsaaStatus dmsaa_begin_second_layer(DmsaaRetrofit *retrofit,
 // Threading: the host's context current on the calling thread. The host's
 // GL state is as it was.
 // Errors: those of [`dmsaa_begin_second_layer`], with `out_fbo` for
-// `run_lighting`.
+// `run_lighting`; `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` naming the own
+// target where the host's code deleted it (then [`dmsaa_refresh`]).
 DmsaaStatus dmsaa_begin_second_layer_own_target(DmsaaRetrofit *retrofit,
                                                 uint32_t output_fbo,
                                                 uint32_t *out_fbo);
@@ -556,20 +572,28 @@ DmsaaStatus dmsaa_begin_forward(DmsaaRetrofit *retrofit, uint32_t output_fbo, ui
 // bit.
 //
 // Threading: the host's context current on the calling thread. The host's
-// GL state is as it was.
+// GL state is as it was, but for one binding: where the host left the
+// forward target bound (draw, read or both), `output_fbo` is bound there
+// instead, as if the host had drawn into it, so a read-back that follows
+// (`glReadBuffer(GL_BACK)`, `glReadPixels`) reads the finished image.
 // Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit`;
 // `DMSAA_STATUS_OUT_OF_ORDER` without [`dmsaa_begin_forward`];
 // `DMSAA_STATUS_INVALID_ARGUMENT` for another output than begin's;
-// `DMSAA_STATUS_GL`.
+// `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` naming the forward target where
+// the host's code deleted it (then [`dmsaa_refresh`]); `DMSAA_STATUS_GL`.
 DmsaaStatus dmsaa_finish_forward(DmsaaRetrofit *retrofit, uint32_t output_fbo);
 
 // After the host lit the second layer into `output_fbo` (the one given to
 // [`dmsaa_begin_second_layer`]): mix the two lit layers into it by the
 // second layer's coverage and put the first layer back into the host's
-// G-buffer (as much of it as the options' `restore_first_layer` says).
+// G-buffer (as much of it as the options' `restore_first_layer` says),
+// and `output_fbo`'s own depth and stencil (a depth attachment that is
+// not the G-buffer's) as the first lighting left them.
 //
 // Threading: the host's context current on the calling thread. The host's
-// GL state is as it was.
+// GL state is as it was, but for one binding: where the host left
+// [`dmsaa_begin_second_layer_own_target`]'s framebuffer bound, `output_fbo`
+// is bound there instead, as if the host had lit into it.
 // Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit`;
 // `DMSAA_STATUS_OUT_OF_ORDER` without a [`dmsaa_begin_second_layer`] that
 // returned `*run_lighting` true; `DMSAA_STATUS_INVALID_ARGUMENT` for
@@ -597,6 +621,20 @@ DmsaaStatus dmsaa_set_options(DmsaaRetrofit *retrofit, const DmsaaOptions *optio
 // Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit`; those of
 // [`dmsaa_retrofit_new`].
 DmsaaStatus dmsaa_refresh(DmsaaRetrofit *retrofit);
+
+// [`dmsaa_refresh`] for a host that made its G-buffer anew under another
+// framebuffer name (deleted the old framebuffer and generated a new one):
+// the handle reads `host_fbo` from now on and rebuilds its twins, second
+// layer and forward target for it, keeping its options (ask
+// [`dmsaa_framebuffer`] again). On error the handle keeps working as
+// before.
+//
+// Threading: the host's context current on the calling thread. The host's
+// GL state is as it was.
+// Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit`;
+// `DMSAA_STATUS_INVALID_ARGUMENT` for `host_fbo` 0; those of
+// [`dmsaa_retrofit_new`] for `host_fbo`.
+DmsaaStatus dmsaa_refresh_with(DmsaaRetrofit *retrofit, uint32_t host_fbo);
 
 // Free every GL object the handle made (never the host's) and the handle
 // itself; `retrofit` is invalid afterwards. Null is accepted and does

@@ -205,6 +205,7 @@ pub(crate) fn convert(o: &DmsaaOptions) -> Result<Converted, Failure> {
         depth: o.clear_depth,
         stencil: o.clear_stencil,
     });
+    options.lit_clear = flag("has_lit_clear", o.has_lit_clear)?.then_some(o.lit_clear_color);
     let strict = flag("memory_budget_strict", o.memory_budget_strict)?;
     options.memory_budget = match o.memory_budget_bytes {
         DMSAA_MEMORY_BUDGET_NONE => None,

@@ -297,6 +297,16 @@ pub struct DmsaaOptions {
     pub memory_budget_strict: u8,
     /// `DMSAA_DEPTH_*` (default standard): how the host stores depth.
     pub depth_mode: DmsaaDepthMode,
+    /// With two layers, 1: the host's lit target shows `lit_clear_color`
+    /// where its lighting writes nothing (a sky left to its `glClear`), and
+    /// [`dmsaa_begin_second_layer_own_target`]'s target starts cleared to
+    /// it. 0 (default): that target starts as a copy of the output's lit
+    /// first layer (a pixel the second lighting leaves unwritten mixes to
+    /// the first layer's value); never the host's last `glClearColor`.
+    pub has_lit_clear: u8,
+    /// With `has_lit_clear`: the lit target's clear colour (RGBA, as
+    /// `glClearColor` takes it).
+    pub lit_clear_color: [f32; 4],
 }
 
 /// A host G-buffer retrofitted with MSAA: the multisampled twins, the

@@ -260,6 +260,13 @@ impl ForeignRetrofit {
         self.retrofit.refresh(&self.gl)
     }
 
+    /// [`ForeignRetrofit::refresh`] for a host that made its G-buffer anew
+    /// under another framebuffer name ([`MsaaRetrofit::refresh_with`]).
+    pub fn refresh_with(&mut self, host_fbo: NonZeroU32) -> Result<()> {
+        self.retrofit
+            .refresh_with(&self.gl, glow::NativeFramebuffer(host_fbo))
+    }
+
     /// The retrofit itself, for what this type does not forward (the
     /// profile, the twins' description). No GL call.
     pub fn retrofit(&self) -> &MsaaRetrofit {

@@ -178,6 +178,40 @@ impl ForwardTarget {
         self.output.same(host, framebuffer_srgb) && &self.mix == mix
     }
 
+    /// The multisampled framebuffer the host draws into.
+    pub(crate) fn framebuffer(&self) -> glow::Framebuffer {
+        self.fbo.raw()
+    }
+
+    /// What of the target someone other than the crate deleted (a
+    /// render-target wrapper that deletes what it wraps when dropped), in
+    /// words naming it; `None` while every object exists.
+    pub(crate) fn deleted(&self, gl: &glow::Context) -> Option<String> {
+        unsafe {
+            if !gl.is_framebuffer(self.fbo.raw()) {
+                return Some(format!(
+                    "the forward target's framebuffer {} (the one MsaaRetrofit::begin_forward returns)",
+                    self.fbo.raw().0
+                ));
+            }
+            if !gl.is_texture(self.color.raw()) {
+                return Some(format!(
+                    "the forward target's multisampled colour texture {} (attached to framebuffer {}, which begin_forward returns)",
+                    self.color.raw().0,
+                    self.fbo.raw().0
+                ));
+            }
+            if !gl.is_framebuffer(self.lit_fbo.raw()) || !gl.is_texture(self.lit.raw()) {
+                return Some(format!(
+                    "the forward target's copy of the lit image (texture {}, framebuffer {})",
+                    self.lit.raw().0,
+                    self.lit_fbo.raw().0
+                ));
+            }
+        }
+        None
+    }
+
     /// The output it serves.
     pub(crate) fn output(&self) -> Option<glow::Framebuffer> {
         self.output.host

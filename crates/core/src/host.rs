@@ -439,7 +439,7 @@ pub(crate) fn check_unchanged(gl: &glow::Context, host: &HostFramebuffer) -> Res
 
 /// Whether the framebuffer a retrofit was made for still exists: a host
 /// that deletes it and makes another (whose name GL does not promise to be
-/// the same) makes a new retrofit for that one.
+/// the same) gives that one to `refresh_with`.
 ///
 /// Errors: [`Error::InvalidArgument`] saying so.
 pub(crate) fn check_alive(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<()> {
@@ -448,7 +448,7 @@ pub(crate) fn check_alive(gl: &glow::Context, fbo: glow::Framebuffer) -> Result<
     }
     Err(Error::invalid(format!(
         "host framebuffer {} is no longer a framebuffer object (deleted since the retrofit read \
-         it); make a new retrofit for the host's new framebuffer",
+         it); give the host's new framebuffer to refresh_with (dmsaa_refresh_with)",
         fbo.0
     )))
 }

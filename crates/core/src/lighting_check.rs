@@ -163,7 +163,7 @@ impl LightingCheck {
                  a depth or stencil test left on from the first lighting rejected it (the first lighting wrote depth or stencil \
                  into the lit target). Clear the lit target's depth and stencil before the second lighting as before the first \
                  (repeat the lighting pass's own glClear), disable those tests in the lighting pass, or light into \
-                 begin_second_layer_own_target's framebuffer (dmsaa_begin_second_layer_own_target), which the crate clears"
+                 begin_second_layer_own_target's framebuffer (dmsaa_begin_second_layer_own_target), which the crate prepares"
             )));
         }
         Ok(())

@@ -154,6 +154,27 @@ fn retrofitted(
             if let Err(e) = msaa.finish_second_layer(output) {
                 failures.push(format!("second frame: finish_second_layer: {e}"));
             }
+            // The one change: the output bound where the engine left the
+            // own target, as if it had lit into it.
+            let bound = |pname| unsafe { gl.get_parameter_i32(pname) } as u32;
+            for pname in [
+                glow017::DRAW_FRAMEBUFFER_BINDING,
+                glow017::READ_FRAMEBUFFER_BINDING,
+            ] {
+                if bound(pname) != host.lit_fbo.0.get() {
+                    failures.push(format!(
+                        "second frame: finish_second_layer left framebuffer {} bound (0x{pname:04x}), not the output {}",
+                        bound(pname),
+                        host.lit_fbo.0
+                    ));
+                }
+            }
+            unsafe {
+                gl.bind_framebuffer(
+                    glow017::FRAMEBUFFER,
+                    Some(glow017::NativeFramebuffer(target)),
+                )
+            };
             checked("second frame: finish_second_layer", &before, &mut failures);
         }
         (_, Ok(own)) => failures.push(format!(

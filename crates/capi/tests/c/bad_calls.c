@@ -116,6 +116,8 @@ int main(void)
            "null handle (finish_second_layer)");
     expect(dmsaa_set_options(NULL, &options), DMSAA_STATUS_NULL_POINTER, "null handle (set_options)");
     expect(dmsaa_refresh(NULL), DMSAA_STATUS_NULL_POINTER, "null handle (refresh)");
+    expect(dmsaa_refresh_with(NULL, gbuffer), DMSAA_STATUS_NULL_POINTER,
+           "null handle (refresh_with)");
     dmsaa_destroy(NULL); /* accepted: does nothing */
     expect(dmsaa_retrofit_new(load_gl, NULL, 0, &options, &msaa), DMSAA_STATUS_INVALID_ARGUMENT,
            "zero FBO");
@@ -222,6 +224,16 @@ int main(void)
         failures++;
     }
     expect(dmsaa_finish_second_layer(msaa, output), DMSAA_STATUS_OUT_OF_ORDER, "finish twice");
+    /* a G-buffer made anew under another name: refresh_with takes it, not 0
+       nor a name that is no framebuffer, and the handle keeps working */
+    expect(dmsaa_refresh_with(msaa, 0), DMSAA_STATUS_INVALID_ARGUMENT, "refresh_with 0");
+    expect(dmsaa_refresh_with(msaa, 9999), DMSAA_STATUS_INVALID_ARGUMENT,
+           "refresh_with a name that is no framebuffer");
+    if (dmsaa_refresh_with(msaa, gbuffer) != DMSAA_STATUS_OK ||
+        dmsaa_resolve(msaa, projection, NULL) != DMSAA_STATUS_OK) {
+        fprintf(stderr, "FAIL: refresh_with the G-buffer, then resolve: %s\n", dmsaa_last_error());
+        failures++;
+    }
     dmsaa_destroy(msaa);
 
     /* world-space positions need the view matrix */

@@ -157,14 +157,19 @@ static void frame(Engine &e, const Variant &v, DmsaaRetrofit *msaa)
     glDisable(GL_FRAMEBUFFER_SRGB);
 }
 
+// The screenshot as the program takes it right after its frame: it binds
+// nothing, since it drew into framebuffer 0 last (its light cubes; with the
+// library, into the forward target, which dmsaa_finish_forward replaces by
+// framebuffer 0 as if the cubes had been drawn there). A GL error here is a
+// black screenshot.
 static std::vector<unsigned char> readScreen(int w, int h)
 {
     std::vector<unsigned char> pixels(static_cast<size_t>(w) * static_cast<size_t>(h) * 4);
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
     glReadBuffer(GL_BACK);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    checkGlErrors("the read-back right after the frame (glReadBuffer(GL_BACK), glReadPixels)");
     return pixels;
 }
 

@@ -105,3 +105,46 @@ pub(super) fn check_output(gl: &glow::Context, output: Option<glow::Framebuffer>
     }
     Ok(())
 }
+
+/// Which of the draw and read framebuffer bindings the host left on `ours`
+/// (a framebuffer of the crate's it drew into in place of its output).
+pub(super) fn bound_to(gl: &glow::Context, ours: glow::Framebuffer) -> (bool, bool) {
+    use glow::HasContext;
+    let get = |pname| unsafe { gl.get_parameter_i32(pname) } as u32;
+    (
+        get(glow::DRAW_FRAMEBUFFER_BINDING) == ours.0.get(),
+        get(glow::READ_FRAMEBUFFER_BINDING) == ours.0.get(),
+    )
+}
+
+/// After a finish, with the host's state back: where the host had bound
+/// the crate's framebuffer (`bound`, from [`bound_to`]), bind `output`
+/// instead, as if the host had drawn into its output; so a read-back
+/// (`glReadBuffer(GL_BACK)`, `glReadPixels`) or a post pass that follows
+/// reads the output, never the crate's multisampled target.
+pub(super) fn bind_output_where(
+    gl: &glow::Context,
+    bound: (bool, bool),
+    output: Option<glow::Framebuffer>,
+) {
+    use glow::HasContext;
+    unsafe {
+        match bound {
+            (true, true) => gl.bind_framebuffer(glow::FRAMEBUFFER, output),
+            (true, false) => gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, output),
+            (false, true) => gl.bind_framebuffer(glow::READ_FRAMEBUFFER, output),
+            (false, false) => {}
+        }
+    }
+}
+
+/// An object of the crate's that the host's code deleted (`what` names it):
+/// the error naming it and the fix.
+pub(super) fn deleted_by_host(target: &str, what: String) -> Error {
+    Error::Retrofit {
+        attachment: target.into(),
+        reason: format!(
+            "{what} was deleted by someone other than the retrofit, which owns it (a render-target wrapper that deletes what it wraps when dropped?); wrap it without taking ownership, and call refresh (dmsaa_refresh) to make it anew"
+        ),
+    }
+}

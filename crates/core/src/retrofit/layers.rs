@@ -3,7 +3,9 @@
 //! multisampled forward target for what the host draws after lighting.
 
 use super::MsaaRetrofit;
-use super::checks::{check_output, clear_host_errors, settle};
+use super::checks::{
+    bind_output_where, bound_to, check_output, clear_host_errors, deleted_by_host, settle,
+};
 use crate::forward::ForwardTarget;
 use crate::gl::{SetupState, TextureRef, destroy_object};
 use crate::second_layer::SecondLayer;
@@ -35,12 +37,25 @@ impl MsaaRetrofit {
     /// [`MsaaRetrofit::begin_second_layer`], for a host that lights the
     /// second layer into the crate's own target instead of `output`: the
     /// framebuffer returned, of `output`'s format and the G-buffer's size,
-    /// whose colour is cleared to the host's clear colour
-    /// (`glClearColor`), whose depth is cleared to the host's clear depth
-    /// (`glClearDepth`), and whose stencil is
-    /// [`SECOND_LAYER_SELECTED`](crate::second_layer::SECOND_LAYER_SELECTED)
-    /// exactly where a pixel has a second layer (every pixel, where no
-    /// selection could be made). The host binds it in place of `output`
+    /// holding what `output` would hold for a second lighting into it:
+    ///
+    /// - colour: [`RetrofitOptions::lit_clear`](crate::RetrofitOptions::lit_clear)
+    ///   where the host declared it (the colour its lit target shows where
+    ///   its lighting writes nothing), else a copy of `output`'s lit first
+    ///   layer (a pixel the second lighting leaves unwritten mixes to the
+    ///   first layer's value); never the host's last `glClearColor`;
+    /// - depth: where `output`'s depth attachment is the G-buffer's depth
+    ///   image (a lighting that depth-tests against the G-buffer's depth: a
+    ///   compose pass at z = 1 with `GL_GREATER`, a background pass with
+    ///   `GL_LEQUAL`), the second layer's depth, as the G-buffer holds it
+    ///   during the second lighting (in a 24-bit depth); else the host's
+    ///   clear depth (`glClearDepth`), as a lit target cleared before its
+    ///   lighting holds;
+    /// - stencil: [`SECOND_LAYER_SELECTED`](crate::second_layer::SECOND_LAYER_SELECTED)
+    ///   exactly where a pixel has a second layer (every pixel, where no
+    ///   selection could be made).
+    ///
+    /// The host binds it in place of `output`
     /// for its second lighting, changing nothing else; with
     /// `glStencilFunc(GL_EQUAL, SECOND_LAYER_SELECTED, 0xFF)` and stencil
     /// writes off it lights only the pixels the mix reads. It must not
@@ -76,6 +91,9 @@ impl MsaaRetrofit {
         }
         clear_host_errors(gl);
         crate::host::check_unchanged(gl, &self.host)?;
+        if let Some(what) = second.own_target_deleted(gl) {
+            return Err(deleted_by_host("the second lighting's own target", what));
+        }
         check_output(gl, output)?;
         let host = SetupState::capture(gl).guard(gl);
         let profile = &mut self.profile;
@@ -83,7 +101,7 @@ impl MsaaRetrofit {
             gl,
             output,
             self.options.restore_first_layer,
-            own_target,
+            own_target.then_some(self.options.lit_clear),
             profile,
         );
         // The host's stencil, for its lighting's tests: the second
@@ -121,7 +139,11 @@ impl MsaaRetrofit {
     /// first layer exactly where `α` is 0) and put the first layer back into
     /// the host's G-buffer textures and depth (as much of it as
     /// [`RetrofitOptions::restore_first_layer`](crate::RetrofitOptions::restore_first_layer) said at `begin`). The
-    /// host's GL state is as it was.
+    /// host's GL state is as it was, but for one binding: where the host
+    /// left [`MsaaRetrofit::begin_second_layer_own_target`]'s framebuffer
+    /// bound (for drawing, reading or both), `output` is bound there
+    /// instead, as if the host had lit into it, so that a read-back or a
+    /// pass that follows reads the mixed image.
     pub fn finish_second_layer(
         &mut self,
         gl: &glow::Context,
@@ -139,12 +161,23 @@ impl MsaaRetrofit {
             second.lighting = false;
             return Err(e);
         }
+        if let Some(what) = second.own_target_deleted(gl) {
+            second.lighting = false;
+            second.abandon_check(gl);
+            return Err(deleted_by_host("the second lighting's own target", what));
+        }
+        // Where the host left the own target bound, its output is bound
+        // after the finish, as if it had lit into it.
+        let bound = second
+            .own_target_framebuffer()
+            .map_or((false, false), |own| bound_to(gl, own));
         let mut host = SetupState::capture(gl);
         // The mix tests the selection's stencil.
         host.keep_stencil_func(gl)?;
         let host = host.guard(gl);
         let result = second.finish(gl, output, &mut self.profile);
         drop(host);
+        bind_output_where(gl, bound, output);
         settle(gl, "finishing the second layer", result)
     }
 
@@ -184,6 +217,9 @@ impl MsaaRetrofit {
             second.end_first_lighting(gl);
         }
         clear_host_errors(gl);
+        if let Some(what) = self.forward.as_ref().and_then(|f| f.deleted(gl)) {
+            return Err(deleted_by_host("the forward target", what));
+        }
         let host = SetupState::capture(gl).guard(gl);
         let framebuffer_srgb = unsafe { gl.is_enabled(glow::FRAMEBUFFER_SRGB) };
         let result = self
@@ -233,7 +269,12 @@ impl MsaaRetrofit {
     /// samples into `output`'s lit image (in the domain of
     /// [`RetrofitOptions::layer_mix`](crate::RetrofitOptions::layer_mix)), leaving every pixel no forward
     /// object touched bit for bit as it was. The host's GL state is as it
-    /// was.
+    /// was, but for one binding: where the host left
+    /// [`MsaaRetrofit::begin_forward`]'s framebuffer bound (for drawing,
+    /// reading or both), `output` is bound there instead, as if the host
+    /// had drawn into it, so that a read-back (`glReadBuffer(GL_BACK)`,
+    /// `glReadPixels`) or a post pass that follows reads the finished
+    /// image.
     pub fn finish_forward(
         &mut self,
         gl: &glow::Context,
@@ -249,11 +290,19 @@ impl MsaaRetrofit {
             ));
         }
         clear_host_errors(gl);
+        if let Some(what) = forward.deleted(gl) {
+            forward.drawing = false;
+            return Err(deleted_by_host("the forward target", what));
+        }
+        // Where the host left the forward target bound, its output is
+        // bound after the finish, as if it had drawn into it.
+        let bound = bound_to(gl, forward.framebuffer());
         let host = SetupState::capture(gl).guard(gl);
         let result = self
             .profile
             .time(gl, "forward: resolve", || forward.finish(gl));
         drop(host);
+        bind_output_where(gl, bound, output);
         settle(gl, "resolving the forward target", result)
     }
 

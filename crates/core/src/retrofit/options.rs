@@ -63,7 +63,9 @@ pub struct RetrofitOptions {
     /// what the host's first and second lighting draw, and return
     /// [`Error::SecondLighting`](crate::Error::SecondLighting) where the first drew and the second drew
     /// nothing (its own depth or stencil test rejected it) though pixels
-    /// have a second layer (default `true`). The queries are active from
+    /// have a second layer, and where a second lighting into the own
+    /// target cleared or wrote the second layer's depth it holds (so lit
+    /// the second layer as background) (default `true`). The queries are active from
     /// the end of `resolve` to the start of `begin_second_layer` and from
     /// its end to the start of `finish_second_layer`; a host that runs
     /// occlusion queries of its own there, or whose second lighting draws
@@ -86,6 +88,16 @@ pub struct RetrofitOptions {
     /// less work), and during the second lighting the host's image holds
     /// the first layer's value there. Default: none.
     pub second_layer_omits: Vec<ColorAttachment>,
+    /// With two layers: the colour the host's lit target shows where its
+    /// lighting writes nothing (its clear colour, for a host that leaves its
+    /// sky or background to `glClear`). The own target of
+    /// [`MsaaRetrofit::begin_second_layer_own_target`](crate::MsaaRetrofit::begin_second_layer_own_target)
+    /// starts cleared to it. `None` (the default): the own target starts as
+    /// a copy of the output's lit first layer, as the output holds it for a
+    /// second lighting into it without a clear; a pixel the second lighting
+    /// leaves unwritten then mixes to the first layer's value. Never the
+    /// host's last `glClearColor`, which may be another target's.
+    pub lit_clear: Option<[f32; 4]>,
 }
 
 /// The values a host clears its G-buffer to, for
@@ -139,6 +151,7 @@ impl Default for RetrofitOptions {
             check_second_lighting: true,
             twin_clear: None,
             second_layer_omits: Vec::new(),
+            lit_clear: None,
         }
     }
 }

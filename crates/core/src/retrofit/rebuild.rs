@@ -34,7 +34,7 @@ impl MsaaRetrofit {
             || options.second_layer_omits != self.options.second_layer_omits
             || options.resolve.layers != self.options.resolve.layers;
         if twins_change {
-            return self.rebuild(gl, options);
+            return self.rebuild(gl, self.host.fbo, options);
         }
         let previous = self.options.clone();
         self.options = options.clone();
@@ -48,9 +48,26 @@ impl MsaaRetrofit {
     /// Re-read the host framebuffer (after the host resized or re-allocated
     /// its textures) and rebuild the twins. The old twins are freed only once
     /// the new ones exist, so a failure leaves the retrofit working as before.
+    ///
+    /// Errors: those of [`MsaaRetrofit::new`]; [`Error::InvalidArgument`](crate::Error::InvalidArgument)
+    /// when the host's framebuffer itself was deleted (then
+    /// [`MsaaRetrofit::refresh_with`] takes its new one).
     pub fn refresh(&mut self, gl: &glow::Context) -> Result<()> {
         let options = self.options.clone();
-        self.rebuild(gl, &options)
+        self.rebuild(gl, self.host.fbo, &options)
+    }
+
+    /// [`MsaaRetrofit::refresh`] for a host that made its G-buffer anew
+    /// under another framebuffer name (deleted the old one and generated a
+    /// new one, on a resize, say): the retrofit reads `host_fbo` from now
+    /// on and rebuilds its twins, second layer and forward target for it,
+    /// keeping its options and compiled programs. On error the retrofit is
+    /// as it was.
+    ///
+    /// Errors: those of [`MsaaRetrofit::new`] for `host_fbo`.
+    pub fn refresh_with(&mut self, gl: &glow::Context, host_fbo: glow::Framebuffer) -> Result<()> {
+        let options = self.options.clone();
+        self.rebuild(gl, host_fbo, &options)
     }
 
     /// Change the sample count: [`MsaaRetrofit::set_options`] with only
@@ -60,14 +77,21 @@ impl MsaaRetrofit {
             samples,
             ..self.options.clone()
         };
-        self.rebuild(gl, &options)
+        self.rebuild(gl, self.host.fbo, &options)
     }
 
-    fn rebuild(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
+    fn rebuild(
+        &mut self,
+        gl: &glow::Context,
+        host_fbo: glow::Framebuffer,
+        options: &RetrofitOptions,
+    ) -> Result<()> {
         clear_host_errors(gl);
-        crate::host::check_alive(gl, self.host.fbo)?;
+        if host_fbo == self.host.fbo {
+            crate::host::check_alive(gl, host_fbo)?;
+        }
         let host = SetupState::capture(gl).guard(gl);
-        let result = self.rebuild_within(gl, options);
+        let result = self.rebuild_within(gl, host_fbo, options);
         drop(host);
         settle(gl, "rebuilding the twins", result)
     }
@@ -89,8 +113,13 @@ impl MsaaRetrofit {
         }
     }
 
-    fn rebuild_within(&mut self, gl: &glow::Context, options: &RetrofitOptions) -> Result<()> {
-        let built = Self::build(gl, self.host.fbo, options)?;
+    fn rebuild_within(
+        &mut self,
+        gl: &glow::Context,
+        host_fbo: glow::Framebuffer,
+        options: &RetrofitOptions,
+    ) -> Result<()> {
+        let built = Self::build(gl, host_fbo, options)?;
         // Freed when this returns, or if the compilation panics; taken back
         // if it fails.
         let old = Owned::new(gl, self.swap_built(built));

@@ -213,7 +213,27 @@ impl SecondLayer {
             ))
         })?;
         let (target, masked, lit_first, lit_second, lit_first_fbo, lit_second_fbo) = made;
+        let shares_depth = host.is_some_and(|f| shares_depth(gl, f, self.host_depth));
+        let depth_kept = match host {
+            Some(f) if !shares_depth => output_depth_copy(gl, f, (w, h)),
+            _ => Ok(None),
+        };
+        let depth_kept = match depth_kept {
+            Ok(kept) => kept,
+            Err(e) => {
+                for f in [target, masked].into_iter().flatten() {
+                    f.destroy(gl);
+                }
+                lit_first_fbo.destroy(gl);
+                lit_second_fbo.destroy(gl);
+                lit_first.destroy(gl);
+                lit_second.destroy(gl);
+                return Err(e);
+            }
+        };
         self.output = Some(OutputTarget {
+            shares_depth,
+            depth_kept,
             output,
             target,
             masked,
@@ -259,6 +279,42 @@ impl SecondLayer {
         }
     }
 
+    /// Whether the output has a depth of its own that is kept across the
+    /// second lighting into it.
+    fn keeps_output_depth(&self) -> bool {
+        self.output.as_ref().is_some_and(|o| o.depth_kept.is_some())
+    }
+
+    /// Copy the output's own depth (and stencil) aside (`keep`), or back
+    /// into the output; nothing where it has none of its own.
+    fn keep_output_depth(&self, gl: &glow::Context, keep: bool) {
+        let Some(o) = &self.output else {
+            return;
+        };
+        let (Some((texture, copy)), Some(host)) = (&o.depth_kept, o.output.host) else {
+            return;
+        };
+        let bits = if texture.format.has_stencil() {
+            glow::DEPTH_BUFFER_BIT | glow::STENCIL_BUFFER_BIT
+        } else {
+            glow::DEPTH_BUFFER_BIT
+        };
+        let (from, to) = if keep {
+            (host, copy.raw())
+        } else {
+            (copy.raw(), host)
+        };
+        let (w, h) = (self.width as i32, self.height as i32);
+        unsafe {
+            gl.disable(glow::SCISSOR_TEST);
+            gl.depth_mask(true);
+            gl.stencil_mask(0xFF);
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(from));
+            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(to));
+            gl.blit_framebuffer(0, 0, w, h, 0, 0, w, h, bits, glow::NEAREST);
+        }
+    }
+
     /// Count the pixels with a second layer, for the check of the second
     /// lighting (after the second resolve; the caller keeps the host's
     /// state). A failed check of the last frame's lighting is returned.
@@ -278,28 +334,68 @@ impl SecondLayer {
         })
     }
 
-    /// The crate's own target for the second lighting, prepared: the
-    /// lit second layer's copy (cleared to the host's clear colour) with
-    /// the selection stencil (its depth cleared to the host's clear depth;
-    /// its stencil [`SECOND_LAYER_SELECTED`] on every pixel where no
-    /// selection was made). The caller keeps the host's state.
-    fn prepare_own_target(&self, gl: &glow::Context) -> Option<glow::Framebuffer> {
+    /// The crate's own target for the second lighting, prepared (the
+    /// caller keeps the host's state): the lit second layer's copy, which
+    /// starts cleared to the declared `lit_clear`, or else as the lit first
+    /// layer (so a pixel the second lighting does not write mixes to the
+    /// first layer's value; never to a colour the host happened to clear
+    /// last), with the selection stencil
+    /// ([`SECOND_LAYER_SELECTED`] on every pixel where no selection was
+    /// made) and a depth as the output's would be during a second
+    /// lighting into it: the second layer's depth where the output shares
+    /// the G-buffer's depth, else the host's clear depth
+    /// (`glClearDepth`), as a lit target cleared before its lighting holds.
+    fn prepare_own_target(
+        &self,
+        gl: &glow::Context,
+        lit_clear: Option<[f32; 4]>,
+    ) -> Option<glow::Framebuffer> {
         let o = self.output.as_ref()?;
+        let (w, h) = (self.width as i32, self.height as i32);
         unsafe {
-            let mut colour = [0.0f32; 4];
-            gl.get_parameter_f32_slice(glow::COLOR_CLEAR_VALUE, &mut colour);
             let depth = gl.get_parameter_f32(glow::DEPTH_CLEAR_VALUE);
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(o.lit_second_fbo.raw()));
             gl.disable(glow::SCISSOR_TEST);
-            gl.disable(glow::FRAMEBUFFER_SRGB);
             gl.color_mask(true, true, true, true);
+            match lit_clear {
+                Some(colour) => {
+                    gl.bind_framebuffer(glow::FRAMEBUFFER, Some(o.lit_second_fbo.raw()));
+                    // The colour as glClearColor takes it: encoded on
+                    // the way in where the host's writes are.
+                    set_srgb(gl, o.output.srgb_writes);
+                    gl.clear_buffer_f32_slice(glow::COLOR, 0, &colour);
+                    gl.disable(glow::FRAMEBUFFER_SRGB);
+                }
+                None => {
+                    gl.disable(glow::FRAMEBUFFER_SRGB);
+                    gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(o.lit_first_fbo.raw()));
+                    gl.read_buffer(glow::COLOR_ATTACHMENT0);
+                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(o.lit_second_fbo.raw()));
+                    gl.blit_framebuffer(
+                        0,
+                        0,
+                        w,
+                        h,
+                        0,
+                        0,
+                        w,
+                        h,
+                        glow::COLOR_BUFFER_BIT,
+                        glow::NEAREST,
+                    );
+                }
+            }
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(o.lit_second_fbo.raw()));
             gl.depth_mask(true);
-            gl.clear_buffer_f32_slice(glow::COLOR, 0, &colour);
-            gl.clear_buffer_f32_slice(glow::DEPTH, 0, &[depth]);
+            if !o.shares_depth {
+                gl.clear_buffer_f32_slice(glow::DEPTH, 0, &[depth]);
+            }
             if !self.selected.get() {
                 gl.stencil_mask(0xFF);
                 gl.clear_buffer_i32_slice(glow::STENCIL, 0, &[i32::from(SELECTED)]);
             }
+        }
+        if o.shares_depth {
+            self.write_layer_depth(gl, &o.lit_second_fbo);
         }
         Some(o.lit_second_fbo.raw())
     }
@@ -313,7 +409,7 @@ impl SecondLayer {
         gl: &glow::Context,
         output: Option<glow::Framebuffer>,
         restore: FirstLayerRestore,
-        own_target: bool,
+        own_target: Option<Option<[f32; 4]>>,
         profile: &mut StepProfile,
     ) -> Result<Option<glow::Framebuffer>> {
         if self.lighting {
@@ -333,6 +429,11 @@ impl SecondLayer {
         profile.time(gl, "second layer: keep lit first layer", || {
             self.keep_lit(gl, true)
         });
+        if own_target.is_none() && self.keeps_output_depth() {
+            profile.time(gl, "second layer: keep output depth", || {
+                self.keep_output_depth(gl, true)
+            });
+        }
         match restore {
             FirstLayerRestore::Everything => {
                 profile.time(gl, "second layer: save host G-buffer", || {
@@ -354,10 +455,11 @@ impl SecondLayer {
         profile.time(gl, "second layer: depth into host", || {
             self.depth_into_host(gl)
         });
-        let own = if own_target {
-            self.prepare_own_target(gl)
-        } else {
-            None
+        let own = match own_target {
+            Some(lit_clear) => profile.time(gl, "second layer: own target", || {
+                self.prepare_own_target(gl, lit_clear)
+            }),
+            None => None,
         };
         check_error(gl, "keeping the first layer and copying in the second")?;
         self.lighting = true;
@@ -417,7 +519,18 @@ impl SecondLayer {
                 self.keep_lit(gl, false)
             });
         }
+        let probed = if self.own_target && self.output.as_ref().is_some_and(|o| o.shares_depth) {
+            self.probe_own_depth(gl)
+        } else {
+            Ok(())
+        };
+        let checked = checked.and(probed);
         profile.time(gl, "second layer: mix", || self.draw_mix(gl))?;
+        if !self.own_target && self.keeps_output_depth() {
+            profile.time(gl, "second layer: restore output depth", || {
+                self.keep_output_depth(gl, false)
+            });
+        }
         // Depth and stencil as they were before the second lighting.
         match self.host_saved {
             FirstLayerRestore::Everything => {
@@ -436,14 +549,86 @@ impl SecondLayer {
         checked
     }
 
+    /// The check that the own target's depth, the second layer's, is what
+    /// the host's second lighting tested against: a count of the selected
+    /// pixels where it no longer holds it (a lighting that cleared or wrote
+    /// it, and so lit the second layer as background where it tests the
+    /// depth). The last frame's count, if still pending, is read first
+    /// (a frame old, it waits); this one's now if the GPU has it, or on the
+    /// first check, else at the next finish. The caller keeps the host's
+    /// state.
+    fn probe_own_depth(&mut self, gl: &glow::Context) -> Result<()> {
+        let last = self.settle_probe(gl, true);
+        let (Some(probe), Some(o)) = (&self.depth_probe, &self.output) else {
+            return last;
+        };
+        probe.begin(gl);
+        // Another occlusion query of the host's is active: no count.
+        if unsafe { gl.get_error() } != glow::NO_ERROR {
+            return last;
+        }
+        unsafe {
+            o.lit_second_fbo.bind(gl);
+            crate::gl::SavedState::prepare_fullscreen_pass(gl);
+            gl.color_mask(false, false, false, false);
+            gl.enable(glow::DEPTH_TEST);
+            gl.depth_func(glow::NOTEQUAL);
+            gl.depth_mask(false);
+            gl.enable(glow::STENCIL_TEST);
+            gl.stencil_func(glow::EQUAL, i32::from(SELECTED), 0xFF);
+            gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+            gl.stencil_mask(0);
+            self.write_depth.program().bind(gl);
+            TextureRef::from(&self.depth).bind(gl, 0);
+        }
+        self.write_depth.draw(gl, &self.vao);
+        unsafe { gl.color_mask(true, true, true, true) };
+        probe.end(gl);
+        self.probe_pending = true;
+        let wait = !self.probe_waited;
+        last.and(self.settle_probe(gl, wait))
+    }
+
+    /// Read a pending count of the depth probe when it is there, or when
+    /// `wait`.
+    fn settle_probe(&mut self, gl: &glow::Context, wait: bool) -> Result<()> {
+        let Some(probe) = self.depth_probe.as_ref().filter(|_| self.probe_pending) else {
+            return Ok(());
+        };
+        let available = wait
+            || unsafe { gl.get_query_parameter_u32(probe.raw, glow::QUERY_RESULT_AVAILABLE) } != 0;
+        if !available {
+            return Ok(());
+        }
+        self.probe_pending = false;
+        self.probe_waited = true;
+        let changed = probe.result(gl);
+        if changed > 0 {
+            return Err(Error::SecondLighting(format!(
+                "the host's second lighting changed the own target's depth at {changed} samples of pixels with a second layer: \
+                 that depth is the second layer's, as the G-buffer's depth the output shares holds it, for a lighting that tests \
+                 against it, and a lighting that cleared it (glClear with GL_DEPTH_BUFFER_BIT) or wrote it lit the second layer \
+                 as background there. In begin_second_layer_own_target's framebuffer clear colour only (or nothing) and leave \
+                 depth writes off, or light into the output with begin_second_layer"
+            )));
+        }
+        Ok(())
+    }
+
     /// The second layer's depth into the host's depth attachment (its
     /// stencil untouched).
     fn depth_into_host(&self, gl: &glow::Context) {
         if self.depth_bits == 0 {
             return;
         }
+        self.write_layer_depth(gl, &self.host_target);
+    }
+
+    /// The second layer's depth into `target`'s depth (its stencil and
+    /// colours untouched).
+    fn write_layer_depth(&self, gl: &glow::Context, target: &Framebuffer) {
         unsafe {
-            self.host_target.bind(gl);
+            target.bind(gl);
             crate::gl::SavedState::prepare_fullscreen_pass(gl);
             gl.color_mask(false, false, false, false);
             gl.enable(glow::DEPTH_TEST);
@@ -528,4 +713,68 @@ impl SecondLayer {
         pass.draw(gl, &self.vao);
         Ok(())
     }
+}
+
+/// Whether host framebuffer `output`'s depth attachment is `depth` (the
+/// G-buffer's depth image). The caller keeps the host's state.
+fn shares_depth(
+    gl: &glow::Context,
+    output: glow::Framebuffer,
+    depth: crate::host::HostImageKind,
+) -> bool {
+    use crate::host::HostImageKind;
+    let (kind, name) = match depth {
+        HostImageKind::Texture2d(t) | HostImageKind::TextureLayer { texture: t, .. } => {
+            (glow::TEXTURE, t.0.get())
+        }
+        HostImageKind::Renderbuffer(r) => (glow::RENDERBUFFER, r.0.get()),
+    };
+    unsafe {
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(output));
+        let p = |pname| {
+            gl.get_framebuffer_attachment_parameter_i32(
+                glow::FRAMEBUFFER,
+                glow::DEPTH_ATTACHMENT,
+                pname,
+            ) as u32
+        };
+        let shared = p(glow::FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE) == kind
+            && p(glow::FRAMEBUFFER_ATTACHMENT_OBJECT_NAME) == name;
+        // Nothing attached: the name query is an error, not the host's.
+        let _ = gl.get_error();
+        shared
+    }
+}
+
+/// A texture of host framebuffer `output`'s depth format and a framebuffer
+/// of it, to keep the output's depth in (`None` where it has no depth
+/// attachment). The caller keeps the host's state.
+fn output_depth_copy(
+    gl: &glow::Context,
+    output: glow::Framebuffer,
+    (w, h): (u32, u32),
+) -> Result<Option<(Texture2d, Framebuffer)>> {
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(output)) };
+    let Some(depth) = crate::host::introspect_point(gl, Attachment::Depth)? else {
+        return Ok(None);
+    };
+    Made::build(gl, |made| {
+        let texture = made.keep(Texture2d::new(
+            gl,
+            "second layer: the output's depth kept",
+            depth.format,
+            w,
+            h,
+        )?);
+        let fbo = made.keep(Framebuffer::new(
+            gl,
+            "second layer: the output's depth kept",
+            &[(
+                Attachment::for_depth_format(depth.format),
+                TextureRef::from(&texture),
+            )],
+            &[],
+        )?);
+        Ok(Some((texture, fbo)))
+    })
 }

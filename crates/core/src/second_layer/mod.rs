@@ -121,6 +121,9 @@ pub(crate) struct SecondLayer {
     /// The host's depth format has stencil, which the second layer's
     /// depth must not overwrite.
     host_stencil: bool,
+    /// The host's depth image: a lit output that has it attached shares
+    /// the G-buffer's depth.
+    host_depth: crate::host::HostImageKind,
     colors: usize,
     depth_bits: u32,
     width: u32,
@@ -138,6 +141,15 @@ pub(crate) struct SecondLayer {
     /// `None` where the host turned the check off
     /// ([`RetrofitOptions::check_second_lighting`](crate::RetrofitOptions::check_second_lighting)).
     check: Option<LightingCheck>,
+    /// With the check: counts the pixels with a second layer where the own
+    /// target's depth, set to the second layer's for a lighting that tests
+    /// the G-buffer's depth, no longer holds it after the second lighting
+    /// (a lighting that cleared it lit the second layer as background).
+    depth_probe: Option<crate::gl::SamplesPassedQuery>,
+    /// The probe's count is not read yet; a count was read once (from then
+    /// on a count is read when the GPU has it, or at the next finish).
+    probe_pending: bool,
+    probe_waited: bool,
     vao: VertexArray,
     output: Option<OutputTarget>,
     /// `begin_second_layer` ran and `finish_second_layer` has not.
@@ -175,6 +187,7 @@ impl GlObject for SecondLayer {
         self.mix_curve.handles(out);
         self.count.handles(out);
         self.check.handles(out);
+        self.depth_probe.handles(out);
         self.vao.handles(out);
         self.output.handles(out);
     }
@@ -324,6 +337,11 @@ impl SecondLayer {
             } else {
                 None
             };
+            let depth_probe = if check_lighting {
+                Some(made.keep(crate::gl::SamplesPassedQuery::new(gl)?))
+            } else {
+                None
+            };
             let write_depth = made.keep(single_input_pass(
                 gl,
                 "second layer depth",
@@ -358,6 +376,7 @@ impl SecondLayer {
                 host_target,
                 host_images,
                 host_stencil: host.depth.format.has_stencil(),
+                host_depth: host.depth.image,
                 colors: host.colors.len(),
                 depth_bits: host.depth.format.properties().depth_bits,
                 width: w,
@@ -371,6 +390,9 @@ impl SecondLayer {
                 mix: mix.clone(),
                 count,
                 check,
+                depth_probe,
+                probe_pending: false,
+                probe_waited: false,
                 vao,
                 output: None,
                 lighting: false,
@@ -380,6 +402,41 @@ impl SecondLayer {
                 resolved: false,
             })
         })
+    }
+
+    /// The crate's own target, while the host lights into it (between
+    /// `begin_second_layer_own_target` and `finish_second_layer`).
+    pub(crate) fn own_target_framebuffer(&self) -> Option<glow::Framebuffer> {
+        let o = self.output.as_ref()?;
+        (self.lighting && self.own_target).then(|| o.lit_second_fbo.raw())
+    }
+
+    /// What of the own target (made for the last output) someone other
+    /// than the crate deleted, in words naming it; `None` while it exists
+    /// or was not made.
+    pub(crate) fn own_target_deleted(&self, gl: &glow::Context) -> Option<String> {
+        let o = self.output.as_ref()?;
+        let fbo = o.lit_second_fbo.raw();
+        unsafe {
+            if !gl.is_framebuffer(fbo) {
+                return Some(format!(
+                    "the second lighting's own target, framebuffer {} (the one MsaaRetrofit::begin_second_layer_own_target returns)",
+                    fbo.0
+                ));
+            }
+            for (what, t) in [
+                ("lit second layer", o.lit_second.raw()),
+                ("selection stencil", self.stencil.raw()),
+            ] {
+                if !gl.is_texture(t) {
+                    return Some(format!(
+                        "the own target's {what} texture {} (attached to framebuffer {}, which begin_second_layer_own_target returns)",
+                        t.0, fbo.0
+                    ));
+                }
+            }
+        }
+        None
     }
 
     /// The first resolve's outside flag, where it has a draw buffer.
@@ -485,10 +542,12 @@ impl SecondLayer {
         .flatten()
         .map(|t| u64::from(t.format.bytes_per_texel()))
         .sum();
-        let lit = self
-            .output
-            .as_ref()
-            .map_or(0, |o| 2 * u64::from(o.lit_first.format.bytes_per_texel()));
+        let lit = self.output.as_ref().map_or(0, |o| {
+            2 * u64::from(o.lit_first.format.bytes_per_texel())
+                + o.depth_kept
+                    .as_ref()
+                    .map_or(0, |(t, _)| u64::from(t.format.bytes_per_texel()))
+        });
         texels * (2 * colours + ours + lit)
     }
 }

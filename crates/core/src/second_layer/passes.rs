@@ -84,6 +84,18 @@ pub(super) struct OutputTarget {
     /// crate's own target for the second lighting
     /// ([`MsaaRetrofit::begin_second_layer_own_target`](crate::MsaaRetrofit::begin_second_layer_own_target)).
     pub(super) lit_second_fbo: Framebuffer,
+    /// The output's depth attachment is the G-buffer's depth image (a
+    /// lighting whose depth test reads the G-buffer's depth): the own
+    /// target's depth then holds the second layer's depth, as the
+    /// output's would during a second lighting into it.
+    pub(super) shares_depth: bool,
+    /// Where the output has a depth of its own (a framebuffer of the
+    /// host's whose depth attachment is not the G-buffer's): a copy of it
+    /// (its format, at `Attachment::for_depth_format`), taken before the
+    /// second lighting into the output and put back after it, so that a
+    /// lighting that clears the output's depth leaves it as the first
+    /// lighting did.
+    pub(super) depth_kept: Option<(Texture2d, Framebuffer)>,
 }
 
 impl GlObject for OutputTarget {
@@ -94,6 +106,10 @@ impl GlObject for OutputTarget {
         self.lit_second.handles(out);
         self.lit_first_fbo.handles(out);
         self.lit_second_fbo.handles(out);
+        if let Some((texture, fbo)) = &self.depth_kept {
+            texture.handles(out);
+            fbo.handles(out);
+        }
     }
 }
 
