@@ -322,7 +322,8 @@ pub(crate) fn introspect_point(
 
 /// Whether the host's framebuffer still holds what `host` read: each image
 /// attached where it was, not deleted, at the size it had. A host that
-/// re-allocates, deletes or replaces an attachment must call `refresh`; a
+/// re-allocates, deletes or replaces an attachment must call `refresh` (or
+/// `refresh_with`, for a framebuffer made anew); a
 /// pass over the old images would write part of an image of another size
 /// or raise a GL error naming none of this. The host's bindings are left
 /// as they were (the read framebuffer, the active unit's 2D and 2D-array
@@ -336,7 +337,8 @@ pub(crate) fn check_unchanged(gl: &glow::Context, host: &HostFramebuffer) -> Res
         attachment: a.point.name(),
         reason: format!(
             "{what} since the retrofit read it ({}x{}); call refresh after re-allocating the \
-             G-buffer",
+             G-buffer's images, or refresh_with with the new framebuffer where the host made \
+             the G-buffer anew",
             a.width, a.height
         ),
     };
