@@ -4,9 +4,10 @@
 // The entry points these types' docs link to; rustdoc alone needs them.
 #[cfg(doc)]
 use crate::{
-    dmsaa_begin_frame, dmsaa_begin_second_layer, dmsaa_destroy, dmsaa_finish_second_layer,
-    dmsaa_framebuffer, dmsaa_last_error, dmsaa_options_default, dmsaa_resolve, dmsaa_retrofit_new,
-    dmsaa_samples, dmsaa_second_layer_selection,
+    dmsaa_begin_frame, dmsaa_begin_second_layer, dmsaa_begin_second_layer_own_target,
+    dmsaa_destroy, dmsaa_finish_second_layer, dmsaa_framebuffer, dmsaa_last_error,
+    dmsaa_options_default, dmsaa_resolve, dmsaa_retrofit_new, dmsaa_samples,
+    dmsaa_second_layer_selection,
 };
 use deferred_msaa::DepthMode;
 use deferred_msaa::foreign::ForeignRetrofit;
