@@ -63,33 +63,19 @@ vec3 shade_sample(ivec2 pixel, int i) {
         sample_emissive(pixel, i, false));
 }
 
-// Output k (a constant index): sample u_first_sample + k, if lit.
-#define SHADE_OUTPUT(k) \
-    o_color[k] = k < u_sample_count \
-        ? vec4(shade_sample(pixel, u_first_sample + k), 1.0) : vec4(0.0);
-
 void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
-    SHADE_OUTPUT(0)
-#if SAMPLES_PER_DRAW > 1
-    SHADE_OUTPUT(1)
-#endif
-#if SAMPLES_PER_DRAW > 2
-    SHADE_OUTPUT(2)
-#endif
-#if SAMPLES_PER_DRAW > 3
-    SHADE_OUTPUT(3)
-#endif
-#if SAMPLES_PER_DRAW > 4
-    SHADE_OUTPUT(4)
-#endif
-#if SAMPLES_PER_DRAW > 5
-    SHADE_OUTPUT(5)
-#endif
-#if SAMPLES_PER_DRAW > 6
-    SHADE_OUTPUT(6)
-#endif
-#if SAMPLES_PER_DRAW > 7
-    SHADE_OUTPUT(7)
-#endif
+    // One iteration per lit sample: u_sample_count is uniform, so every
+    // lane leaves together and no output past it is shaded (a SIMD
+    // rasteriser such as llvmpipe runs both sides of a branch, so outputs
+    // chosen by a condition would all be shaded). The outputs are picked
+    // by constant indices.
+    vec4 color[SAMPLES_PER_DRAW];
+    for (int k = 0; k < SAMPLES_PER_DRAW; ++k) color[k] = vec4(0.0);
+    int count = min(u_sample_count, SAMPLES_PER_DRAW);
+    for (int i = 0; i < count; ++i) {
+        vec4 c = vec4(shade_sample(pixel, u_first_sample + i), 1.0);
+        for (int k = 0; k < SAMPLES_PER_DRAW; ++k) color[k] = k == i ? c : color[k];
+    }
+    for (int k = 0; k < SAMPLES_PER_DRAW; ++k) o_color[k] = color[k];
 }

@@ -622,94 +622,20 @@ void main() {
         bg_r = i == r ? g_bg[i] : bg_r;
         reference_depth = i == r ? g_raw_depth[i] : reference_depth;
     }
+    // Every sample's normal, fetched and decoded once for every step below
+    // (n_r's in all of them for a one-sample pixel, whose group leaves the
+    // loop after its first iteration), and which samples are within the
+    // reference's depth window (near_r) and of its cluster (in_r), as bits.
+    vec3 normals[NUM_SAMPLES];
 #ifdef CLUSTER_NORMALS
     vec3 n_r = decode_normal(vec4(FETCH(NORMAL_SAMPLER, p, r)));
 #else
     vec3 n_r = vec3(0.0);
 #endif
-#ifdef MAJORITY_REFERENCE
-    // The reference moves to the orientation most samples within its depth
-    // window share (cpu.rs's majority_reference). A crease, or a
-    // box's side face behind its front face, can put the median on the
-    // smaller of two faces, which the larger's samples would then join, lit
-    // as it; a tie goes by the pixel's parity.
-    {
-        vec3 ns[NUM_SAMPLES];
-        for (int k = 0; k < NUM_SAMPLES; ++k) ns[k] = n_r;
-        for (int i = g_zero; i < NUM_SAMPLES; ++i) {
-            if (g_one) break;
-            vec3 n_i = decode_normal(vec4(FETCH(NORMAL_SAMPLER, p, i)));
-            for (int k = 0; k < NUM_SAMPLES; ++k) ns[k] = k == i ? n_i : ns[k];
-        }
-        // Each candidate's cluster size: the samples within its window and
-        // of its orientation.
-        int sizes[NUM_SAMPLES];
-        for (int k = 0; k < NUM_SAMPLES; ++k) sizes[k] = 0;
-        for (int s = g_zero; s < NUM_SAMPLES; ++s) {
-            if (g_one) break;
-            int size = 0;
-            for (int j = 0; j < NUM_SAMPLES; ++j) {
-                bool member = closeness(g_key[j], g_bg[j], j == s, g_key[s], g_bg[s]) > 0.0
-                    && same_normal(ns[j], ns[s], g_bg[j], g_bg[s]);
-                size += member ? 1 : 0;
-            }
-            for (int k = 0; k < NUM_SAMPLES; ++k) sizes[k] = k == s ? size : sizes[k];
-        }
-        int best = r;
-        int best_size;
-        PICK(best_size, sizes, r)
-        int r_size = best_size;
-        float z_best = z_r;
-        bool bg_best = bg_r;
-        vec3 n_best = n_r;
-        // The first sample of another cluster within the window as large
-        // as the reference's: where none is larger, taken on pixels of odd
-        // parity (cpu.rs's majority_reference says what that does with
-        // the median's own tie).
-        int tied = -1;
-        float z_tied = z_r;
-        bool bg_tied = bg_r;
-        vec3 n_tied = n_r;
-        for (int s = g_zero; s < NUM_SAMPLES; ++s) {
-            if (g_one) break;
-            bool near = closeness(g_key[s], g_bg[s], s == r, z_r, bg_r) > 0.0;
-            bool better = near && sizes[s] > best_size;
-            best = better ? s : best;
-            best_size = better ? sizes[s] : best_size;
-            z_best = better ? g_key[s] : z_best;
-            bg_best = better ? g_bg[s] : bg_best;
-            n_best = better ? ns[s] : n_best;
-            bool tie = near && tied < 0 && sizes[s] == r_size
-                && !same_normal(ns[s], n_r, g_bg[s], bg_r);
-            tied = tie ? s : tied;
-            z_tied = tie ? g_key[s] : z_tied;
-            bg_tied = tie ? g_bg[s] : bg_tied;
-            n_tied = tie ? ns[s] : n_tied;
-        }
-        ivec2 place = ivec2(gl_FragCoord.xy);
-        bool take_tie = best == r && tied >= 0 && ((place.x + place.y) & 1) == 1;
-        best = take_tie ? tied : best;
-        z_best = take_tie ? z_tied : z_best;
-        bg_best = take_tie ? bg_tied : bg_best;
-        n_best = take_tie ? n_tied : n_best;
-        for (int i = 0; i < NUM_SAMPLES; ++i)
-            reference_depth = i == best ? g_raw_depth[i] : reference_depth;
-        r = best;
-        z_r = z_best;
-        bg_r = bg_best;
-        n_r = n_best;
-    }
-#endif
-
-#ifdef SECOND_LAYER_OUTPUT
-    // The second layer (cpu.rs's resolve_second_layer_at). The first
-    // layer's cluster: the samples its blend weighs.
-    bool in_first[NUM_SAMPLES];
-    vec3 normals[NUM_SAMPLES];
-    for (int k = 0; k < NUM_SAMPLES; ++k) {
-        in_first[k] = true;
-        normals[k] = vec3(0.0);
-    }
+    for (int k = 0; k < NUM_SAMPLES; ++k) normals[k] = n_r;
+    int near_r = 0;
+    int in_r = 0;
+#if defined(CLUSTER_NORMALS) || defined(MAJORITY_REFERENCE) || defined(SECOND_LAYER_OUTPUT)
     for (int i = g_zero; i < NUM_SAMPLES; ++i) {
         if (g_one) break;
         float z_i;
@@ -721,18 +647,106 @@ void main() {
 #else
         vec3 n_i = vec3(0.0);
 #endif
-        float w = closeness(z_i, bg_i, i == r, z_r, bg_r);
-        w = same_normal(n_i, n_r, bg_i, bg_r) ? w : 0.0;
+        for (int k = 0; k < NUM_SAMPLES; ++k) normals[k] = k == i ? n_i : normals[k];
+#if defined(MAJORITY_REFERENCE) || defined(SECOND_LAYER_OUTPUT)
+        bool near = closeness(z_i, bg_i, i == r, z_r, bg_r) > 0.0;
+        near_r |= near ? 1 << i : 0;
+        in_r |= near && same_normal(n_i, n_r, bg_i, bg_r) ? 1 << i : 0;
+#endif
+    }
+#endif
+    const int ALL_SAMPLES = (1 << NUM_SAMPLES) - 1;
+#if defined(MAJORITY_REFERENCE) || defined(SECOND_LAYER_OUTPUT)
+    // The reference's cluster holds every sample: no cluster is larger and
+    // none is another orientation (the majority keeps the reference), and
+    // there is no second layer. A group of such pixels leaves the loops
+    // below after their first iteration.
+    bool settled = g_one || in_r == ALL_SAMPLES;
+    // The clusters, computed once for the majority and the second layer:
+    // bit j of members[s] is set when sample j is within sample s's window
+    // and of its orientation (cpu.rs's member); sizes[s] counts them.
+    int members[NUM_SAMPLES];
+    int sizes[NUM_SAMPLES];
+    for (int k = 0; k < NUM_SAMPLES; ++k) {
+        members[k] = 0;
+        sizes[k] = 0;
+    }
+    for (int s = g_zero; s < NUM_SAMPLES; ++s) {
+        if (settled) break;
+        float z_s;
+        bool bg_s;
+        vec3 n_s;
+        PICK(z_s, g_key, s)
+        PICK(bg_s, g_bg, s)
+        PICK(n_s, normals, s)
+        int bits = 0;
+        int size = 0;
+        for (int j = 0; j < NUM_SAMPLES; ++j) {
+            bool member = closeness(g_key[j], g_bg[j], j == s, z_s, bg_s) > 0.0
+                && same_normal(normals[j], n_s, g_bg[j], bg_s);
+            bits |= member ? 1 << j : 0;
+            size += member ? 1 : 0;
+        }
         for (int k = 0; k < NUM_SAMPLES; ++k) {
-            in_first[k] = k == i ? w > 0.0 : in_first[k];
-            normals[k] = k == i ? n_i : normals[k];
+            members[k] = k == s ? bits : members[k];
+            sizes[k] = k == s ? size : sizes[k];
         }
     }
+#endif
+#ifdef MAJORITY_REFERENCE
+    // The reference moves to the orientation most samples within its depth
+    // window share (cpu.rs's majority_reference). A crease, or a
+    // box's side face behind its front face, can put the median on the
+    // smaller of two faces, which the larger's samples would then join, lit
+    // as it; a tie goes by the pixel's parity.
+    {
+        int best = r;
+        int best_size;
+        PICK(best_size, sizes, r)
+        int r_size = best_size;
+        // The first sample of another cluster within the window as large
+        // as the reference's: where none is larger, taken on pixels of odd
+        // parity (cpu.rs's majority_reference says what that does with
+        // the median's own tie). Within the window, another orientation is
+        // outside the reference's cluster.
+        int tied = -1;
+        for (int s = g_zero; s < NUM_SAMPLES; ++s) {
+            if (settled) break;
+            int size_s;
+            PICK(size_s, sizes, s)
+            bool near = ((near_r >> s) & 1) != 0;
+            bool better = near && size_s > best_size;
+            best = better ? s : best;
+            best_size = better ? size_s : best_size;
+            bool tie = near && tied < 0 && size_s == r_size && ((in_r >> s) & 1) == 0;
+            tied = tie ? s : tied;
+        }
+        ivec2 place = ivec2(gl_FragCoord.xy);
+        bool take_tie = best == r && tied >= 0 && ((place.x + place.y) & 1) == 1;
+        best = take_tie ? tied : best;
+        bool moved = best != r;
+        for (int i = 0; i < NUM_SAMPLES; ++i) {
+            reference_depth = i == best ? g_raw_depth[i] : reference_depth;
+            z_r = i == best ? g_key[i] : z_r;
+            bg_r = i == best ? g_bg[i] : bg_r;
+            n_r = i == best ? normals[i] : n_r;
+        }
+        int members_best;
+        PICK(members_best, members, best)
+        // The moved reference's cluster is its column of the clusters.
+        in_r = moved ? members_best : in_r;
+        r = best;
+    }
+#endif
+
+#ifdef SECOND_LAYER_OUTPUT
+    // The second layer (cpu.rs's resolve_second_layer_at). The first
+    // layer's cluster: the samples its blend weighs (every sample of a
+    // one-sample pixel).
+    int in_first = g_one ? ALL_SAMPLES : in_r;
     // A pixel all of whose samples are in the first cluster has no second
     // one: its group leaves the loops below after their first iteration.
-    int first_size = 0;
-    for (int k = 0; k < NUM_SAMPLES; ++k) first_size += in_first[k] ? 1 : 0;
-    bool one_cluster = g_one || first_size == NUM_SAMPLES;
+    bool one_cluster = settled || in_first == ALL_SAMPLES;
     // The second layer's seed, outside it: one outside the reference's
     // depth window (another surface in depth) before one inside it (another
     // orientation at its depth: a crease, a box's side face), then the
@@ -745,22 +759,18 @@ void main() {
     bool seed_apart = false;
     for (int s = g_zero; s < NUM_SAMPLES; ++s) {
         if (one_cluster) break;
-        bool in_s;
         float z_s;
         bool bg_s;
         float sort_s;
-        vec3 n_s;
-        PICK(in_s, in_first, s)
+        int members_s;
         PICK(z_s, g_key, s)
         PICK(bg_s, g_bg, s)
         PICK(sort_s, g_sort, s)
-        PICK(n_s, normals, s)
+        PICK(members_s, members, s)
+        bool in_s = ((in_first >> s) & 1) != 0;
+        int outside = members_s & ~in_first;
         int size = 0;
-        for (int j = 0; j < NUM_SAMPLES; ++j) {
-            bool member = !in_first[j] && closeness(g_key[j], g_bg[j], j == s, z_s, bg_s) > 0.0
-                && same_normal(normals[j], n_s, g_bg[j], bg_s);
-            size += member ? 1 : 0;
-        }
+        for (int j = 0; j < NUM_SAMPLES; ++j) size += (outside >> j) & 1;
         bool apart = !(closeness(z_s, bg_s, s == r, z_r, bg_r) > 0.0);
         bool better = !in_s && (seed < 0 || (apart && !seed_apart) || (apart == seed_apart && (size > second_size || (size == second_size && sort_s < seed_sort))));
         seed_apart = better ? apart : seed_apart;
@@ -774,18 +784,24 @@ void main() {
     float z_s = 0.0;
     bool bg_s = false;
     vec3 n_s = vec3(0.0);
+    int in_second = 0;
     for (int i = 0; i < NUM_SAMPLES; ++i) {
         z_s = i == seed ? g_key[i] : z_s;
         bg_s = i == seed ? g_bg[i] : bg_s;
         n_s = i == seed ? normals[i] : n_s;
+        in_second = i == seed ? members[i] : in_second;
     }
     int joined_second = 0;
     for (int j = g_zero; j < NUM_SAMPLES; ++j) {
         if (one_cluster) break;
-        bool in_second = closeness(g_key[j], g_bg[j], j == seed, z_s, bg_s) > 0.0
-            && same_normal(normals[j], n_s, g_bg[j], bg_s);
-        bool joins = !in_first[j] && !in_second
-            && joins_second(g_key[j], g_bg[j], normals[j], z_r, bg_r, n_r, z_s, bg_s, n_s);
+        float z_j;
+        bool bg_j;
+        vec3 n_j;
+        PICK(z_j, g_key, j)
+        PICK(bg_j, g_bg, j)
+        PICK(n_j, normals, j)
+        bool joins = (((in_first | in_second) >> j) & 1) == 0
+            && joins_second(z_j, bg_j, n_j, z_r, bg_r, n_r, z_s, bg_s, n_s);
         joined_second += joins ? 1 : 0;
     }
     float coverage = has_second ? float(second_size + joined_second) / float(NUM_SAMPLES) : 0.0;
@@ -820,12 +836,12 @@ void main() {
 #endif
         float w = closeness(z_i, bg_i, i == r, z_r, bg_r);
 #ifdef CLUSTER_NORMALS
-        w = same_normal(decode_normal(vec4(FETCH(NORMAL_SAMPLER, p, i))), n_r, bg_i, bg_r) ? w : 0.0;
+        vec3 n_i;
+        PICK(n_i, normals, i)
+        w = same_normal(n_i, n_r, bg_i, bg_r) ? w : 0.0;
 #endif
 #ifdef SECOND_LAYER_OUTPUT
-        bool in_first_i;
-        PICK(in_first_i, in_first, i)
-        w = in_first_i ? 0.0 : w;
+        w = ((in_first >> i) & 1) != 0 ? 0.0 : w;
 #endif
         depth_sum += w * depth_i;
         depth_weight += w;
