@@ -21,7 +21,9 @@ use deferred_msaa_lab::gl::{Capabilities, ExtraFns, live_objects};
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::renderer::technique::Complex;
 use deferred_msaa_lab::renderer::{AaMode, DecalTarget, DepthMode, RenderOptions, Renderer};
-use deferred_msaa_lab::resolve::{DEFAULT_NORMAL_THRESHOLD, ResolveMethod, ResolveRule, ResolveSettings};
+use deferred_msaa_lab::resolve::{
+    DEFAULT_NORMAL_THRESHOLD, ResolveMethod, ResolveRule, ResolveSettings,
+};
 use deferred_msaa_lab::retrofit::FirstLayerRestore;
 use deferred_msaa_lab::scene::{Aabb, Background, Camera, Light, Material, Object, Scene};
 use glow::HasContext;

@@ -3,8 +3,8 @@
 
 use super::run::{say_once, settings};
 use crate::check;
-use crate::hooks::{Api, load_real, real, real_type};
 use crate::profile::Profile;
+use crate::real::{Api, load_real, real, real_type};
 use crate::replay::Recording;
 use deferred_msaa_capi as capi;
 use std::collections::HashMap;

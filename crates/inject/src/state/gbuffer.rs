@@ -205,7 +205,7 @@ impl Context {
         self.frames += 1;
         self.last_frame = std::mem::take(&mut self.passes);
         if self.learning() {
-            crate::learn::after_frame(self);
+            super::learn::after_frame(self);
             return;
         }
         if self.frames == 2 && self.gbuffer.is_none() && !self.off {

@@ -6,7 +6,7 @@
 
 use super::context::Context;
 use super::run::{say_once, settings};
-use crate::hooks::{current_context, real_type};
+use crate::real::{current_context, real_type};
 use crate::replay::DrawCall;
 use std::collections::HashMap;
 use std::ffi::{CStr, c_char, c_ulong, c_void};

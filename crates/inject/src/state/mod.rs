@@ -5,15 +5,14 @@
 //! The calls come in through [`handlers`]; the state they work on is
 //! [`context`]'s, and its parts are [`gbuffer`] (finding the G-buffer),
 //! [`framebuffers`] (the binds and attachments followed), [`retrofit`] (the
-//! C API's retrofit made, bound, resolved, its second layer) and [`run`]
-//! (the settings and messages of the whole run).
+//! C API's retrofit made, bound, resolved, its second layer), [`run`]
+//! (the settings and messages of the whole run) and [`learn`] (`--learn`'s
+//! profile).
 
 mod context;
 mod framebuffers;
 mod gbuffer;
 pub(crate) mod handlers;
+mod learn;
 mod retrofit;
 mod run;
-
-pub(crate) use context::Context;
-pub(crate) use run::{say_once, settings};

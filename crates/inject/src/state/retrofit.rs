@@ -4,7 +4,7 @@
 
 use super::context::{Context, Framebuffer, Retrofit};
 use super::run::{RESOLVES, say_once, settings};
-use crate::hooks::{Api, library_loader};
+use crate::real::{Api, library_loader};
 use crate::replay::{self, Recording};
 use deferred_msaa_capi as capi;
 use glow::HasContext;

@@ -37,7 +37,7 @@ macro_rules! watched_functions {
         }
     };
 }
-pub(super) use watched_functions;
+pub(crate) use watched_functions;
 
 /// Declares the watched functions' real types and slots.
 macro_rules! declare_real_entry_points {

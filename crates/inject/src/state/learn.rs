@@ -2,8 +2,9 @@
 //! framebuffers drawn into and their attachments, the matrix uniforms set,
 //! the passes in order), for the user to edit. Nothing is retrofitted.
 
+use super::context::Context;
+use super::run::{say_once, settings};
 use crate::profile::{Attachment, FramebufferMatch, Profile, Projection, Retrofit};
-use crate::state::{Context, say_once, settings};
 use std::fmt::Write as _;
 use std::sync::atomic::{AtomicBool, Ordering};
 
