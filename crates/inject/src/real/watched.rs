@@ -12,6 +12,7 @@ macro_rules! watched_functions {
             glDeleteFramebuffers(count: i32, framebuffers: *const u32);
             glFramebufferTexture(target: u32, attachment: u32, texture: u32, level: i32);
             glFramebufferTexture2D(target: u32, attachment: u32, textarget: u32, texture: u32, level: i32);
+            glFramebufferTextureLayer(target: u32, attachment: u32, texture: u32, level: i32, layer: i32);
             glFramebufferRenderbuffer(target: u32, attachment: u32, rbtarget: u32, renderbuffer: u32);
             glNamedFramebufferTexture(framebuffer: u32, attachment: u32, texture: u32, level: i32);
             glNamedFramebufferRenderbuffer(framebuffer: u32, attachment: u32, rbtarget: u32, renderbuffer: u32);

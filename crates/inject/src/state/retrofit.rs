@@ -3,7 +3,7 @@
 //! resolved, and with two layers the recorded lighting drawn again.
 
 use super::context::{Context, Framebuffer, Retrofit};
-use super::run::{RESOLVES, say_once, settings};
+use super::run::{RESOLVES, say_once, seen, settings};
 use crate::real::{Api, library_loader};
 use crate::replay::{self, Recording};
 use deferred_msaa_capi as capi;
@@ -129,6 +129,7 @@ impl Context {
                 }
             ),
         );
+        seen(|s| s.retrofitted = true);
         self.retrofit = Some(Retrofit {
             handle,
             world_space,

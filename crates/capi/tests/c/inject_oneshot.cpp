@@ -1,0 +1,119 @@
+// The LearnOpenGL deferred-shading program (tutorial_program.hpp) as the
+// programs that render to a file are written: a screenshot harness, or an
+// engine's one-call render. Its `render` does the whole of one image: it
+// makes the G-buffer (engineInit), draws the geometry pass into it, the
+// lighting into an output framebuffer of its own (an RGBA8 texture), reads
+// that back, and deletes the G-buffer and everything else it made
+// (engineFree). Nothing of the retrofit is in it: it is what
+// `deferred-msaa inject` is run on, to show the line the library says when
+// it leaves such a program alone.
+//
+// Usage: inject_oneshot OUT_FILE [--calls N] [--no-swap]
+//   --calls N   call `render` N times (default 1: a screenshot harness)
+//   --no-swap   never swap (as a surfaceless renderer does); otherwise the
+//               window's buffers are swapped after each call
+//
+// It writes the last image, raw RGBA8 (rows bottom-up), into OUT_FILE, and
+// prints "ok" when no GL error or failed check was seen.
+#include "tutorial_program.hpp"
+
+static const int WIDTH = 160;
+static const int HEIGHT = 120;
+
+// One image, start to end: the G-buffer made, used and deleted.
+static void render(std::vector<unsigned char> &pixels)
+{
+    Engine e;
+    engineInit(e, WIDTH, HEIGHT, false);
+
+    GLuint output = 0, outputColor = 0;
+    glGenFramebuffers(1, &output);
+    glBindFramebuffer(GL_FRAMEBUFFER, output);
+    outputColor = makeTexture(WIDTH, HEIGHT, GL_RGBA8, GL_UNSIGNED_BYTE);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, outputColor, 0);
+    CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "the output is incomplete");
+
+    geometryPass(e, e.gBuffer);
+    glBindFramebuffer(GL_FRAMEBUFFER, output);
+    glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    lightingQuad(e);
+
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, output);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, WIDTH, HEIGHT, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    checkGlErrors("render");
+
+    glDeleteFramebuffers(1, &output);
+    glDeleteTextures(1, &outputColor);
+    engineFree(e);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        std::fprintf(stderr, "usage: %s OUT_FILE [--calls N] [--no-swap]\n", argv[0]);
+        return 2;
+    }
+    int calls = 1;
+    bool swap = true;
+    for (int i = 2; i < argc; i++) {
+        if (std::strcmp(argv[i], "--calls") == 0 && i + 1 < argc)
+            calls = std::atoi(argv[++i]);
+        else if (std::strcmp(argv[i], "--no-swap") == 0)
+            swap = false;
+        else {
+            std::fprintf(stderr, "unknown argument %s\n", argv[i]);
+            return 2;
+        }
+    }
+    glfwInit();
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 2);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GL_TRUE);
+    glfwWindowHint(GLFW_VISIBLE, GLFW_FALSE);
+    GLFWwindow *window = glfwCreateWindow(WIDTH, HEIGHT, "oneshot", NULL, NULL);
+    if (window == NULL) {
+        const char *why = nullptr;
+        glfwGetError(&why);
+        std::fprintf(stderr, "Failed to create GLFW window: %s\n", why ? why : "?");
+        glfwTerminate();
+        return 3;
+    }
+    glfwMakeContextCurrent(window);
+    if (!loadGL()) {
+        std::fprintf(stderr, "Failed to initialize GLAD\n");
+        return 3;
+    }
+    GLint major = 0, minor = 0;
+    glGetIntegerv(GL_MAJOR_VERSION, &major);
+    glGetIntegerv(GL_MINOR_VERSION, &minor);
+    if (major * 10 + minor < 33)
+        glslVersion = "#version 150 core\n#extension GL_ARB_explicit_attrib_location : require\n";
+    glViewport(0, 0, WIDTH, HEIGHT);
+
+    std::vector<unsigned char> pixels(static_cast<size_t>(WIDTH) * HEIGHT * 4);
+    for (int call = 0; call < calls; call++) {
+        render(pixels);
+        if (swap)
+            glfwSwapBuffers(window);
+    }
+
+    FILE *f = std::fopen(argv[1], "wb");
+    CHECK(f != nullptr, "cannot write %s", argv[1]);
+    if (f) {
+        std::fwrite(pixels.data(), 1, pixels.size(), f);
+        std::fclose(f);
+    }
+    glfwTerminate();
+    if (failures) {
+        std::fprintf(stderr, "%d check(s) failed\n", failures);
+        return 1;
+    }
+    std::printf("ok\n");
+    return 0;
+}
