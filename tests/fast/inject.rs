@@ -726,3 +726,197 @@ fn inject_refuses_bad_input_in_one_line() {
     }
     assert!(!marker.exists(), "a refused command ran its program");
 }
+
+/// The lines the library said, but `--check`'s.
+fn said(stderr: &str) -> Vec<&str> {
+    stderr
+        .lines()
+        .filter(|l| l.starts_with("deferred-msaa inject: ") && !l.contains("inject: check: "))
+        .collect()
+}
+
+/// Programs the library leaves alone, each written as such programs are
+/// (`inject_oneshot.cpp`: a render call that makes the G-buffer, draws,
+/// reads the image back and deletes it all): a screenshot harness that
+/// renders one frame and exits, the same with no swap (surfaceless), and
+/// an engine's one-call render called three times, with and without
+/// swaps. Each run says exactly one line, naming why; the frame is the
+/// program's own, and the library is never called. `--learn` on the
+/// one-call render writes a profile at the end with the G-buffer's
+/// signature, only the keys it saw and the rest marked `?`, and says so;
+/// where it cannot write, it says why.
+#[test]
+fn a_program_left_alone_says_why_in_one_line() {
+    if !can_run_glfw() {
+        return;
+    }
+    let Some(xvfb) = common::xvfb::start_xvfb() else {
+        return;
+    };
+    let build = Path::new(env!("CARGO_TARGET_TMPDIR")).join("inject-oneshot-build");
+    let _ = std::fs::remove_dir_all(&build);
+    let src = build.join("src");
+    std::fs::create_dir_all(&src).expect("making the source folder");
+    for f in ["inject_oneshot.cpp", "tutorial_program.hpp"] {
+        std::fs::copy(capi::sources().join(f), src.join(f)).expect("copying the C++ sources");
+    }
+    let exe = build.join("oneshot");
+    capi::run(
+        cxx()
+            .arg(src.join("inject_oneshot.cpp"))
+            .arg("-o")
+            .arg(&exe)
+            .arg("-lglfw"),
+        "compiling inject_oneshot.cpp",
+    );
+    let library = capi::built("libdeferred_msaa_inject", "so");
+    let cases: [(&[&str], &[&str]); 4] = [
+        (
+            &[],
+            &[
+                "but it was never bound for drawing again (the program ended after one frame)",
+                "a program that renders one frame, as a screenshot harness does, is never retrofitted",
+            ],
+        ),
+        (
+            &["--no-swap"],
+            &[
+                "but it was never bound for drawing again (no frame boundary was seen",
+                "a program that renders one frame",
+            ],
+        ),
+        (
+            &["--calls", "3"],
+            &[
+                "was deleted before it was bound for drawing again (2 time(s))",
+                "a G-buffer made and deleted within a frame, as a one-call render does, is never retrofitted",
+                "2 frames seen",
+            ],
+        ),
+        (
+            &["--no-swap", "--calls", "3"],
+            &[
+                "was deleted before it was bound for drawing again (3 time(s))",
+                "a G-buffer made and deleted within a frame",
+                "no frame boundary was seen",
+            ],
+        ),
+    ];
+    for (args, needles) in cases {
+        let own = build.join("own.rgba");
+        capi::run(
+            Command::new(&exe)
+                .arg(&own)
+                .args(args)
+                .env("DISPLAY", xvfb.display()),
+            &format!("the one-shot program as it is, {args:?}"),
+        );
+        let injected = build.join("injected.rgba");
+        let output = capi::run(
+            cli()
+                .args(["inject", "--check", "--library"])
+                .arg(&library)
+                .arg("--")
+                .arg(&exe)
+                .arg(&injected)
+                .args(args)
+                .env("DISPLAY", xvfb.display()),
+            &format!("deferred-msaa inject on the one-shot program, {args:?}"),
+        );
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        eprint!("{args:?}:\n{stderr}");
+        let lines = said(&stderr);
+        assert_eq!(lines.len(), 1, "{args:?}: not one line:\n{stderr}");
+        assert!(
+            lines[0].ends_with("leaving the program untouched")
+                || lines[0].contains("leaving the program untouched ("),
+            "{args:?}: {}",
+            lines[0]
+        );
+        for needle in needles {
+            assert!(
+                lines[0].contains(needle),
+                "{args:?}: no `{needle}` in {}",
+                lines[0]
+            );
+        }
+        assert!(
+            stderr.contains("check: 0 calls into the library"),
+            "{args:?}: the library was called:\n{stderr}"
+        );
+        assert!(
+            frame(&injected) == frame(&own),
+            "{args:?}: the frame under inject is not the program's own"
+        );
+    }
+    // `--learn`: no frame with the G-buffer alive at its end, so the file
+    // is written when the program's context goes.
+    let learned = build.join("learned.toml");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(&library)
+            .arg("--learn")
+            .arg(&learned)
+            .arg("--")
+            .arg(&exe)
+            .arg(build.join("learn.rgba"))
+            .args(["--no-swap", "--calls", "3"])
+            .env("DISPLAY", xvfb.display()),
+        "deferred-msaa inject --learn on the one-call render",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let lines = said(&stderr);
+    assert_eq!(lines.len(), 1, "--learn: not one line:\n{stderr}");
+    assert!(
+        lines[0].contains("wrote a first profile to ") && lines[0].contains("marked `?`"),
+        "{}",
+        lines[0]
+    );
+    let text = std::fs::read_to_string(&learned).expect("--learn wrote no profile");
+    eprint!("the learned profile:\n{text}");
+    for line in [
+        "colour_textures = 3",
+        "formats = [\"float16\", \"float16\", \"unorm8\"]",
+        "uniform = \"projection\"",
+        "# meaning = ?",
+        "# rule = ?",
+        "# [retrofit] ?",
+        "made and deleted for each image is never retrofitted",
+    ] {
+        assert!(text.contains(line), "no `{line}` in the learned profile");
+    }
+    // Only what was seen is a key: no meaning, rule or retrofit table.
+    for key in ["meaning", "rule", "layers", "layer_mix"] {
+        assert!(
+            !text.lines().any(|l| l.starts_with(key)),
+            "the learned profile sets `{key}`, which no GL call shows"
+        );
+    }
+    let parsed = deferred_msaa_inject::profile::Profile::parse(&text, "learned.toml")
+        .expect("the learned profile parses");
+    assert_eq!(parsed.attachments.len(), 3);
+    assert!(parsed.retrofit.is_none());
+    // Nowhere to write: said, in one line.
+    let nowhere = build.join("no-such-folder").join("learned.toml");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(&library)
+            .arg("--learn")
+            .arg(&nowhere)
+            .arg("--")
+            .arg(&exe)
+            .arg(build.join("learn.rgba"))
+            .env("DISPLAY", xvfb.display()),
+        "deferred-msaa inject --learn into a missing folder",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let lines = said(&stderr);
+    assert_eq!(lines.len(), 1, "--learn, nowhere: not one line:\n{stderr}");
+    assert!(
+        lines[0].contains("cannot write the profile"),
+        "{}",
+        lines[0]
+    );
+}
