@@ -738,10 +738,11 @@ fn said(stderr: &str) -> Vec<&str> {
 /// Programs the library leaves alone, each written as such programs are
 /// (`inject_oneshot.cpp`: a render call that makes the G-buffer, draws,
 /// reads the image back and deletes it all): a screenshot harness that
-/// renders one frame and exits, the same with no swap (surfaceless), and
-/// an engine's one-call render called three times, with and without
-/// swaps. Each run says exactly one line, naming why; the frame is the
-/// program's own, and the library is never called. `--learn` on the
+/// renders one frame and exits, the same with no swap (surfaceless), an
+/// engine's one-call render called three times, with and without swaps,
+/// and a G-buffer of one texture array's layers (without a profile, and
+/// with one whose signature it has). Each run says exactly one line, naming
+/// why; the frame is the program's own, and the library is never called. `--learn` on the
 /// one-call render writes a profile at the end with the G-buffer's
 /// signature, only the keys it saw and the rest marked `?`, and says so;
 /// where it cannot write, it says why.
@@ -770,7 +771,7 @@ fn a_program_left_alone_says_why_in_one_line() {
         "compiling inject_oneshot.cpp",
     );
     let library = capi::built("libdeferred_msaa_inject", "so");
-    let cases: [(&[&str], &[&str]); 4] = [
+    let cases: [(&[&str], &[&str]); 5] = [
         (
             &[],
             &[
@@ -801,8 +802,26 @@ fn a_program_left_alone_says_why_in_one_line() {
                 "no frame boundary was seen",
             ],
         ),
+        (
+            &["--array", "--calls", "3"],
+            &[
+                "framebuffer(s) [1] attach layers of one texture (glFramebufferTextureLayer)",
+                "the retrofit takes a G-buffer of 2D textures only",
+            ],
+        ),
     ];
-    for (args, needles) in cases {
+    let array_profile = build.join("array.toml");
+    std::fs::write(
+        &array_profile,
+        "[framebuffer]\ncolour_textures = 3\nformats = [\"float16\", \"float16\", \"float16\"]\n",
+    )
+    .expect("writing the array profile");
+    let cases = cases.into_iter().map(|(a, n)| (a, n, None)).chain([(
+        &["--array", "--calls", "3"][..],
+        &["framebuffer 1 has the profile's signature, but its colour attachments are layers of one texture"][..],
+        Some(&array_profile),
+    )]);
+    for (args, needles, profile) in cases {
         let own = build.join("own.rgba");
         capi::run(
             Command::new(&exe)
@@ -812,10 +831,15 @@ fn a_program_left_alone_says_why_in_one_line() {
             &format!("the one-shot program as it is, {args:?}"),
         );
         let injected = build.join("injected.rgba");
+        let mut command = cli();
+        command
+            .args(["inject", "--check", "--library"])
+            .arg(&library);
+        if let Some(p) = profile {
+            command.arg("--profile").arg(p);
+        }
         let output = capi::run(
-            cli()
-                .args(["inject", "--check", "--library"])
-                .arg(&library)
+            command
                 .arg("--")
                 .arg(&exe)
                 .arg(&injected)

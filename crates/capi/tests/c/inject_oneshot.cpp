@@ -8,10 +8,14 @@
 // `deferred-msaa inject` is run on, to show the line the library says when
 // it leaves such a program alone.
 //
-// Usage: inject_oneshot OUT_FILE [--calls N] [--no-swap]
+// Usage: inject_oneshot OUT_FILE [--calls N] [--no-swap] [--array]
 //   --calls N   call `render` N times (default 1: a screenshot harness)
 //   --no-swap   never swap (as a surfaceless renderer does); otherwise the
 //               window's buffers are swapped after each call
+//   --array     the G-buffer made once, as some engines make it: one
+//               GL_TEXTURE_2D_ARRAY whose three layers are attached with
+//               glFramebufferTextureLayer, read by the lighting as a
+//               sampler2DArray (the tutorial's geometry pass draws into it)
 //
 // It writes the last image, raw RGBA8 (rows bottom-up), into OUT_FILE, and
 // prints "ok" when no GL error or failed check was seen.
@@ -20,8 +24,59 @@
 static const int WIDTH = 160;
 static const int HEIGHT = 120;
 
-// One image, start to end: the G-buffer made, used and deleted.
-static void render(std::vector<unsigned char> &pixels)
+#ifndef TUTORIAL_LINK_GL
+static PFNGLTEXIMAGE3DPROC glTexImage3D;
+static PFNGLFRAMEBUFFERTEXTURELAYERPROC glFramebufferTextureLayer;
+#endif
+
+// The lighting of the array G-buffer: one light from above, on the albedo
+// layer, by the normal layer.
+static const char *arrayLightingFs = R"(
+out vec4 FragColor;
+in vec2 TexCoords;
+uniform sampler2DArray gBuffer;
+void main()
+{
+    vec3 normal = texture(gBuffer, vec3(TexCoords, 1.0)).rgb;
+    vec3 albedo = texture(gBuffer, vec3(TexCoords, 2.0)).rgb;
+    FragColor = vec4(albedo * (0.2 + max(dot(normal, normalize(vec3(0.3, 1.0, 0.5))), 0.0)), 1.0);
+}
+)";
+
+// The array G-buffer's framebuffer and its objects.
+struct ArrayGBuffer {
+    GLuint framebuffer = 0, layers = 0, depth = 0;
+    Shader *lighting = nullptr;
+};
+
+static ArrayGBuffer makeArrayGBuffer()
+{
+    ArrayGBuffer a;
+    glGenTextures(1, &a.layers);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, a.layers);
+    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGBA16F, WIDTH, HEIGHT, 3, 0, GL_RGBA, GL_FLOAT, NULL);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glGenFramebuffers(1, &a.framebuffer);
+    glBindFramebuffer(GL_FRAMEBUFFER, a.framebuffer);
+    for (int layer = 0; layer < 3; layer++)
+        glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(layer), a.layers, 0,
+                                  layer);
+    unsigned int attachments[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glDrawBuffers(3, attachments);
+    glGenRenderbuffers(1, &a.depth);
+    glBindRenderbuffer(GL_RENDERBUFFER, a.depth);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT, WIDTH, HEIGHT);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, a.depth);
+    CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "the array G-buffer is incomplete");
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    a.lighting = new Shader(quadVs, arrayLightingFs);
+    return a;
+}
+
+// One image, start to end: the G-buffer made, used and deleted (with an
+// array G-buffer, that one is drawn instead, and kept).
+static void render(std::vector<unsigned char> &pixels, const ArrayGBuffer *array)
 {
     Engine e;
     engineInit(e, WIDTH, HEIGHT, false);
@@ -33,11 +88,19 @@ static void render(std::vector<unsigned char> &pixels)
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, outputColor, 0);
     CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "the output is incomplete");
 
-    geometryPass(e, e.gBuffer);
+    geometryPass(e, array ? array->framebuffer : e.gBuffer);
     glBindFramebuffer(GL_FRAMEBUFFER, output);
     glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT);
-    lightingQuad(e);
+    if (array) {
+        array->lighting->use();
+        array->lighting->setInt("gBuffer", 0);
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, array->layers);
+        renderQuad();
+    } else {
+        lightingQuad(e);
+    }
 
     glBindFramebuffer(GL_READ_FRAMEBUFFER, output);
     glReadBuffer(GL_COLOR_ATTACHMENT0);
@@ -55,16 +118,18 @@ static void render(std::vector<unsigned char> &pixels)
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        std::fprintf(stderr, "usage: %s OUT_FILE [--calls N] [--no-swap]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s OUT_FILE [--calls N] [--no-swap] [--array]\n", argv[0]);
         return 2;
     }
     int calls = 1;
-    bool swap = true;
+    bool swap = true, useArray = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--calls") == 0 && i + 1 < argc)
             calls = std::atoi(argv[++i]);
         else if (std::strcmp(argv[i], "--no-swap") == 0)
             swap = false;
+        else if (std::strcmp(argv[i], "--array") == 0)
+            useArray = true;
         else {
             std::fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;
@@ -89,6 +154,11 @@ int main(int argc, char **argv)
         std::fprintf(stderr, "Failed to initialize GLAD\n");
         return 3;
     }
+#ifndef TUTORIAL_LINK_GL
+    glTexImage3D = reinterpret_cast<PFNGLTEXIMAGE3DPROC>(glfwGetProcAddress("glTexImage3D"));
+    glFramebufferTextureLayer =
+        reinterpret_cast<PFNGLFRAMEBUFFERTEXTURELAYERPROC>(glfwGetProcAddress("glFramebufferTextureLayer"));
+#endif
     GLint major = 0, minor = 0;
     glGetIntegerv(GL_MAJOR_VERSION, &major);
     glGetIntegerv(GL_MINOR_VERSION, &minor);
@@ -96,11 +166,21 @@ int main(int argc, char **argv)
         glslVersion = "#version 150 core\n#extension GL_ARB_explicit_attrib_location : require\n";
     glViewport(0, 0, WIDTH, HEIGHT);
 
+    ArrayGBuffer array;
+    if (useArray)
+        array = makeArrayGBuffer();
     std::vector<unsigned char> pixels(static_cast<size_t>(WIDTH) * HEIGHT * 4);
     for (int call = 0; call < calls; call++) {
-        render(pixels);
+        render(pixels, useArray ? &array : nullptr);
         if (swap)
             glfwSwapBuffers(window);
+    }
+    if (useArray) {
+        glDeleteFramebuffers(1, &array.framebuffer);
+        glDeleteTextures(1, &array.layers);
+        glDeleteRenderbuffers(1, &array.depth);
+        glDeleteProgram(array.lighting->ID);
+        delete array.lighting;
     }
 
     FILE *f = std::fopen(argv[1], "wb");

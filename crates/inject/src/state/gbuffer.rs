@@ -161,6 +161,18 @@ impl Context {
             if let Some(f) = self.framebuffers.get(&draw)
                 && Self::matches_profile(p, f)
             {
+                if f.layered {
+                    say_once(
+                        "layered",
+                        &format!(
+                            "framebuffer {draw} has the profile's signature, but its colour attachments are layers \
+                             of one texture (glFramebufferTextureLayer): the retrofit takes a G-buffer of 2D \
+                             textures only; leaving the program untouched"
+                        ),
+                    );
+                    self.off = true;
+                    return;
+                }
                 self.gbuffer = Some(draw);
                 seen(|s| s.found = Some(draw));
             }

@@ -151,13 +151,13 @@ pub(crate) fn left_alone(seen: &Seen, frames: u64, ended: bool) -> String {
         format!(
             "framebuffer(s) {:?} attach layers of one texture (glFramebufferTextureLayer): the retrofit takes a \
              G-buffer of 2D textures only",
-            seen.layered
+            seen.layered.iter().collect::<Vec<_>>()
         )
     } else if !seen.candidates.is_empty() {
         format!(
             "framebuffer(s) {:?} have the shape of a G-buffer, but no later draw read two of their colour \
              textures together (a profile can name it)",
-            seen.candidates
+            seen.candidates.iter().collect::<Vec<_>>()
         )
     } else {
         format!("no G-buffer found ({LOOKED_FOR})")
