@@ -742,7 +742,10 @@ fn said(stderr: &str) -> Vec<&str> {
 /// engine's one-call render called three times, with and without swaps,
 /// and a G-buffer of one texture array's layers (without a profile, and
 /// with one whose signature it has). Each run says exactly one line, naming
-/// why; the frame is the program's own, and the library is never called. `--learn` on the
+/// why; the frame is the program's own, and the library is never called.
+/// The G-buffer kept across frames is retrofitted; cleared through another
+/// framebuffer sharing its textures, its resolve is black, and one warning
+/// says so. `--learn` on the
 /// one-call render writes a profile at the end with the G-buffer's
 /// signature, only the keys it saw and the rest marked `?`, and says so;
 /// where it cannot write, it says why.
@@ -871,6 +874,66 @@ fn a_program_left_alone_says_why_in_one_line() {
         assert!(
             frame(&injected) == frame(&own),
             "{args:?}: the frame under inject is not the program's own"
+        );
+    }
+    // The G-buffer kept across frames is retrofitted, and its first
+    // resolve read back shows the scene: no warning. Cleared through a
+    // framebuffer of the program's own that shares its textures, the
+    // retrofit's framebuffer is never cleared, nothing passes its depth
+    // test, and the resolve leaves the G-buffer black: said, in one
+    // warning, and the check still finds the read-back changed nothing.
+    for (args, warned) in [
+        (&["--keep", "--calls", "3"][..], false),
+        (&["--keep", "--clear-fbo", "--calls", "3"][..], true),
+    ] {
+        let own = build.join("own.rgba");
+        capi::run(
+            Command::new(&exe)
+                .arg(&own)
+                .args(args)
+                .env("DISPLAY", xvfb.display()),
+            &format!("the one-shot program as it is, {args:?}"),
+        );
+        let injected = build.join("injected.rgba");
+        let output = capi::run(
+            cli()
+                .args(["inject", "--check", "--library"])
+                .arg(&library)
+                .arg("--")
+                .arg(&exe)
+                .arg(&injected)
+                .args(args)
+                .env("DISPLAY", xvfb.display()),
+            &format!("deferred-msaa inject on the one-shot program, {args:?}"),
+        );
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        eprint!("{args:?}:\n{stderr}");
+        let lines = said(&stderr);
+        assert!(
+            lines[0].contains("inject: retrofitting framebuffer 1 "),
+            "{args:?}:\n{stderr}"
+        );
+        let warnings: Vec<&&str> = lines.iter().filter(|l| l.contains("warning:")).collect();
+        if warned {
+            assert_eq!(lines.len(), 2, "{args:?}:\n{stderr}");
+            assert_eq!(warnings.len(), 1, "{args:?}:\n{stderr}");
+            assert!(
+                warnings[0].contains("every colour attachment of framebuffer 1 is black")
+                    && warnings[0].contains("another framebuffer that shares its textures"),
+                "{}",
+                warnings[0]
+            );
+        } else {
+            assert_eq!(lines.len(), 1, "{args:?}:\n{stderr}");
+        }
+        assert!(
+            stderr.contains("the resolved G-buffer read back 1")
+                && stderr.contains(" 0 changed, 0 GL errors left by the library"),
+            "{args:?}:\n{stderr}"
+        );
+        assert!(
+            frame(&injected) != frame(&own),
+            "{args:?}: the retrofitted frame is the program's own"
         );
     }
     // `--learn`: no frame with the G-buffer alive at its end, so the file

@@ -8,10 +8,16 @@
 // `deferred-msaa inject` is run on, to show the line the library says when
 // it leaves such a program alone.
 //
-// Usage: inject_oneshot OUT_FILE [--calls N] [--no-swap] [--array]
+// Usage: inject_oneshot OUT_FILE [--calls N] [--no-swap] [--keep [--clear-fbo]] [--array]
 //   --calls N   call `render` N times (default 1: a screenshot harness)
 //   --no-swap   never swap (as a surfaceless renderer does); otherwise the
 //               window's buffers are swapped after each call
+//   --keep      the G-buffer made once and kept: a render loop of N frames
+//               writing its last (the tutorial's engine, with the output
+//               framebuffer of its own)
+//   --clear-fbo (with --keep) the G-buffer cleared as some engines clear
+//               it: through a framebuffer of their own that shares its
+//               textures and depth, not with the G-buffer bound
 //   --array     the G-buffer made once, as some engines make it: one
 //               GL_TEXTURE_2D_ARRAY whose three layers are attached with
 //               glFramebufferTextureLayer, read by the lighting as a
@@ -74,12 +80,61 @@ static ArrayGBuffer makeArrayGBuffer()
     return a;
 }
 
-// One image, start to end: the G-buffer made, used and deleted (with an
-// array G-buffer, that one is drawn instead, and kept).
-static void render(std::vector<unsigned char> &pixels, const ArrayGBuffer *array)
+// The geometry pass with the G-buffer cleared through `clearFbo`, a
+// framebuffer sharing its attachments (the tutorial's draws otherwise).
+static void geometryPassClearedElsewhere(Engine &e, GLuint clearFbo)
 {
-    Engine e;
-    engineInit(e, WIDTH, HEIGHT, false);
+    glBindFramebuffer(GL_FRAMEBUFFER, clearFbo);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    glBindFramebuffer(GL_FRAMEBUFFER, e.gBuffer);
+    e.shaderGeometryPass->use();
+    e.shaderGeometryPass->setMat4("projection", e.projection);
+    e.shaderGeometryPass->setMat4("view", e.view);
+    for (size_t i = 0; i < e.objectPositions.size(); i++) {
+        float fi = static_cast<float>(i);
+        Mat4 model = translate(e.objectPositions[i]) * rotate(0.35f + 0.6f * fi, {1.0f, 0.8f, 0.3f}) * scale(0.6f);
+        e.shaderGeometryPass->setMat4("model", model);
+        e.shaderGeometryPass->setVec3("diffuseColor",
+                                      {0.45f + 0.06f * fi, 0.85f - 0.05f * fi, 0.5f + 0.04f * static_cast<float>(i % 3)});
+        e.shaderGeometryPass->setFloat("specularIntensity", 0.25f + 0.08f * fi);
+        renderCube();
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+// The framebuffer an engine clears its G-buffer through: the same textures
+// and depth.
+static GLuint makeClearFbo(const Engine &e)
+{
+    GLuint fbo = 0;
+    glGenFramebuffers(1, &fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, e.gPosition, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, e.gNormal, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, e.gAlbedoSpec, 0);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, e.rboDepth);
+    unsigned int attachments[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glDrawBuffers(3, attachments);
+    CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "the clear framebuffer is incomplete");
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    return fbo;
+}
+
+// What a render draws with: made in each call, or kept across calls.
+struct Kept {
+    Engine *engine = nullptr;
+    GLuint clearFbo = 0;
+};
+
+// One image, start to end: the G-buffer made, used and deleted (with an
+// array G-buffer, that one is drawn instead, and kept; with a kept engine,
+// its G-buffer is drawn and kept).
+static void render(std::vector<unsigned char> &pixels, const ArrayGBuffer *array, const Kept &kept)
+{
+    Engine own;
+    if (!kept.engine)
+        engineInit(own, WIDTH, HEIGHT, false);
+    Engine &e = kept.engine ? *kept.engine : own;
 
     GLuint output = 0, outputColor = 0;
     glGenFramebuffers(1, &output);
@@ -88,7 +143,10 @@ static void render(std::vector<unsigned char> &pixels, const ArrayGBuffer *array
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, outputColor, 0);
     CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "the output is incomplete");
 
-    geometryPass(e, array ? array->framebuffer : e.gBuffer);
+    if (kept.clearFbo)
+        geometryPassClearedElsewhere(e, kept.clearFbo);
+    else
+        geometryPass(e, array ? array->framebuffer : e.gBuffer);
     glBindFramebuffer(GL_FRAMEBUFFER, output);
     glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
     glClear(GL_COLOR_BUFFER_BIT);
@@ -112,17 +170,18 @@ static void render(std::vector<unsigned char> &pixels, const ArrayGBuffer *array
 
     glDeleteFramebuffers(1, &output);
     glDeleteTextures(1, &outputColor);
-    engineFree(e);
+    if (!kept.engine)
+        engineFree(own);
 }
 
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        std::fprintf(stderr, "usage: %s OUT_FILE [--calls N] [--no-swap] [--array]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s OUT_FILE [--calls N] [--no-swap] [--keep [--clear-fbo]] [--array]\n", argv[0]);
         return 2;
     }
     int calls = 1;
-    bool swap = true, useArray = false;
+    bool swap = true, useArray = false, keep = false, clearFbo = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--calls") == 0 && i + 1 < argc)
             calls = std::atoi(argv[++i]);
@@ -130,6 +189,10 @@ int main(int argc, char **argv)
             swap = false;
         else if (std::strcmp(argv[i], "--array") == 0)
             useArray = true;
+        else if (std::strcmp(argv[i], "--keep") == 0)
+            keep = true;
+        else if (std::strcmp(argv[i], "--clear-fbo") == 0)
+            clearFbo = true;
         else {
             std::fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;
@@ -169,11 +232,23 @@ int main(int argc, char **argv)
     ArrayGBuffer array;
     if (useArray)
         array = makeArrayGBuffer();
+    Engine keptEngine;
+    Kept kept;
+    if (keep) {
+        engineInit(keptEngine, WIDTH, HEIGHT, false);
+        kept.engine = &keptEngine;
+        if (clearFbo)
+            kept.clearFbo = makeClearFbo(keptEngine);
+    }
     std::vector<unsigned char> pixels(static_cast<size_t>(WIDTH) * HEIGHT * 4);
     for (int call = 0; call < calls; call++) {
-        render(pixels, useArray ? &array : nullptr);
+        render(pixels, useArray ? &array : nullptr, kept);
         if (swap)
             glfwSwapBuffers(window);
+    }
+    if (keep) {
+        glDeleteFramebuffers(1, &kept.clearFbo);
+        engineFree(keptEngine);
     }
     if (useArray) {
         glDeleteFramebuffers(1, &array.framebuffer);

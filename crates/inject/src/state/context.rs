@@ -55,6 +55,8 @@ pub(super) struct Retrofit {
     pub(super) handle: *mut capi::DmsaaRetrofit,
     pub(super) world_space: bool,
     pub(super) layers: u32,
+    /// Whether the G-buffer was read back after its first resolve.
+    pub(super) looked: bool,
 }
 
 // SAFETY: the handle is used only under the state's lock, with the

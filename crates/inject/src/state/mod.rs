@@ -3,12 +3,14 @@
 //! when the program leaves it.
 //!
 //! The calls come in through [`handlers`]; the state they work on is
-//! [`context`]'s, and its parts are [`gbuffer`] (finding the G-buffer),
+//! [`context`]'s, and its parts are [`content`] (the first resolve's G-buffer
+//! read back, a warning where it shows nothing), [`gbuffer`] (finding the G-buffer),
 //! [`framebuffers`] (the binds and attachments followed), [`retrofit`] (the
 //! C API's retrofit made, bound, resolved, its second layer), [`run`]
 //! (the settings and messages of the whole run) and [`learn`] (`--learn`'s
 //! profile).
 
+mod content;
 mod context;
 mod framebuffers;
 mod gbuffer;

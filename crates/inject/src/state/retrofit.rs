@@ -134,6 +134,7 @@ impl Context {
             handle,
             world_space,
             layers: options.layers,
+            looked: false,
         });
         Some(())
     }
@@ -157,6 +158,12 @@ impl Context {
         });
         if status == capi::DmsaaStatus::Ok {
             RESOLVES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if let Some(r) = self.retrofit.as_mut().filter(|r| !r.looked) {
+                r.looked = true;
+                if let Some(g) = self.gbuffer {
+                    self.look_at_resolved(g);
+                }
+            }
             if layers == 2 {
                 let pass = settings()
                     .profile
