@@ -743,9 +743,10 @@ fn said(stderr: &str) -> Vec<&str> {
 /// and a G-buffer of one texture array's layers (without a profile, and
 /// with one whose signature it has). Each run says exactly one line, naming
 /// why; the frame is the program's own, and the library is never called.
-/// The G-buffer kept across frames is retrofitted; cleared through another
-/// framebuffer sharing its textures, its resolve is black, and one warning
-/// says so. `--learn` on the
+/// The G-buffer kept across frames is retrofitted; cleared with glClear
+/// through another framebuffer sharing its textures, the clear is replayed
+/// and the frame is the same; cleared there with glClearBufferfv, the
+/// resolve is black, and one warning says so. `--learn` on the
 /// one-call render writes a profile at the end with the G-buffer's
 /// signature, only the keys it saw and the rest marked `?`, and says so;
 /// where it cannot write, it says why.
@@ -877,14 +878,23 @@ fn a_program_left_alone_says_why_in_one_line() {
         );
     }
     // The G-buffer kept across frames is retrofitted, and its first
-    // resolve read back shows the scene: no warning. Cleared through a
-    // framebuffer of the program's own that shares its textures, the
-    // retrofit's framebuffer is never cleared, nothing passes its depth
-    // test, and the resolve leaves the G-buffer black: said, in one
-    // warning, and the check still finds the read-back changed nothing.
-    for (args, warned) in [
-        (&["--keep", "--calls", "3"][..], false),
-        (&["--keep", "--clear-fbo", "--calls", "3"][..], true),
+    // resolve read back shows the scene: no warning. Cleared with glClear
+    // through a framebuffer of the program's own that shares its textures
+    // and depth, the clear is replayed on the retrofit's framebuffer: the
+    // same frame, bit for bit. Cleared there per attachment
+    // (glClearBufferfv), it is not (yet): the retrofit's framebuffer is
+    // never cleared, nothing passes its depth test, the resolve leaves the
+    // G-buffer black, and one warning says so. The check finds no state
+    // changed around the replays and the read-back.
+    let mut kept_frame = Vec::new();
+    for (args, replays, warned) in [
+        (&["--keep", "--calls", "3"][..], 0, false),
+        (&["--keep", "--clear-fbo", "--calls", "3"][..], 2, false),
+        (
+            &["--keep", "--clear-fbo", "--clear-buffers", "--calls", "3"][..],
+            0,
+            true,
+        ),
     ] {
         let own = build.join("own.rgba");
         capi::run(
@@ -926,15 +936,28 @@ fn a_program_left_alone_says_why_in_one_line() {
         } else {
             assert_eq!(lines.len(), 1, "{args:?}:\n{stderr}");
         }
+        let replayed =
+            format!("a clear through a framebuffer sharing the G-buffer's, replayed {replays}");
         assert!(
             stderr.contains("the resolved G-buffer read back 1")
-                && stderr.contains(" 0 changed, 0 GL errors left by the library"),
+                && stderr.contains(" 0 changed, 0 GL errors left by the library")
+                && (replays == 0 || stderr.contains(&replayed))
+                && (replays > 0 || !stderr.contains("sharing the G-buffer's, replayed")),
             "{args:?}:\n{stderr}"
         );
+        let injected = frame(&injected);
         assert!(
-            frame(&injected) != frame(&own),
+            injected != frame(&own),
             "{args:?}: the retrofitted frame is the program's own"
         );
+        match (replays, warned) {
+            (0, false) => kept_frame = injected,
+            (_, false) => assert!(
+                injected == kept_frame,
+                "{args:?}: the frame with the clear replayed is not the frame cleared in place"
+            ),
+            _ => {}
+        }
     }
     // `--learn`: no frame with the G-buffer alive at its end, so the file
     // is written when the program's context goes.

@@ -8,7 +8,7 @@
 // `deferred-msaa inject` is run on, to show the line the library says when
 // it leaves such a program alone.
 //
-// Usage: inject_oneshot OUT_FILE [--calls N] [--no-swap] [--keep [--clear-fbo]] [--array]
+// Usage: inject_oneshot OUT_FILE [--calls N] [--no-swap] [--keep [--clear-fbo [--clear-buffers]]] [--array]
 //   --calls N   call `render` N times (default 1: a screenshot harness)
 //   --no-swap   never swap (as a surfaceless renderer does); otherwise the
 //               window's buffers are swapped after each call
@@ -17,7 +17,9 @@
 //               framebuffer of its own)
 //   --clear-fbo (with --keep) the G-buffer cleared as some engines clear
 //               it: through a framebuffer of their own that shares its
-//               textures and depth, not with the G-buffer bound
+//               textures and depth, not with the G-buffer bound (glClear)
+//   --clear-buffers  (with --clear-fbo) that clear made per attachment,
+//               each with its own value (glClearBufferfv)
 //   --array     the G-buffer made once, as some engines make it: one
 //               GL_TEXTURE_2D_ARRAY whose three layers are attached with
 //               glFramebufferTextureLayer, read by the lighting as a
@@ -33,6 +35,7 @@ static const int HEIGHT = 120;
 #ifndef TUTORIAL_LINK_GL
 static PFNGLTEXIMAGE3DPROC glTexImage3D;
 static PFNGLFRAMEBUFFERTEXTURELAYERPROC glFramebufferTextureLayer;
+static PFNGLCLEARBUFFERFVPROC glClearBufferfv;
 #endif
 
 // The lighting of the array G-buffer: one light from above, on the albedo
@@ -82,10 +85,18 @@ static ArrayGBuffer makeArrayGBuffer()
 
 // The geometry pass with the G-buffer cleared through `clearFbo`, a
 // framebuffer sharing its attachments (the tutorial's draws otherwise).
-static void geometryPassClearedElsewhere(Engine &e, GLuint clearFbo)
+static void geometryPassClearedElsewhere(Engine &e, GLuint clearFbo, bool perAttachment)
 {
     glBindFramebuffer(GL_FRAMEBUFFER, clearFbo);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    if (perAttachment) {
+        const float none[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+        const float far = 1.0f;
+        for (int i = 0; i < 3; i++)
+            glClearBufferfv(GL_COLOR, i, none);
+        glClearBufferfv(GL_DEPTH, 0, &far);
+    } else {
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    }
     glBindFramebuffer(GL_FRAMEBUFFER, e.gBuffer);
     e.shaderGeometryPass->use();
     e.shaderGeometryPass->setMat4("projection", e.projection);
@@ -124,6 +135,7 @@ static GLuint makeClearFbo(const Engine &e)
 struct Kept {
     Engine *engine = nullptr;
     GLuint clearFbo = 0;
+    bool clearBuffers = false;
 };
 
 // One image, start to end: the G-buffer made, used and deleted (with an
@@ -144,7 +156,7 @@ static void render(std::vector<unsigned char> &pixels, const ArrayGBuffer *array
     CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "the output is incomplete");
 
     if (kept.clearFbo)
-        geometryPassClearedElsewhere(e, kept.clearFbo);
+        geometryPassClearedElsewhere(e, kept.clearFbo, kept.clearBuffers);
     else
         geometryPass(e, array ? array->framebuffer : e.gBuffer);
     glBindFramebuffer(GL_FRAMEBUFFER, output);
@@ -177,11 +189,11 @@ static void render(std::vector<unsigned char> &pixels, const ArrayGBuffer *array
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        std::fprintf(stderr, "usage: %s OUT_FILE [--calls N] [--no-swap] [--keep [--clear-fbo]] [--array]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s OUT_FILE [--calls N] [--no-swap] [--keep [--clear-fbo [--clear-buffers]]] [--array]\n", argv[0]);
         return 2;
     }
     int calls = 1;
-    bool swap = true, useArray = false, keep = false, clearFbo = false;
+    bool swap = true, useArray = false, keep = false, clearFbo = false, clearBuffers = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--calls") == 0 && i + 1 < argc)
             calls = std::atoi(argv[++i]);
@@ -193,6 +205,8 @@ int main(int argc, char **argv)
             keep = true;
         else if (std::strcmp(argv[i], "--clear-fbo") == 0)
             clearFbo = true;
+        else if (std::strcmp(argv[i], "--clear-buffers") == 0)
+            clearBuffers = true;
         else {
             std::fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;
@@ -221,6 +235,7 @@ int main(int argc, char **argv)
     glTexImage3D = reinterpret_cast<PFNGLTEXIMAGE3DPROC>(glfwGetProcAddress("glTexImage3D"));
     glFramebufferTextureLayer =
         reinterpret_cast<PFNGLFRAMEBUFFERTEXTURELAYERPROC>(glfwGetProcAddress("glFramebufferTextureLayer"));
+    glClearBufferfv = reinterpret_cast<PFNGLCLEARBUFFERFVPROC>(glfwGetProcAddress("glClearBufferfv"));
 #endif
     GLint major = 0, minor = 0;
     glGetIntegerv(GL_MAJOR_VERSION, &major);
@@ -239,6 +254,7 @@ int main(int argc, char **argv)
         kept.engine = &keptEngine;
         if (clearFbo)
             kept.clearFbo = makeClearFbo(keptEngine);
+        kept.clearBuffers = clearBuffers;
     }
     std::vector<unsigned char> pixels(static_cast<size_t>(WIDTH) * HEIGHT * 4);
     for (int call = 0; call < calls; call++) {

@@ -1,9 +1,9 @@
 //! After the first resolve of a retrofit, the G-buffer's colour
 //! attachments read back: where every one is uniform (black included), a
 //! warning, since the frame will show nothing of the scene. It catches a
-//! resolve of a twin the program never cleared or drew (a clear made
-//! through another framebuffer sharing the G-buffer's textures, a draw by
-//! a path the library does not follow). The reads are made inside
+//! resolve of a twin the program never cleared or drew (a `glClearBuffer*`
+//! made through another framebuffer sharing the G-buffer's textures, a
+//! draw by a path the library does not follow). The reads are made inside
 //! [`Context::checked`], so `--check` sees that they change nothing.
 
 use super::context::Context;
@@ -114,8 +114,9 @@ impl Context {
             &format!(
                 "warning: after the first resolve, every colour attachment of framebuffer {g} is {} ({}): the \
                  frame shows nothing of the scene. The retrofit's framebuffer stands in for the G-buffer only \
-                 where the G-buffer is bound: a clear or draw made through another framebuffer that shares its \
-                 textures (or by a call the library does not follow) never reaches it",
+                 where the G-buffer is bound: a glClearBuffer* or a draw made through another framebuffer that \
+                 shares its textures (a glClear there is replayed), or a call the library does not follow, \
+                 never reaches it",
                 if black { "black" } else { "uniform" },
                 values.join(", ")
             ),

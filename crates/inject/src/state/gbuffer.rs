@@ -93,7 +93,7 @@ impl Context {
     }
 
     /// The bound draw framebuffer's attachments, read from GL.
-    fn inspect(&mut self) -> Framebuffer {
+    pub(super) fn inspect(&mut self) -> Framebuffer {
         let gl = self.gl();
         let mut f = Framebuffer::default();
         // SAFETY: queries of the bound draw framebuffer, a user one.

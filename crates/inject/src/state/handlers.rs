@@ -347,7 +347,8 @@ pub(crate) fn glClear(real: real_type::glClear, mask: u32) {
             cx.twin_drawn = true;
         }
     });
-    unsafe { real(mask) }
+    unsafe { real(mask) };
+    with_context(|cx| cx.after_clear(mask));
 }
 
 pub(crate) fn glDrawArrays(real: real_type::glDrawArrays, mode: u32, first: i32, count: i32) {

@@ -3,13 +3,15 @@
 //! when the program leaves it.
 //!
 //! The calls come in through [`handlers`]; the state they work on is
-//! [`context`]'s, and its parts are [`content`] (the first resolve's G-buffer
+//! [`context`]'s, and its parts are [`clears`] (a clear through
+//! another framebuffer sharing the G-buffer's attachments, replayed), [`content`] (the first resolve's G-buffer
 //! read back, a warning where it shows nothing), [`gbuffer`] (finding the G-buffer),
 //! [`framebuffers`] (the binds and attachments followed), [`retrofit`] (the
 //! C API's retrofit made, bound, resolved, its second layer), [`run`]
 //! (the settings and messages of the whole run) and [`learn`] (`--learn`'s
 //! profile).
 
+mod clears;
 mod content;
 mod context;
 mod framebuffers;
