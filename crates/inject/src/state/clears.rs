@@ -80,7 +80,7 @@ impl Context {
                     if mask & glow::COLOR_BUFFER_BIT != 0 {
                         for i in 0..max {
                             let b = gl.get_parameter_i32(glow::DRAW_BUFFER0 + i) as u32;
-                            if b >= glow::COLOR_ATTACHMENT0 && b < glow::COLOR_ATTACHMENT0 + 8 {
+                            if (glow::COLOR_ATTACHMENT0..glow::COLOR_ATTACHMENT0 + 8).contains(&b) {
                                 colour.push(attached(gl, glow::DRAW_FRAMEBUFFER, b));
                             }
                         }
