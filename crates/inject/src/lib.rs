@@ -18,8 +18,8 @@
 
 mod check;
 mod hooks;
-mod learn;
 pub mod profile;
+mod real;
 mod replay;
 mod state;
 

@@ -14,19 +14,13 @@
 //! handed out for a function the driver has) and calls the handler of
 //! the same name in [`crate::state::handlers`].
 //!
-//! The parts, one-way: [`loader`] finds the real entry points, [`watched`]
-//! lists the watched functions and holds their real types and slots (which
-//! the handlers use too), [`wrappers`] stands in for them; this file hands
-//! out the wrappers.
+//! The parts, one-way: [`crate::real`] (below this module and the state)
+//! finds the real entry points and holds the watched functions' slots,
+//! [`wrappers`] stands in for them; this file hands out the wrappers.
 
-mod loader;
-mod watched;
 mod wrappers;
 
-pub(crate) use loader::{Api, current_context, library_loader, load_real};
-pub(crate) use watched::{real, real_type};
-
-use loader::{
+use crate::real::{
     EGL_GET_CURRENT_CONTEXT, EGL_GET_PROC_ADDRESS, GLX_GET_CURRENT_CONTEXT, GLX_GET_PROC_ADDRESS,
     GetProcAddress, Slot, real_dlsym,
 };
@@ -56,12 +50,14 @@ pub unsafe extern "C" fn dlsym(handle: *mut c_void, name: *const c_char) -> *mut
     match bytes {
         b"glXGetProcAddress" | b"glXGetProcAddressARB" => {
             GLX_GET_PROC_ADDRESS.set(found);
+            crate::state::handlers::watch_exit();
             // SAFETY: the same handle, a C string literal.
             GLX_GET_CURRENT_CONTEXT.set(unsafe { real(handle, c"glXGetCurrentContext".as_ptr()) });
             glx_get_proc_address as *mut c_void
         }
         b"eglGetProcAddress" => {
             EGL_GET_PROC_ADDRESS.set(found);
+            crate::state::handlers::watch_exit();
             // SAFETY: as above.
             EGL_GET_CURRENT_CONTEXT.set(unsafe { real(handle, c"eglGetCurrentContext".as_ptr()) });
             egl_get_proc_address as *mut c_void

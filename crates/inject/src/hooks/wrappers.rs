@@ -2,8 +2,8 @@
 //! wrapper calls the handler of its name in [`crate::state::handlers`]
 //! with the real function first.
 
-use super::loader::{Slot, next_definition};
-use super::watched::{real, real_type, watched_functions};
+use crate::real::{Slot, next_definition};
+use crate::real::{real, real_type, watched_functions};
 
 /// Declares the wrappers of the watched functions, and the lookup of a
 /// wrapper by name.

@@ -3,8 +3,8 @@
 
 use super::run::{say_once, settings};
 use crate::check;
-use crate::hooks::{Api, load_real, real, real_type};
 use crate::profile::Profile;
+use crate::real::{Api, load_real, real, real_type};
 use crate::replay::Recording;
 use deferred_msaa_capi as capi;
 use std::collections::HashMap;
@@ -25,6 +25,9 @@ pub(crate) struct Framebuffer {
     /// Each colour attachment's component type and size (`float16`…).
     pub(crate) formats: Vec<String>,
     pub(crate) depth: bool,
+    /// Two or more colour attachments are layers of one texture
+    /// (`glFramebufferTextureLayer` on an array texture).
+    pub(crate) layered: bool,
     /// Drawn into since it was inspected.
     pub(crate) drawn: bool,
     /// Its attachments changed since it was inspected.
@@ -52,6 +55,8 @@ pub(super) struct Retrofit {
     pub(super) handle: *mut capi::DmsaaRetrofit,
     pub(super) world_space: bool,
     pub(super) layers: u32,
+    /// Whether the G-buffer was read back after its first resolve.
+    pub(super) looked: bool,
 }
 
 // SAFETY: the handle is used only under the state's lock, with the
@@ -86,12 +91,16 @@ pub(crate) struct Context {
     pub(super) view: Option<[f32; 16]>,
     pub(crate) framebuffers: HashMap<u32, Framebuffer>,
     pub(crate) gbuffer: Option<u32>,
+    /// The G-buffer last deleted, as it was seen (for `--learn`).
+    pub(crate) last_gbuffer: Option<Framebuffer>,
     pub(super) retrofit: Option<Retrofit>,
     pub(super) needs_refresh: bool,
     pub(super) twin_bound: bool,
     pub(super) twin_drawn: bool,
     pub(super) off: bool,
     pub(super) frames: u64,
+    /// Draw calls seen.
+    pub(crate) draws: u64,
     pub(crate) passes: Vec<Pass>,
     pub(crate) last_frame: Vec<Pass>,
     /// With two layers: the draws after this frame's resolve.
@@ -126,12 +135,14 @@ impl Context {
             view,
             framebuffers: HashMap::new(),
             gbuffer: None,
+            last_gbuffer: None,
             retrofit: None,
             needs_refresh: false,
             twin_bound: false,
             twin_drawn: false,
             off,
             frames: 0,
+            draws: 0,
             passes: Vec::new(),
             last_frame: Vec::new(),
             recording: None,

@@ -3,7 +3,7 @@
 //! goes.
 
 use super::context::{Context, GL_DRAW_FRAMEBUFFER, GL_READ_FRAMEBUFFER, real_bind};
-use super::run::say_once;
+use super::run::{say_once, seen};
 use deferred_msaa_capi as capi;
 
 const GL_FRAMEBUFFER: u32 = 0x8D40;
@@ -55,8 +55,16 @@ impl Context {
 
     pub(super) fn delete_framebuffers(&mut self, names: &[u32]) {
         for name in names {
-            self.framebuffers.remove(name);
+            let seen_as = self.framebuffers.remove(name);
             if self.gbuffer == Some(*name) {
+                self.last_gbuffer = seen_as;
+                if self.retrofit.is_none() && !self.off && !self.learning() {
+                    // Found, and deleted before it was bound again.
+                    seen(|s| {
+                        let times = s.made_and_deleted.map_or(0, |(_, n)| n);
+                        s.made_and_deleted = Some((*name, times + 1));
+                    });
+                }
                 // GL unbinds a deleted framebuffer: the twin goes too.
                 if self.twin_bound {
                     real_bind(GL_DRAW_FRAMEBUFFER, 0);

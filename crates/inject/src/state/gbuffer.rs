@@ -11,7 +11,7 @@
 //! program untouched and says so once.
 
 use super::context::{Context, Framebuffer, GL_DRAW_FRAMEBUFFER, Pass};
-use super::run::{say_once, settings};
+use super::run::{FRAMES, left_alone, say_once, seen, settings};
 use crate::profile::Profile;
 use crate::replay::{DrawCall, RecordedDraw};
 use glow::HasContext;
@@ -21,6 +21,8 @@ impl Context {
     /// Before a draw call: the twin is drawn; otherwise the framebuffer
     /// drawn into is inspected, and the G-buffer looked for.
     pub(super) fn before_draw(&mut self, call: DrawCall) {
+        self.draws += 1;
+        seen(|s| s.draws += 1);
         if self.twin_bound {
             self.twin_drawn = true;
             return;
@@ -72,6 +74,16 @@ impl Context {
                 self.framebuffers.insert(d, info);
             }
             if let Some(f) = self.framebuffers.get_mut(&d) {
+                if !f.drawn {
+                    seen(|s| {
+                        if f.looks_like_gbuffer() {
+                            s.candidates.insert(d);
+                        }
+                        if f.layered {
+                            s.layered.insert(d);
+                        }
+                    });
+                }
                 f.drawn = true;
             }
         }
@@ -81,7 +93,7 @@ impl Context {
     }
 
     /// The bound draw framebuffer's attachments, read from GL.
-    fn inspect(&mut self) -> Framebuffer {
+    pub(super) fn inspect(&mut self) -> Framebuffer {
         let gl = self.gl();
         let mut f = Framebuffer::default();
         // SAFETY: queries of the bound draw framebuffer, a user one.
@@ -116,6 +128,10 @@ impl Context {
                     f.colour_textures.push((k, texture));
                 }
             }
+            let mut names: Vec<u32> = f.colour_textures.iter().map(|&(_, t)| t).collect();
+            names.sort_unstable();
+            names.dedup();
+            f.layered = names.len() < f.colour_textures.len();
             f.depth = gl.get_framebuffer_attachment_parameter_i32(
                 GL_DRAW_FRAMEBUFFER,
                 glow::DEPTH_ATTACHMENT,
@@ -145,7 +161,20 @@ impl Context {
             if let Some(f) = self.framebuffers.get(&draw)
                 && Self::matches_profile(p, f)
             {
+                if f.layered {
+                    say_once(
+                        "layered",
+                        &format!(
+                            "framebuffer {draw} has the profile's signature, but its colour attachments are layers \
+                             of one texture (glFramebufferTextureLayer): the retrofit takes a G-buffer of 2D \
+                             textures only; leaving the program untouched"
+                        ),
+                    );
+                    self.off = true;
+                    return;
+                }
                 self.gbuffer = Some(draw);
+                seen(|s| s.found = Some(draw));
             }
             return;
         }
@@ -175,7 +204,10 @@ impl Context {
             .collect();
         match found.as_slice() {
             [] => {}
-            [g] => self.gbuffer = Some(*g),
+            [g] => {
+                self.gbuffer = Some(*g);
+                seen(|s| s.found = Some(*g));
+            }
             many => {
                 say_once(
                     "ambiguous",
@@ -191,6 +223,11 @@ impl Context {
     /// At a swap: the last resort's resolve, the frame's passes kept for
     /// `--learn`, and the one line for a program left alone.
     pub(super) fn end_frame(&mut self) {
+        if self.draws == 0 {
+            // A swap before the program drew anything (GLFW swaps once as
+            // it makes a window): no frame of the program's.
+            return;
+        }
         if self.twin_drawn {
             self.resolve();
         }
@@ -203,30 +240,15 @@ impl Context {
         }
         self.recording = None;
         self.frames += 1;
+        FRAMES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.last_frame = std::mem::take(&mut self.passes);
         if self.learning() {
-            crate::learn::after_frame(self);
+            super::learn::after_frame(self);
             return;
         }
         if self.frames == 2 && self.gbuffer.is_none() && !self.off {
-            let unsure: Vec<u32> = self
-                .framebuffers
-                .iter()
-                .filter(|(_, f)| f.drawn && f.looks_like_gbuffer())
-                .map(|(n, _)| *n)
-                .collect();
-            let message = if unsure.is_empty() {
-                "no G-buffer found (no complete single-sample framebuffer with two or more colour textures and \
-                 depth was drawn into); leaving the program untouched"
-                    .to_string()
-            } else {
-                format!(
-                    "framebuffer(s) {unsure:?} have the shape of a G-buffer, but no later pass read two of their \
-                     colour textures together; not sure it is one, so leaving the program untouched (a profile \
-                     can name it)"
-                )
-            };
-            say_once("none", &message);
+            let frames = self.frames;
+            say_once("none", &seen(|s| left_alone(s, frames, false)));
         }
     }
 }

@@ -5,8 +5,8 @@
 #![allow(non_snake_case)]
 
 use super::context::Context;
-use super::run::{say_once, settings};
-use crate::hooks::{current_context, real_type};
+use super::run::{FRAMES, SEEN, left_alone, outcome_said, say_once, settings};
+use crate::real::{current_context, real_type};
 use crate::replay::DrawCall;
 use std::collections::HashMap;
 use std::ffi::{CStr, c_char, c_ulong, c_void};
@@ -40,6 +40,7 @@ impl Drop for Inside {
 /// the library's own work on this thread, or the state is poisoned. Another
 /// thread's call waits for the state (each context's state stays whole).
 fn with_context<R>(f: impl FnOnce(&mut Context) -> R) -> Option<R> {
+    watch_exit();
     if INSIDE.with(|i| i.replace(true)) {
         return None;
     }
@@ -61,6 +62,44 @@ fn with_context<R>(f: impl FnOnce(&mut Context) -> R) -> Option<R> {
             None
         }
     }
+}
+
+/// Have [`at_exit`] run when the program exits (once; from the first
+/// `dlsym` or GL call that reaches the library).
+pub(crate) fn watch_exit() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    // SAFETY: a plain extern "C" function with no arguments.
+    ONCE.call_once(|| unsafe {
+        libc::atexit(at_exit);
+    });
+}
+
+/// At exit: `--learn`'s profile if none was written yet; otherwise, for a
+/// run that said nothing, the one line saying why the program was left
+/// alone.
+extern "C" fn at_exit() {
+    if settings().learn.is_some() {
+        // The contexts still alive (a destroyed one wrote at its end); the
+        // state is not waited for at exit.
+        if let Ok(guard) = CONTEXTS.try_lock()
+            && let Some(map) = guard.as_ref()
+            && let Some(cx) = map.values().max_by_key(|cx| cx.draws)
+        {
+            super::learn::at_end(cx, "at the program's exit");
+        } else {
+            super::learn::at_end_unseen();
+        }
+        return;
+    }
+    if outcome_said() {
+        return;
+    }
+    let line = left_alone(
+        &SEEN.lock().unwrap_or_else(|e| e.into_inner()),
+        FRAMES.load(std::sync::atomic::Ordering::Relaxed),
+        true,
+    );
+    say_once("exit", &line);
 }
 
 pub(crate) fn glBindFramebuffer(real: real_type::glBindFramebuffer, target: u32, name: u32) {
@@ -106,6 +145,18 @@ pub(crate) fn glFramebufferTexture2D(
 ) {
     with_context(|cx| cx.attachment_changes(t));
     unsafe { real(t, a, tt, tex, l) }
+}
+
+pub(crate) fn glFramebufferTextureLayer(
+    real: real_type::glFramebufferTextureLayer,
+    t: u32,
+    a: u32,
+    tex: u32,
+    l: i32,
+    layer: i32,
+) {
+    with_context(|cx| cx.attachment_changes(t));
+    unsafe { real(t, a, tex, l, layer) }
 }
 
 pub(crate) fn glFramebufferRenderbuffer(
@@ -296,7 +347,8 @@ pub(crate) fn glClear(real: real_type::glClear, mask: u32) {
             cx.twin_drawn = true;
         }
     });
-    unsafe { real(mask) }
+    unsafe { real(mask) };
+    with_context(|cx| cx.after_clear(mask));
 }
 
 pub(crate) fn glDrawArrays(real: real_type::glDrawArrays, mode: u32, first: i32, count: i32) {
@@ -418,8 +470,10 @@ fn forget_context(context: *mut c_void) {
     }
     if let Ok(mut guard) = CONTEXTS.lock()
         && let Some(map) = guard.as_mut()
+        && let Some(cx) = map.remove(&(context as usize))
+        && settings().learn.is_some()
     {
-        map.remove(&(context as usize));
+        super::learn::at_end(&cx, "when its context was destroyed");
     }
 }
 

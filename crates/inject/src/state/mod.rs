@@ -3,17 +3,20 @@
 //! when the program leaves it.
 //!
 //! The calls come in through [`handlers`]; the state they work on is
-//! [`context`]'s, and its parts are [`gbuffer`] (finding the G-buffer),
+//! [`context`]'s, and its parts are [`clears`] (a clear through
+//! another framebuffer sharing the G-buffer's attachments, replayed), [`content`] (the first resolve's G-buffer
+//! read back, a warning where it shows nothing), [`gbuffer`] (finding the G-buffer),
 //! [`framebuffers`] (the binds and attachments followed), [`retrofit`] (the
-//! C API's retrofit made, bound, resolved, its second layer) and [`run`]
-//! (the settings and messages of the whole run).
+//! C API's retrofit made, bound, resolved, its second layer), [`run`]
+//! (the settings and messages of the whole run) and [`learn`] (`--learn`'s
+//! profile).
 
+mod clears;
+mod content;
 mod context;
 mod framebuffers;
 mod gbuffer;
 pub(crate) mod handlers;
+mod learn;
 mod retrofit;
 mod run;
-
-pub(crate) use context::Context;
-pub(crate) use run::{say_once, settings};

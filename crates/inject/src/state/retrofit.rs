@@ -3,8 +3,8 @@
 //! resolved, and with two layers the recorded lighting drawn again.
 
 use super::context::{Context, Framebuffer, Retrofit};
-use super::run::{RESOLVES, say_once, settings};
-use crate::hooks::{Api, library_loader};
+use super::run::{RESOLVES, say_once, seen, settings};
+use crate::real::{Api, library_loader};
 use crate::replay::{self, Recording};
 use deferred_msaa_capi as capi;
 use glow::HasContext;
@@ -129,10 +129,12 @@ impl Context {
                 }
             ),
         );
+        seen(|s| s.retrofitted = true);
         self.retrofit = Some(Retrofit {
             handle,
             world_space,
             layers: options.layers,
+            looked: false,
         });
         Some(())
     }
@@ -156,6 +158,12 @@ impl Context {
         });
         if status == capi::DmsaaStatus::Ok {
             RESOLVES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if let Some(r) = self.retrofit.as_mut().filter(|r| !r.looked) {
+                r.looked = true;
+                if let Some(g) = self.gbuffer {
+                    self.look_at_resolved(g);
+                }
+            }
             if layers == 2 {
                 let pass = settings()
                     .profile

@@ -1,5 +1,7 @@
 //! The layout's rules, read from the sources (docs/layout.md): no import
-//! cycle among the files of any crate of the workspace, no source file over
+//! cycle among the files of any crate of the workspace, nor among the
+//! modules (a folder with its files, or one file) beside each other in one
+//! parent module, no source file over
 //! 900 lines but a data table, and nothing in the renderer's shared passes
 //! naming a technique.
 //!
@@ -11,6 +13,14 @@
 //! neither taken for their author nor for their user. `mod` declarations
 //! are no arrows, and code under `#[cfg(test)]` (a unit test may reach
 //! anywhere) or `#[cfg(doc)]` (imports for rustdoc's links) is left out.
+//!
+//! A cycle can run through folders with no two files importing each other
+//! (`hooks/wrappers.rs` → `state/handlers.rs` → `hooks/loader.rs`): the
+//! module graph has an arrow from module A to module B, two children of one
+//! parent, where any file in A (or below it) has an arrow to any file in B
+//! (or below it), and a cycle there is one too.
+
+mod modules;
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};

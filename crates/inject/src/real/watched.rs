@@ -12,6 +12,7 @@ macro_rules! watched_functions {
             glDeleteFramebuffers(count: i32, framebuffers: *const u32);
             glFramebufferTexture(target: u32, attachment: u32, texture: u32, level: i32);
             glFramebufferTexture2D(target: u32, attachment: u32, textarget: u32, texture: u32, level: i32);
+            glFramebufferTextureLayer(target: u32, attachment: u32, texture: u32, level: i32, layer: i32);
             glFramebufferRenderbuffer(target: u32, attachment: u32, rbtarget: u32, renderbuffer: u32);
             glNamedFramebufferTexture(framebuffer: u32, attachment: u32, texture: u32, level: i32);
             glNamedFramebufferRenderbuffer(framebuffer: u32, attachment: u32, rbtarget: u32, renderbuffer: u32);
@@ -37,7 +38,7 @@ macro_rules! watched_functions {
         }
     };
 }
-pub(super) use watched_functions;
+pub(crate) use watched_functions;
 
 /// Declares the watched functions' real types and slots.
 macro_rules! declare_real_entry_points {

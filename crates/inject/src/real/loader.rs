@@ -22,7 +22,7 @@ impl Slot {
         }
     }
 
-    pub(super) fn set(&self, address: *mut c_void) {
+    pub(crate) fn set(&self, address: *mut c_void) {
         if !address.is_null() {
             self.0.store(address as usize, Ordering::Release);
         }
@@ -39,8 +39,8 @@ pub(crate) enum Api {
     Egl,
 }
 
-pub(super) type Dlsym = unsafe extern "C" fn(*mut c_void, *const c_char) -> *mut c_void;
-pub(super) type GetProcAddress = unsafe extern "C" fn(*const c_char) -> *mut c_void;
+type Dlsym = unsafe extern "C" fn(*mut c_void, *const c_char) -> *mut c_void;
+pub(crate) type GetProcAddress = unsafe extern "C" fn(*const c_char) -> *mut c_void;
 type GetCurrentContext = unsafe extern "C" fn() -> *mut c_void;
 
 unsafe extern "C" {
@@ -48,14 +48,14 @@ unsafe extern "C" {
 }
 
 static REAL_DLSYM: Slot = Slot::new();
-pub(super) static GLX_GET_PROC_ADDRESS: Slot = Slot::new();
-pub(super) static EGL_GET_PROC_ADDRESS: Slot = Slot::new();
-pub(super) static GLX_GET_CURRENT_CONTEXT: Slot = Slot::new();
-pub(super) static EGL_GET_CURRENT_CONTEXT: Slot = Slot::new();
+pub(crate) static GLX_GET_PROC_ADDRESS: Slot = Slot::new();
+pub(crate) static EGL_GET_PROC_ADDRESS: Slot = Slot::new();
+pub(crate) static GLX_GET_CURRENT_CONTEXT: Slot = Slot::new();
+pub(crate) static EGL_GET_CURRENT_CONTEXT: Slot = Slot::new();
 
 /// glibc's own `dlsym`: the versions it has carried it under (2.34 moved
 /// it into libc; 2.2.5 and 2.17 are the x86-64 and AArch64 baselines).
-pub(super) fn real_dlsym() -> Option<Dlsym> {
+pub(crate) fn real_dlsym() -> Option<Dlsym> {
     if REAL_DLSYM.get().is_none() {
         for version in [c"GLIBC_2.34", c"GLIBC_2.2.5", c"GLIBC_2.17"] {
             // SAFETY: plain C strings; dlvsym is not this library's dlsym.
@@ -74,7 +74,7 @@ pub(super) fn real_dlsym() -> Option<Dlsym> {
 
 /// The definition of `name` (NUL-terminated) after this library's: the
 /// one a program linked with libGL would have called.
-pub(super) fn next_definition(name: &str) -> *mut c_void {
+pub(crate) fn next_definition(name: &str) -> *mut c_void {
     match (real_dlsym(), CStr::from_bytes_with_nul(name.as_bytes())) {
         // SAFETY: a C string; RTLD_NEXT from this library.
         (Some(real), Ok(name)) => unsafe { real(libc::RTLD_NEXT, name.as_ptr()) },

@@ -15,6 +15,8 @@
 //! the program built on SDL2 (GLX, EGL) and linked with libGL directly.
 //! A forward bloom program is left untouched without a profile.
 
+mod left_alone;
+
 use super::capi;
 use crate::common;
 use std::path::{Path, PathBuf};

@@ -1,0 +1,148 @@
+//! A clear made through a framebuffer of the program's own that shares the
+//! G-buffer's textures (an engine's "clear" framebuffer) clears the
+//! G-buffer's textures, not the retrofit's framebuffer standing in for it:
+//! it is replayed there, attachment by attachment, with the values GL
+//! used (the clear colour, depth and stencil the program set; the same
+//! masks and scissor apply), and the draw framebuffer put back.
+
+use super::context::Context;
+use deferred_msaa_capi as capi;
+use glow::HasContext;
+use std::num::NonZeroU32;
+
+/// The object attached at `attachment` of the framebuffer bound at
+/// `target`: (type, name).
+///
+/// # Safety
+///
+/// A query of the current context.
+unsafe fn attached(gl: &glow::Context, target: u32, attachment: u32) -> (u32, u32) {
+    // SAFETY: the caller's.
+    unsafe {
+        (
+            gl.get_framebuffer_attachment_parameter_i32(
+                target,
+                attachment,
+                glow::FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE,
+            ) as u32,
+            gl.get_framebuffer_attachment_parameter_i32(
+                target,
+                attachment,
+                glow::FRAMEBUFFER_ATTACHMENT_OBJECT_NAME,
+            ) as u32,
+        )
+    }
+}
+
+impl Context {
+    /// After `glClear(mask)` into the bound draw framebuffer: where it is
+    /// not the G-buffer but shares attachments with it, the same clear on
+    /// the retrofit's framebuffer.
+    pub(super) fn after_clear(&mut self, mask: u32) {
+        let Some(g) = self.gbuffer else {
+            return;
+        };
+        let d = self.draw_fbo;
+        if d == 0 || d == g || self.twin_bound || self.off || self.learning() {
+            return;
+        }
+        // Whether the cleared framebuffer shares a colour texture with the
+        // G-buffer (the bound one, read as it is now).
+        let ours: Vec<u32> = self
+            .framebuffers
+            .get(&g)
+            .map(|f| f.colour_textures.iter().map(|&(_, t)| t).collect())
+            .unwrap_or_default();
+        let cleared = self.inspect();
+        if !cleared
+            .colour_textures
+            .iter()
+            .any(|(_, t)| ours.contains(t))
+        {
+            return;
+        }
+        // The retrofit made now if it is not yet (the G-buffer's next bind
+        // would make it, after this clear).
+        let Some(twin) = self.twin() else {
+            return;
+        };
+        let mut replayed = false;
+        self.checked(
+            "a clear through a framebuffer sharing the G-buffer's, replayed",
+            |gl| {
+                // SAFETY: queries of the current context; the library's own
+                // framebuffer bound for the replay, the program's put back.
+                unsafe {
+                    let read_fbo = gl.get_parameter_i32(glow::READ_FRAMEBUFFER_BINDING) as u32;
+                    let max = gl.get_parameter_i32(glow::MAX_DRAW_BUFFERS).clamp(0, 8) as u32;
+                    // The objects the cleared framebuffer's draw buffers reach.
+                    let mut colour: Vec<(u32, u32)> = Vec::new();
+                    if mask & glow::COLOR_BUFFER_BIT != 0 {
+                        for i in 0..max {
+                            let b = gl.get_parameter_i32(glow::DRAW_BUFFER0 + i) as u32;
+                            if (glow::COLOR_ATTACHMENT0..glow::COLOR_ATTACHMENT0 + 8).contains(&b) {
+                                colour.push(attached(gl, glow::DRAW_FRAMEBUFFER, b));
+                            }
+                        }
+                    }
+                    let depth = attached(gl, glow::DRAW_FRAMEBUFFER, glow::DEPTH_ATTACHMENT);
+                    let stencil = attached(gl, glow::DRAW_FRAMEBUFFER, glow::STENCIL_ATTACHMENT);
+                    // The G-buffer's attachments, as objects.
+                    let fbo = |n: u32| NonZeroU32::new(n).map(glow::NativeFramebuffer);
+                    gl.bind_framebuffer(glow::READ_FRAMEBUFFER, fbo(g));
+                    let mut targets: Vec<u32> = Vec::new();
+                    for k in 0..8 {
+                        let a = glow::COLOR_ATTACHMENT0 + k;
+                        let object = attached(gl, glow::READ_FRAMEBUFFER, a);
+                        if object.0 != glow::NONE && colour.contains(&object) {
+                            targets.push(a);
+                        }
+                    }
+                    let shares = |a: u32, cleared: (u32, u32)| {
+                        cleared.0 != glow::NONE
+                            && attached(gl, glow::READ_FRAMEBUFFER, a) == cleared
+                    };
+                    let clear_depth =
+                        mask & glow::DEPTH_BUFFER_BIT != 0 && shares(glow::DEPTH_ATTACHMENT, depth);
+                    let clear_stencil = mask & glow::STENCIL_BUFFER_BIT != 0
+                        && shares(glow::STENCIL_ATTACHMENT, stencil);
+                    gl.bind_framebuffer(glow::READ_FRAMEBUFFER, fbo(read_fbo));
+                    if targets.is_empty() && !clear_depth && !clear_stencil {
+                        return capi::DmsaaStatus::Ok;
+                    }
+                    let mut colour_value = [0f32; 4];
+                    gl.get_parameter_f32_slice(glow::COLOR_CLEAR_VALUE, &mut colour_value);
+                    let mut depth_value = [0f32; 1];
+                    gl.get_parameter_f32_slice(glow::DEPTH_CLEAR_VALUE, &mut depth_value);
+                    let stencil_value = gl.get_parameter_i32(glow::STENCIL_CLEAR_VALUE);
+                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, fbo(twin));
+                    // The twin's draw buffer slot of each attachment cleared.
+                    for i in 0..max {
+                        let b = gl.get_parameter_i32(glow::DRAW_BUFFER0 + i) as u32;
+                        if targets.contains(&b) {
+                            gl.clear_buffer_f32_slice(glow::COLOR, i, &colour_value);
+                        }
+                    }
+                    if clear_depth && clear_stencil {
+                        gl.clear_buffer_depth_stencil(
+                            glow::DEPTH_STENCIL,
+                            0,
+                            depth_value[0],
+                            stencil_value,
+                        );
+                    } else if clear_depth {
+                        gl.clear_buffer_f32_slice(glow::DEPTH, 0, &depth_value);
+                    } else if clear_stencil {
+                        gl.clear_buffer_i32_slice(glow::STENCIL, 0, &[stencil_value]);
+                    }
+                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, fbo(d));
+                    replayed = true;
+                }
+                capi::DmsaaStatus::Ok
+            },
+        );
+        if replayed {
+            self.twin_drawn = true;
+        }
+    }
+}

@@ -1,0 +1,228 @@
+//! `inject --learn`: a first profile written from what the program's GL
+//! calls showed (the framebuffers drawn into and their attachments, the
+//! matrix uniforms set, the passes in order), for the user to edit.
+//! Nothing is retrofitted. Only what was observed is written as a key;
+//! what GL calls cannot show (what each attachment holds, how its samples
+//! become one, what the lit values mean) is written as a comment marked
+//! `?`. A file is always written, or a line says why not: once a G-buffer
+//! is found, after a few frames without one, when the context is destroyed,
+//! or at the program's exit.
+
+use super::context::{Context, Framebuffer};
+use super::run::{say_once, settings};
+use std::fmt::Write as _;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+static WRITTEN: AtomicBool = AtomicBool::new(false);
+
+/// Frames observed before a profile is written even without a G-buffer.
+const FRAMES_BEFORE_GIVING_UP: usize = 3;
+static FRAMES: AtomicUsize = AtomicUsize::new(0);
+
+/// At the end of a frame: write the profile once a G-buffer was found (the
+/// frame just ended is then a whole frame with it), or after a few frames
+/// without one.
+pub(super) fn after_frame(cx: &Context) {
+    let frames = FRAMES.fetch_add(1, Ordering::Relaxed) + 1;
+    if cx.gbuffer.is_none() && frames < FRAMES_BEFORE_GIVING_UP {
+        return;
+    }
+    write(cx, &format!("from frame {frames}"));
+}
+
+/// When the program's rendering ends (its context destroyed, or its exit)
+/// with no profile written yet: write what was seen.
+pub(super) fn at_end(cx: &Context, when: &str) {
+    let frames = FRAMES.load(Ordering::Relaxed);
+    write(cx, &format!("{when}, after {frames} frame(s)"));
+}
+
+/// At exit with no context's state to write from.
+pub(super) fn at_end_unseen() {
+    if WRITTEN.swap(true, Ordering::Relaxed) {
+        return;
+    }
+    let path = settings()
+        .learn
+        .as_ref()
+        .map_or(String::new(), |p| p.display().to_string());
+    say_once(
+        "learn",
+        &format!(
+            "--learn wrote no profile to {path}: no GL context's state was seen (no draw call reached the \
+             library)"
+        ),
+    );
+}
+
+fn write(cx: &Context, when: &str) {
+    let Some(path) = settings().learn.as_ref() else {
+        return;
+    };
+    if WRITTEN.swap(true, Ordering::Relaxed) {
+        return;
+    }
+    let text = render(cx, when);
+    let what = if cx.gbuffer.is_some() || cx.last_gbuffer.is_some() {
+        "the G-buffer's signature and the matrix uniforms seen"
+    } else {
+        "no G-buffer (none was found), only the framebuffers and uniforms seen"
+    };
+    match std::fs::write(path, text) {
+        Ok(()) => say_once(
+            "learn",
+            &format!(
+                "wrote a first profile to {} {when}: it holds {what}; what GL calls cannot show is marked `?` \
+                 (unedited, the retrofit runs with the default options: no attachment's meaning, one layer; \
+                 edit it as docs/inject.md says)",
+                path.display()
+            ),
+        ),
+        Err(e) => say_once(
+            "learn",
+            &format!("cannot write the profile {}: {e}", path.display()),
+        ),
+    }
+}
+
+/// A TOML string.
+fn quoted(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+/// The profile's text: what was seen, as comments, then the tables of
+/// what was observed, with the keys not inferred marked `?`.
+pub(super) fn render(cx: &Context, when: &str) -> String {
+    let mut out = String::new();
+    let program = std::env::args().next().unwrap_or_default();
+    let _ = writeln!(
+        out,
+        "# Written by `deferred-msaa inject --learn` {when} of {program}."
+    );
+    let _ = writeln!(out, "# Framebuffers drawn into:");
+    let mut names: Vec<_> = cx.framebuffers.iter().filter(|(_, f)| f.drawn).collect();
+    names.sort_by_key(|(n, _)| **n);
+    for (n, f) in &names {
+        let _ = writeln!(
+            out,
+            "#   {n}: {} colour attachment(s) ({}), {} texture(s){}{}{}",
+            f.colour_attachments,
+            f.formats.join(", "),
+            f.colour_textures.len(),
+            if f.depth { ", depth" } else { "" },
+            if f.layered {
+                ", layers of one texture"
+            } else {
+                ""
+            },
+            if cx.gbuffer == Some(**n) {
+                "  <- the G-buffer"
+            } else {
+                ""
+            }
+        );
+    }
+    let _ = writeln!(
+        out,
+        "# Matrix uniforms set: {}",
+        if cx.matrices_set.is_empty() {
+            "none".to_string()
+        } else {
+            cx.matrices_set.join(", ")
+        }
+    );
+    let passes = if cx.last_frame.is_empty() {
+        &cx.passes
+    } else {
+        &cx.last_frame
+    };
+    let passes: Vec<String> = passes
+        .iter()
+        .map(|p| {
+            format!(
+                "framebuffer {} (program {}, {} draw(s))",
+                p.framebuffer, p.program, p.draws
+            )
+        })
+        .collect();
+    let _ = writeln!(
+        out,
+        "# Passes of the frame, in order: {}",
+        passes.join(", ")
+    );
+    let _ = writeln!(
+        out,
+        "# Keys marked `?` could not be inferred from GL calls: set them (docs/inject.md).\n"
+    );
+    let gbuffer = cx
+        .gbuffer
+        .and_then(|g| cx.framebuffers.get(&g))
+        .or(cx.last_gbuffer.as_ref());
+    if cx.gbuffer.is_none() && gbuffer.is_some() {
+        let _ = writeln!(
+            out,
+            "# The G-buffer was deleted before the end: its signature is the last one seen. A G-buffer\n\
+             # made and deleted for each image is never retrofitted (docs/inject.md).\n"
+        );
+    }
+    match gbuffer {
+        Some(f) => gbuffer_tables(&mut out, f),
+        None => {
+            let _ = writeln!(
+                out,
+                "# [framebuffer] ? no G-buffer was found: name its signature (colour_textures, depth,\n\
+                 # formats) from the framebuffers above.\n"
+            );
+        }
+    }
+    let _ = writeln!(out, "[projection]");
+    for (key, word) in [("uniform", "projection"), ("view_uniform", "view")] {
+        let exact = cx
+            .matrices_set
+            .iter()
+            .find(|n| n.eq_ignore_ascii_case(word));
+        let like = cx
+            .matrices_set
+            .iter()
+            .find(|n| n.to_ascii_lowercase().contains(word));
+        let _ = match (exact, like) {
+            (Some(name), _) => writeln!(out, "{key} = {}", quoted(name)),
+            (None, Some(name)) => writeln!(
+                out,
+                "# {key} = ?  {} was set: the {word} matrix alone, or a product? name the uniform that holds it",
+                quoted(name)
+            ),
+            (None, None) => writeln!(
+                out,
+                "# {key} = ?  no matrix uniform named like {word:?} was set; name it, or give a fixed matrix"
+            ),
+        };
+    }
+    let _ = writeln!(
+        out,
+        "\n# [retrofit] ?  not inferred: layers (1 or 2), layer_mix (what the lit values mean:\n\
+         # linear, tonemapped, srgb-encoded), depth_mode; unset, the defaults apply."
+    );
+    out
+}
+
+/// The G-buffer's signature (observed) and one table per colour texture
+/// (its index observed; its meaning and rule not).
+fn gbuffer_tables(out: &mut String, f: &Framebuffer) {
+    let formats: Vec<String> = f.formats.iter().map(|s| quoted(s)).collect();
+    let _ = writeln!(
+        out,
+        "[framebuffer]\ncolour_textures = {}\ndepth = {}\nformats = [{}]\n",
+        f.colour_textures.len(),
+        f.depth,
+        formats.join(", ")
+    );
+    for &(index, _) in &f.colour_textures {
+        let _ = writeln!(
+            out,
+            "[[attachment]]\nindex = {index}\n\
+             # meaning = ?  \"position\" (with world_space), \"normal\" (with encoding), or \"albedo\"/\"other\"\n\
+             # rule = ?     \"default\", \"blend\", \"blend-normal\", \"blend-hdr\", \"select\"\n"
+        );
+    }
+}

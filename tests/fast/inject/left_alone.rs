@@ -1,0 +1,328 @@
+//! Programs `inject` leaves alone, and the first resolve's read-back:
+//! each run's one line, read (docs/inject.md, "Never silent").
+
+use super::capi;
+use super::{can_run_glfw, cli, cxx, frame};
+use crate::common;
+use std::path::Path;
+use std::process::Command;
+
+/// The lines the library said, but `--check`'s.
+fn said(stderr: &str) -> Vec<&str> {
+    stderr
+        .lines()
+        .filter(|l| l.starts_with("deferred-msaa inject: ") && !l.contains("inject: check: "))
+        .collect()
+}
+
+/// Programs the library leaves alone, each written as such programs are
+/// (`inject_oneshot.cpp`: a render call that makes the G-buffer, draws,
+/// reads the image back and deletes it all): a screenshot harness that
+/// renders one frame and exits, the same with no swap (surfaceless), an
+/// engine's one-call render called three times, with and without swaps,
+/// and a G-buffer of one texture array's layers (without a profile, and
+/// with one whose signature it has). Each run says exactly one line, naming
+/// why; the frame is the program's own, and the library is never called.
+/// The G-buffer kept across frames is retrofitted; cleared with glClear
+/// through another framebuffer sharing its textures, the clear is replayed
+/// and the frame is the same; cleared there with glClearBufferfv, the
+/// resolve is black, and one warning says so. `--learn` on the
+/// one-call render writes a profile at the end with the G-buffer's
+/// signature, only the keys it saw and the rest marked `?`, and says so;
+/// where it cannot write, it says why.
+#[test]
+fn a_program_left_alone_says_why_in_one_line() {
+    if !can_run_glfw() {
+        return;
+    }
+    let Some(xvfb) = common::xvfb::start_xvfb() else {
+        return;
+    };
+    let build = Path::new(env!("CARGO_TARGET_TMPDIR")).join("inject-oneshot-build");
+    let _ = std::fs::remove_dir_all(&build);
+    let src = build.join("src");
+    std::fs::create_dir_all(&src).expect("making the source folder");
+    for f in ["inject_oneshot.cpp", "tutorial_program.hpp"] {
+        std::fs::copy(capi::sources().join(f), src.join(f)).expect("copying the C++ sources");
+    }
+    let exe = build.join("oneshot");
+    capi::run(
+        cxx()
+            .arg(src.join("inject_oneshot.cpp"))
+            .arg("-o")
+            .arg(&exe)
+            .arg("-lglfw"),
+        "compiling inject_oneshot.cpp",
+    );
+    let library = capi::built("libdeferred_msaa_inject", "so");
+    let cases: [(&[&str], &[&str]); 5] = [
+        (
+            &[],
+            &[
+                "but it was never bound for drawing again (the program ended after one frame)",
+                "a program that renders one frame, as a screenshot harness does, is never retrofitted",
+            ],
+        ),
+        (
+            &["--no-swap"],
+            &[
+                "but it was never bound for drawing again (no frame boundary was seen",
+                "a program that renders one frame",
+            ],
+        ),
+        (
+            &["--calls", "3"],
+            &[
+                "was deleted before it was bound for drawing again (2 time(s))",
+                "a G-buffer made and deleted within a frame, as a one-call render does, is never retrofitted",
+                "2 frames seen",
+            ],
+        ),
+        (
+            &["--no-swap", "--calls", "3"],
+            &[
+                "was deleted before it was bound for drawing again (3 time(s))",
+                "a G-buffer made and deleted within a frame",
+                "no frame boundary was seen",
+            ],
+        ),
+        (
+            &["--array", "--calls", "3"],
+            &[
+                "framebuffer(s) [1] attach layers of one texture (glFramebufferTextureLayer)",
+                "the retrofit takes a G-buffer of 2D textures only",
+            ],
+        ),
+    ];
+    let array_profile = build.join("array.toml");
+    std::fs::write(
+        &array_profile,
+        "[framebuffer]\ncolour_textures = 3\nformats = [\"float16\", \"float16\", \"float16\"]\n",
+    )
+    .expect("writing the array profile");
+    let cases = cases.into_iter().map(|(a, n)| (a, n, None)).chain([(
+        &["--array", "--calls", "3"][..],
+        &["framebuffer 1 has the profile's signature, but its colour attachments are layers of one texture"][..],
+        Some(&array_profile),
+    )]);
+    for (args, needles, profile) in cases {
+        let own = build.join("own.rgba");
+        capi::run(
+            Command::new(&exe)
+                .arg(&own)
+                .args(args)
+                .env("DISPLAY", xvfb.display()),
+            &format!("the one-shot program as it is, {args:?}"),
+        );
+        let injected = build.join("injected.rgba");
+        let mut command = cli();
+        command
+            .args(["inject", "--check", "--library"])
+            .arg(&library);
+        if let Some(p) = profile {
+            command.arg("--profile").arg(p);
+        }
+        let output = capi::run(
+            command
+                .arg("--")
+                .arg(&exe)
+                .arg(&injected)
+                .args(args)
+                .env("DISPLAY", xvfb.display()),
+            &format!("deferred-msaa inject on the one-shot program, {args:?}"),
+        );
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        eprint!("{args:?}:\n{stderr}");
+        let lines = said(&stderr);
+        assert_eq!(lines.len(), 1, "{args:?}: not one line:\n{stderr}");
+        assert!(
+            lines[0].ends_with("leaving the program untouched")
+                || lines[0].contains("leaving the program untouched ("),
+            "{args:?}: {}",
+            lines[0]
+        );
+        for needle in needles {
+            assert!(
+                lines[0].contains(needle),
+                "{args:?}: no `{needle}` in {}",
+                lines[0]
+            );
+        }
+        assert!(
+            stderr.contains("check: 0 calls into the library"),
+            "{args:?}: the library was called:\n{stderr}"
+        );
+        assert!(
+            frame(&injected) == frame(&own),
+            "{args:?}: the frame under inject is not the program's own"
+        );
+    }
+    // The G-buffer kept across frames is retrofitted, and its first
+    // resolve read back shows the scene: no warning. Cleared with glClear
+    // through a framebuffer of the program's own that shares its textures
+    // and depth, the clear is replayed on the retrofit's framebuffer: the
+    // same frame, bit for bit. Cleared there per attachment
+    // (glClearBufferfv), it is not (yet): the retrofit's framebuffer is
+    // never cleared, nothing passes its depth test, the resolve leaves the
+    // G-buffer black, and one warning says so. The check finds no state
+    // changed around the replays and the read-back.
+    let mut kept_frame = Vec::new();
+    for (args, replays, warned) in [
+        (&["--keep", "--calls", "3"][..], 0, false),
+        (&["--keep", "--clear-fbo", "--calls", "3"][..], 2, false),
+        (
+            &["--keep", "--clear-fbo", "--clear-buffers", "--calls", "3"][..],
+            0,
+            true,
+        ),
+    ] {
+        let own = build.join("own.rgba");
+        capi::run(
+            Command::new(&exe)
+                .arg(&own)
+                .args(args)
+                .env("DISPLAY", xvfb.display()),
+            &format!("the one-shot program as it is, {args:?}"),
+        );
+        let injected = build.join("injected.rgba");
+        let output = capi::run(
+            cli()
+                .args(["inject", "--check", "--library"])
+                .arg(&library)
+                .arg("--")
+                .arg(&exe)
+                .arg(&injected)
+                .args(args)
+                .env("DISPLAY", xvfb.display()),
+            &format!("deferred-msaa inject on the one-shot program, {args:?}"),
+        );
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        eprint!("{args:?}:\n{stderr}");
+        let lines = said(&stderr);
+        assert!(
+            lines[0].contains("inject: retrofitting framebuffer 1 "),
+            "{args:?}:\n{stderr}"
+        );
+        let warnings: Vec<&&str> = lines.iter().filter(|l| l.contains("warning:")).collect();
+        if warned {
+            assert_eq!(lines.len(), 2, "{args:?}:\n{stderr}");
+            assert_eq!(warnings.len(), 1, "{args:?}:\n{stderr}");
+            assert!(
+                warnings[0].contains("every colour attachment of framebuffer 1 is black")
+                    && warnings[0].contains("another framebuffer that shares its textures"),
+                "{}",
+                warnings[0]
+            );
+        } else {
+            assert_eq!(lines.len(), 1, "{args:?}:\n{stderr}");
+        }
+        let replayed =
+            format!("a clear through a framebuffer sharing the G-buffer's, replayed {replays}");
+        assert!(
+            stderr.contains("the resolved G-buffer read back 1")
+                && stderr.contains(" 0 changed, 0 GL errors left by the library")
+                && (replays == 0 || stderr.contains(&replayed))
+                && (replays > 0 || !stderr.contains("sharing the G-buffer's, replayed")),
+            "{args:?}:\n{stderr}"
+        );
+        let injected = frame(&injected);
+        assert!(
+            injected != frame(&own),
+            "{args:?}: the retrofitted frame is the program's own"
+        );
+        match (replays, warned) {
+            (0, false) => kept_frame = injected,
+            (_, false) => assert!(
+                injected == kept_frame,
+                "{args:?}: the frame with the clear replayed is not the frame cleared in place"
+            ),
+            _ => {}
+        }
+    }
+    // `--learn`: no frame with the G-buffer alive at its end, so the file
+    // is written when the program's context goes.
+    let learned = build.join("learned.toml");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(&library)
+            .arg("--learn")
+            .arg(&learned)
+            .arg("--")
+            .arg(&exe)
+            .arg(build.join("learn.rgba"))
+            .args(["--no-swap", "--calls", "3"])
+            .env("DISPLAY", xvfb.display()),
+        "deferred-msaa inject --learn on the one-call render",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let lines = said(&stderr);
+    assert_eq!(lines.len(), 1, "--learn: not one line:\n{stderr}");
+    assert!(
+        lines[0].contains("wrote a first profile to ") && lines[0].contains("marked `?`"),
+        "{}",
+        lines[0]
+    );
+    let text = std::fs::read_to_string(&learned).expect("--learn wrote no profile");
+    eprint!("the learned profile:\n{text}");
+    for line in [
+        "colour_textures = 3",
+        "formats = [\"float16\", \"float16\", \"unorm8\"]",
+        "uniform = \"projection\"",
+        "# meaning = ?",
+        "# rule = ?",
+        "# [retrofit] ?",
+        "made and deleted for each image is never retrofitted",
+    ] {
+        assert!(text.contains(line), "no `{line}` in the learned profile");
+    }
+    // Only what was seen is a key: no meaning, rule or retrofit table.
+    for key in ["meaning", "rule", "layers", "layer_mix"] {
+        assert!(
+            !text.lines().any(|l| l.starts_with(key)),
+            "the learned profile sets `{key}`, which no GL call shows"
+        );
+    }
+    // The library's own parser takes it, as `inject --profile` checks it
+    // before the program runs.
+    let checked = cli()
+        .args(["inject", "--library"])
+        .arg(&library)
+        .arg("--profile")
+        .arg(&learned)
+        .args(["--", "true"])
+        .output()
+        .expect("running deferred-msaa");
+    assert!(
+        checked.status.success(),
+        "the learned profile is refused: {}",
+        String::from_utf8_lossy(&checked.stderr)
+    );
+    assert_eq!(text.matches("\n[[attachment]]\n").count(), 3);
+    assert!(
+        !text.contains("\n[retrofit]"),
+        "a [retrofit] table was written"
+    );
+    // Nowhere to write: said, in one line.
+    let nowhere = build.join("no-such-folder").join("learned.toml");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(&library)
+            .arg("--learn")
+            .arg(&nowhere)
+            .arg("--")
+            .arg(&exe)
+            .arg(build.join("learn.rgba"))
+            .env("DISPLAY", xvfb.display()),
+        "deferred-msaa inject --learn into a missing folder",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let lines = said(&stderr);
+    assert_eq!(lines.len(), 1, "--learn, nowhere: not one line:\n{stderr}");
+    assert!(
+        lines[0].contains("cannot write the profile"),
+        "{}",
+        lines[0]
+    );
+}
