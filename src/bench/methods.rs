@@ -57,6 +57,7 @@ pub const BASE_DEFAULT_METHODS: &[&str] = &[
     "front",
     "median",
     "back",
+    "upper-median",
     "median:hard",
     "median:nofast",
     "median+fxaa",

@@ -24,7 +24,7 @@ pub struct BenchCmd {
     #[arg(long = "samples", value_name = "N")]
     samples: Vec<u32>,
     /// Comma-separated method entries, e.g. `none,median:hard,median+fxaa`
-    /// (default: none,none+fxaa,average,front,median,back,median:hard,
+    /// (default: none,none+fxaa,average,front,median,back,upper-median,median:hard,
     /// median:nofast,median+fxaa,gbaa,smaa,median+smaa, then per-sample, complex and sparse
     /// where the context has what they need). Options: `:hard`, `:c=F`,
     /// `:c_in=F`, `:nofast`, `:full` (the whole layout, not the plan's),

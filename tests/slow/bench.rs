@@ -122,13 +122,14 @@ fn base_name(method: &str) -> &'static str {
 }
 
 /// The methods of a scene's runs that resolve the multisampled G-buffer
-/// before lighting (`average`, `front`, `median`, `back`, with any options).
+/// before lighting (`average`, `front`, `median`, `back`, `upper-median`,
+/// with any options).
 fn resolves<'a>(report: &'a Value, scene: &'a str) -> impl Iterator<Item = &'a str> + 'a {
     runs(report)
         .iter()
         .filter(move |r| r["scene"] == scene)
         .filter_map(|r| r["method"].as_str())
-        .filter(|m| ["average", "front", "median", "back"].contains(&base_name(m)))
+        .filter(|m| ["average", "front", "median", "back", "upper-median"].contains(&base_name(m)))
 }
 
 #[test]
