@@ -231,26 +231,6 @@ void load_keys(ivec2 p) {
 // llvmpipe runs both sides of every branch that its lanes disagree on, and
 // masks every store made inside one.
 
-// The standard sample pattern (cpu.rs's standard_sample_positions):
-// offsets from the pixel centre in 1/16 pixel, x right, y up.
-#if NUM_SAMPLES == 2
-#define SAMPLE_PATTERN 1
-const vec2 SAMPLE_POS[2] = vec2[2](vec2(4.0, 4.0), vec2(-4.0, -4.0));
-#elif NUM_SAMPLES == 4
-#define SAMPLE_PATTERN 1
-const vec2 SAMPLE_POS[4] = vec2[4](vec2(-2.0, -6.0), vec2(6.0, -2.0), vec2(-6.0, 2.0), vec2(2.0, 6.0));
-#elif NUM_SAMPLES == 8
-#define SAMPLE_PATTERN 1
-const vec2 SAMPLE_POS[8] = vec2[8](vec2(1.0, -3.0), vec2(-1.0, 3.0), vec2(5.0, 1.0), vec2(-3.0, -5.0),
-                                   vec2(-5.0, 5.0), vec2(-7.0, -1.0), vec2(3.0, 7.0), vec2(7.0, -7.0));
-#elif NUM_SAMPLES == 16
-#define SAMPLE_PATTERN 1
-const vec2 SAMPLE_POS[16] = vec2[16](vec2(1.0, 1.0), vec2(-1.0, -3.0), vec2(-3.0, 2.0), vec2(4.0, -1.0),
-                                     vec2(-5.0, -2.0), vec2(2.0, 5.0), vec2(5.0, 3.0), vec2(3.0, -5.0),
-                                     vec2(-2.0, 6.0), vec2(0.0, -7.0), vec2(-4.0, -6.0), vec2(-6.0, 4.0),
-                                     vec2(-8.0, 0.0), vec2(7.0, -4.0), vec2(6.0, 7.0), vec2(-7.0, -8.0));
-#endif
-
 // The reference sample; 0 for a one-sample pixel.
 int reference_sample() {
     int r = 0;
@@ -471,6 +451,21 @@ bool keys_uniform() {
 // the depth samples lie on one plane over the standard sample pattern, and
 // the first blended attachment's samples are all equal. One triangle's
 // samples pass it; it does not prove that one fragment wrote the pixel.
+// Offsets from the pixel centre in 1/16 pixel, x right, y up.
+#if NUM_SAMPLES == 4
+#define PLANE_PATTERN 1
+const vec2 SAMPLE_POS[4] = vec2[4](vec2(-2.0, -6.0), vec2(6.0, -2.0), vec2(-6.0, 2.0), vec2(2.0, 6.0));
+#elif NUM_SAMPLES == 8
+#define PLANE_PATTERN 1
+const vec2 SAMPLE_POS[8] = vec2[8](vec2(1.0, -3.0), vec2(-1.0, 3.0), vec2(5.0, 1.0), vec2(-3.0, -5.0),
+                                   vec2(-5.0, 5.0), vec2(-7.0, -1.0), vec2(3.0, 7.0), vec2(7.0, -7.0));
+#elif NUM_SAMPLES == 16
+#define PLANE_PATTERN 1
+const vec2 SAMPLE_POS[16] = vec2[16](vec2(1.0, 1.0), vec2(-1.0, -3.0), vec2(-3.0, 2.0), vec2(4.0, -1.0),
+                                     vec2(-5.0, -2.0), vec2(2.0, 5.0), vec2(5.0, 3.0), vec2(3.0, -5.0),
+                                     vec2(-2.0, 6.0), vec2(0.0, -7.0), vec2(-4.0, -6.0), vec2(-6.0, 4.0),
+                                     vec2(-8.0, 0.0), vec2(7.0, -4.0), vec2(6.0, 7.0), vec2(-7.0, -8.0));
+#endif
 
 // Least squares over e_i = d_i - d_0 (exact where depths are close), with
 // positions and e centred; up to 3 samples always fit, a count without a
@@ -478,7 +473,7 @@ bool keys_uniform() {
 bool plane_fits() {
 #if NUM_SAMPLES <= 3
     return true;
-#elif !defined(SAMPLE_PATTERN)
+#elif !defined(PLANE_PATTERN)
     return false;
 #else
     vec2 mean_pos = vec2(0.0);
