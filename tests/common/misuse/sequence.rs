@@ -9,8 +9,11 @@ use deferred_msaa_testkit::Rng;
 pub(super) const SIZE: (i32, i32) = (40, 24);
 pub(super) const OTHER_SIZE: (i32, i32) = (32, 24);
 
-/// A framebuffer id no one generated.
-pub(super) const NOT_A_FRAMEBUFFER: u32 = 70_001;
+/// A framebuffer id no one generated. Mesa hands out names counting up
+/// from 1 in each context, and a worker runs thousands of sequences in
+/// one context, each making framebuffers (70 001 was reached in one run
+/// once the crate made more per call): far above any count a run makes.
+pub(super) const NOT_A_FRAMEBUFFER: u32 = 0x7fff_0001;
 
 /// Which handle a call is given.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
