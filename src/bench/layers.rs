@@ -34,7 +34,8 @@ pub fn load_report(path: &Path) -> Result<Report> {
         .map_err(|e| Error::invalid(format!("{} is not a bench report: {e}", path.display())))
 }
 
-fn run<'a>(report: &'a Report, scene: &str, method: &str) -> Option<&'a Run> {
+/// The run of `method` on `scene` in `report`, if it measured one.
+pub(crate) fn run<'a>(report: &'a Report, scene: &str, method: &str) -> Option<&'a Run> {
     report
         .runs
         .iter()
@@ -51,7 +52,8 @@ pub fn scene_name(spec: &str) -> String {
         .map_or_else(|| spec.to_string(), |s| s.to_string_lossy().into_owned())
 }
 
-fn cell(v: Option<f64>, digits: usize) -> String {
+/// A table cell: the value to `digits` places, or a dash.
+pub(crate) fn cell(v: Option<f64>, digits: usize) -> String {
     v.map_or_else(|| "–".into(), |v| format!("{v:.digits$}"))
 }
 

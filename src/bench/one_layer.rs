@@ -4,24 +4,13 @@
 //! halo pixels and the bar width error. `scripts/docs` writes it into
 //! docs/bench.md with `cargo run --release --example one_layer_table`.
 
-use super::layers::scene_name;
-use super::report::{Report, Run};
+use super::layers::{cell, run, scene_name};
+use super::report::Report;
 use std::fmt::Write as _;
 
 /// The entries the table reads; a report without one of them for a scene
 /// leaves a dash.
 pub const ONE_LAYER_METHODS: &[&str] = &["none", "median", "upper-median"];
-
-fn run<'a>(report: &'a Report, scene: &str, method: &str) -> Option<&'a Run> {
-    report
-        .runs
-        .iter()
-        .find(|r| r.scene == scene && r.method == method)
-}
-
-fn cell(v: Option<f64>, digits: usize) -> String {
-    v.map_or_else(|| "–".into(), |v| format!("{v:.digits$}"))
-}
 
 /// One Markdown table over `reports` (each a bench run, e.g. one per image
 /// size): a row per scene and size, and a last line counting the rows
