@@ -14,7 +14,7 @@
 //!     samples, rules: vec![(ColorAttachment(1), Select), (ColorAttachment(2), BlendHdr)],
 //!     ..RetrofitOptions::default()                // no position target: the key is linearised depth
 //! })?;
-//! engine.geometry_pass(gl, msaa.framebuffer());   // was: engine.geometry_pass(gl, engine.gbuffer_fbo())
+//! engine.geometry_pass(gl, msaa.begin_frame(gl)?);  // was: engine.geometry_pass(gl, engine.gbuffer_fbo())
 //! msaa.resolve(gl, &Frame::from_matrix(engine.projection().to_cols_array()))?;  // into its textures
 //! msaa.destroy(gl);                               // at shutdown
 //! ```
@@ -103,7 +103,7 @@ fn run(args: Args) -> AnyResult<()> {
             )?;
             let result = (|| -> AnyResult<image::RgbaImage> {
                 // MSAA (2 of 4): the unchanged geometry pass draws into the twins.
-                engine.geometry_pass(gl, msaa.framebuffer())?;
+                engine.geometry_pass(gl, msaa.begin_frame(gl)?)?;
                 // MSAA (3 of 4): resolve into the engine's own G-buffer textures.
                 msaa.resolve(gl, &Frame::from_matrix(engine.projection().to_cols_array()))?;
                 // The unchanged lighting pass reads the resolved G-buffer.

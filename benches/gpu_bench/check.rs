@@ -240,7 +240,7 @@ pub(crate) fn check_retrofit(
         return Ok(Offer::NotOffered(format!("the driver gave {samples}x")));
     }
     checked.push(samples);
-    draw_into(gl, host, msaa.framebuffer(), model)?;
+    draw_into(gl, host, msaa.begin_frame(gl)?, model)?;
     let (depth_ref, color_refs, _) = msaa.inputs()?;
     let inputs = color_refs
         .iter()
@@ -261,6 +261,8 @@ pub(crate) fn check_retrofit(
     let mut comparisons = Vec::new();
     for fast_path in [true, false] {
         msaa.set_options(gl, &options_for(layout, requested, fast_path))?;
+        // The same frame drawn again, as the resolve requires a begun one.
+        draw_into(gl, host, msaa.begin_frame(gl)?, model)?;
         msaa.resolve(gl, &frame)?;
         let resolved = host
             .colors

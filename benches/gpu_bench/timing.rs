@@ -165,7 +165,7 @@ pub(crate) fn time_count(
                         return Err(e);
                     }
                 };
-            let t = Timed {
+            let mut t = Timed {
                 key,
                 label,
                 layout: layout.clone(),
@@ -173,7 +173,7 @@ pub(crate) fn time_count(
                 msaa,
             };
             // Both permutations compiled now, so switching later only picks one.
-            let ready = draw_into(gl, &t.host, t.msaa.framebuffer(), model).and_then(|()| {
+            let ready = draw_into(gl, &t.host, t.msaa.begin_frame(gl)?, model).and_then(|()| {
                 let real = t.msaa.samples();
                 if real == samples {
                     Ok(())
@@ -202,6 +202,10 @@ pub(crate) fn time_count(
                     let o = options_for(&t.layout, samples, want_fast);
                     t.msaa.set_options(gl, &o)?;
                 }
+                // A frame as a host draws it, outside the timed stretch: the
+                // resolve requires begin_frame and a cleared, drawn twin.
+                let fbo = t.msaa.begin_frame(gl)?;
+                draw_into(gl, &t.host, fbo, model)?;
                 wall.begin(gl);
                 if let Some(q) = query.as_mut() {
                     q.begin(gl);

@@ -82,9 +82,10 @@ fn run(args: &Args) -> Result<(), String> {
     };
     let mut msaa = MsaaRetrofit::new(gl, host.engine.fbo.raw(), &options).map_err(e)?;
     let samples = msaa.samples();
-    let twin = msaa.framebuffer();
+    let twin = msaa.begin_frame(gl).map_err(e)?;
 
-    // The host's geometry pass, once, into the multisampled twin.
+    // The host's geometry pass into the multisampled twin (again before
+    // each resolve timed, outside the timed stretch).
     unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(twin)) };
     host.draw(gl);
     unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, None) };
@@ -186,6 +187,16 @@ fn run(args: &Args) -> Result<(), String> {
     let mut once = |m: Method| -> deferred_msaa::Result<(f64, Option<f64>)> {
         if let Some((_, v)) = variants.iter().find(|(method, _)| *method == m) {
             msaa.set_options(gl, v)?;
+        }
+        if matches!(
+            m,
+            Method::ResolveFast | Method::ResolveExact | Method::ResolveNoFast
+        ) {
+            // A resolve requires a begun frame: drawn again, untimed.
+            let fbo = msaa.begin_frame(gl)?;
+            unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo)) };
+            host.draw(gl);
+            unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, None) };
         }
         wall.begin(gl);
         if let Some(q) = query.as_mut() {

@@ -45,6 +45,11 @@ impl Renderer {
             .plan
             .constant_specular
             .unwrap_or([0.04, 0.04, 0.04, 0.0]);
+        // The way into a frame with twins: the geometry pass's clear
+        // reaches them after it (MsaaRetrofit::begin_frame).
+        if let Some(retrofit) = self.frame.retrofit.as_mut() {
+            retrofit.begin_frame(gl)?;
+        }
         let frame = FrameParts {
             aa,
             gbuffer: &self.frame.gbuffer,

@@ -441,7 +441,7 @@ fn a_host_retrofitted_through_the_public_api_matches_the_builtin_pipeline() {
     // The two integration lines.
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &retrofit_options).expect("retrofit");
     assert_eq!(msaa.samples(), renderer.samples());
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
     let emissive = layout.index_of("emissive").unwrap() as u32;
     host.draw(
         gl,

@@ -102,7 +102,9 @@ impl ClearTarget {
 /// never cleared that way: with the values declared
 /// (`RetrofitOptions::twin_clear`) and `begin_frame` each frame, the frame
 /// is right, frame after frame, and the same as a host that clears through
-/// the twins; the clear values land in the twins exactly.
+/// the twins; the clear values land in the twins exactly. Without them,
+/// every frame's resolve returns `Error::TwinsNotCleared` naming the fix
+/// and writes nothing.
 #[test]
 fn a_host_clearing_through_another_framebuffer_declares_its_clear_values() {
     let Some(ctx) = common::egl_context() else {
@@ -119,7 +121,7 @@ fn a_host_clearing_through_another_framebuffer_declares_its_clear_values() {
     };
     // The right frame: a host clearing through the twins.
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
     unsafe {
         gl.clear_buffer_f32_slice(glow::COLOR, 0, &[0.0, 0.0, 0.0, 0.0]);
         gl.clear_buffer_f32_slice(glow::COLOR, 1, &[0.0, 0.0, -65504.0, 1.0]);
@@ -166,21 +168,40 @@ fn a_host_clearing_through_another_framebuffer_declares_its_clear_values() {
     assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
     msaa.destroy(gl);
 
-    // Without the declaration the twins are never cleared: the frame is
-    // not the host's (what the docs' contract warns of).
+    // Without the declaration the twins are never cleared: each frame's
+    // resolve says so, naming the fix, and resolves nothing (the host's
+    // textures keep what its own clear put there).
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
-    clear.clear(gl);
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
-    host.draw_without_clear(gl, &projection(), false);
-    msaa.resolve(gl, &frame()).unwrap();
-    let position = readback
-        .read(gl, TextureRef::from(&host.colors[1].1), 1)
-        .unwrap()
-        .data;
+    let mut cleared = Vec::new();
+    for n in 0..3 {
+        clear.clear(gl);
+        cleared = host
+            .colors
+            .iter()
+            .map(|(_, t)| readback.read(gl, TextureRef::from(t), 1).unwrap().data)
+            .collect::<Vec<_>>();
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
+        host.draw_without_clear(gl, &projection(), false);
+        match msaa.resolve(gl, &frame()) {
+            Err(e @ Error::TwinsNotCleared { .. }) => {
+                let text = e.to_string();
+                assert!(
+                    text.contains("twin_clear") && text.contains("begin_frame"),
+                    "the error names the fix: {text}"
+                );
+            }
+            other => panic!("frame {n}: an uncleared twin resolved as {other:?}"),
+        }
+        for (k, (_, t)) in host.colors.iter().enumerate() {
+            let got = readback.read(gl, TextureRef::from(t), 1).unwrap().data;
+            assert!(got == cleared[k], "frame {n}: attachment {k} was written");
+        }
+    }
     assert!(
-        position != want[1],
-        "an uncleared twin gave the right frame: the test shows nothing"
+        cleared[1] != want[1],
+        "the host's cleared positions are the resolved frame's: the test shows nothing"
     );
+    assert_eq!(unsafe { gl.get_error() }, glow::NO_ERROR);
     msaa.destroy(gl);
     readback.destroy(gl);
     clear.destroy(gl);
@@ -233,6 +254,7 @@ fn a_deleted_twin_or_a_failed_bind_is_a_returned_error() {
     // The engine's next geometry pass binds the deleted name: an error the
     // host left pending, returned by the resolve.
     msaa.refresh(gl).unwrap();
+    msaa.begin_frame(gl).unwrap();
     unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo)) };
     match msaa.resolve(gl, &frame()) {
         Err(e @ Error::HostGl { .. }) => {

@@ -178,7 +178,7 @@ impl DepthTestedLighting {
 
 /// The geometry pass into the retrofit and its resolve.
 fn geometry(gl: &glow::Context, host: &Host, msaa: &mut MsaaRetrofit) -> deferred_msaa::Result<()> {
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
     host.draw(gl, &projection(), false);
     msaa.resolve(gl, &frame())
 }

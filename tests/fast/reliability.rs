@@ -90,7 +90,7 @@ fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
             ..RetrofitOptions::default()
         };
         let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
-        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
         host.draw(
             gl,
             &perspective(0.9, w as f64 / h as f64, 0.5, Some(100.0)),
@@ -99,7 +99,7 @@ fn a_thousand_create_resize_resample_destroy_cycles_leak_nothing() {
         msaa.resolve(gl, &frame(w, h)).unwrap();
         // Change the sample count at run time, then resize the host and refresh.
         msaa.set_samples(gl, 4).unwrap();
-        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
         host.draw(
             gl,
             &perspective(0.9, w as f64 / h as f64, 0.5, Some(100.0)),
@@ -201,7 +201,7 @@ fn render_once(
     let mut rb = Readback::new(gl).unwrap();
     let mut out = Vec::new();
     for _ in 0..frames {
-        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
         host.draw(gl, &perspective(0.9, 1.5, 0.5, Some(100.0)), false);
         msaa.resolve(gl, &frame(w, h)).unwrap();
         let frame = rb.read(gl, TextureRef::from(host.color()), 1).unwrap().data;

@@ -173,7 +173,7 @@ const GEOMETRY_ONLY: &str = "uniform sampler2D u_color;\nuniform sampler2D u_dep
 
 /// The geometry pass into the retrofit and its resolve.
 fn geometry(gl: &glow::Context, host: &Host, msaa: &mut MsaaRetrofit) -> deferred_msaa::Result<()> {
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
     host.draw(gl, &projection(), false);
     msaa.resolve(gl, &frame())
 }

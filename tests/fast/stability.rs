@@ -119,7 +119,13 @@ fn run(
         ..RetrofitOptions::default()
     };
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
-    unsafe { glow::HasContext::bind_framebuffer(gl, glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe {
+        glow::HasContext::bind_framebuffer(
+            gl,
+            glow::FRAMEBUFFER,
+            Some(msaa.begin_frame(gl).unwrap()),
+        )
+    };
     let m = case.projection();
     host.draw(gl, &m, case.reversed);
     msaa.resolve(
@@ -409,7 +415,13 @@ fn hdr_values_up_to_65504_stay_finite() {
         ..RetrofitOptions::default()
     };
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
-    unsafe { glow::HasContext::bind_framebuffer(gl, glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe {
+        glow::HasContext::bind_framebuffer(
+            gl,
+            glow::FRAMEBUFFER,
+            Some(msaa.begin_frame(gl).unwrap()),
+        )
+    };
     let m = perspective(1.2, 1.0, 0.1, Some(100.0));
     host.draw(gl, &m, false);
     msaa.resolve(gl, &deferred_msaa_testkit::projection::frame(&m, false))

@@ -154,7 +154,7 @@ fn a_front_face_a_side_sliver_and_a_wall_keep_their_shares() {
     let frame = deferred_msaa_testkit::projection::frame(&projection(), false);
     unsafe {
         use glow::HasContext;
-        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer()));
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap()));
     }
     host.draw(gl, &projection(), false);
     // The samples, before the resolve reads them.

@@ -69,7 +69,9 @@ typedef enum {
   DMSAA_STATUS_INVALID_ARGUMENT = 2,
   // A call out of order: `dmsaa_begin_second_layer` before this frame's
   // `dmsaa_resolve` or twice, `dmsaa_finish_second_layer` without
-  // `dmsaa_begin_second_layer`, `dmsaa_resolve` between the two.
+  // `dmsaa_begin_second_layer`, `dmsaa_resolve` between the two or
+  // without `dmsaa_begin_frame` since the last `dmsaa_resolve` (or
+  // `dmsaa_refresh`).
   DMSAA_STATUS_OUT_OF_ORDER = 3,
   // The host framebuffer cannot be retrofitted as it is (no depth
   // attachment, an already multisampled attachment, a rule or key naming
@@ -103,6 +105,17 @@ typedef enum {
   // `dmsaa_begin_second_layer` and `dmsaa_begin_forward`, having done
   // nothing.
   DMSAA_STATUS_LAYER_MIX_UNDECLARED = 10,
+  // The multisampled twins were not cleared between
+  // [`dmsaa_begin_frame`](crate::dmsaa_begin_frame) and
+  // [`dmsaa_resolve`](crate::dmsaa_resolve) (the host clears its
+  // G-buffer through another framebuffer, or before
+  // `dmsaa_begin_frame`, and declared no clear values): much of their
+  // depth still holds the value `dmsaa_begin_frame` put there. Returned
+  // by `dmsaa_resolve`, having resolved nothing: by the first frame's
+  // at once, by a later frame's at the next `dmsaa_resolve`. Clear
+  // through `dmsaa_begin_frame`'s framebuffer after the call, or set
+  // `clear_twins` and the clear values.
+  DMSAA_STATUS_TWINS_NOT_CLEARED = 11,
 } DmsaaStatus;
 
 // A host G-buffer retrofitted with MSAA: the multisampled twins, the
@@ -423,12 +436,16 @@ DmsaaStatus dmsaa_retrofit_new(DmsaaGetProcAddress get_proc_address,
 // Errors: `DMSAA_STATUS_NULL_POINTER` for a null `retrofit` or `out_fbo`.
 DmsaaStatus dmsaa_framebuffer(DmsaaRetrofit *retrofit, uint32_t *out_fbo);
 
-// The start of a frame: check that the multisampled framebuffer and its
-// textures still exist (something that deletes them, such as a
-// render-target wrapper deleting what it wraps, makes every later frame
-// stale), clear the twins to the options' `clear_*` values where
-// `clear_twins` is 1, and give [`dmsaa_framebuffer`]'s framebuffer in
-// `*out_fbo`, to bind for the geometry pass.
+// The start of a frame, required before each frame's geometry pass: check
+// that the multisampled framebuffer and its textures still exist
+// (something that deletes them, such as a render-target wrapper deleting
+// what it wraps, makes every later frame stale), prepare the twins, and
+// give [`dmsaa_framebuffer`]'s framebuffer in `*out_fbo`, to bind for the
+// geometry pass. With `clear_twins` 1 the twins are cleared to the
+// options' `clear_*` values; with 0 their depth is cleared to a sentinel
+// that the host's own clear of `*out_fbo` replaces, and [`dmsaa_resolve`]
+// returns `DMSAA_STATUS_TWINS_NOT_CLEARED` for a frame in which much of
+// it is left.
 //
 // Threading: the host's context current on the calling thread. The host's
 // GL state is as it was.
@@ -482,7 +499,10 @@ DmsaaStatus dmsaa_second_layer_selection(DmsaaRetrofit *retrofit, uint32_t *out_
 // `projection`, or a null `view_or_null` with world-space positions;
 // `DMSAA_STATUS_INVALID_ARGUMENT` for a projection that is not a GL
 // perspective matrix; `DMSAA_STATUS_OUT_OF_ORDER` between
-// [`dmsaa_begin_second_layer`] and [`dmsaa_finish_second_layer`];
+// [`dmsaa_begin_second_layer`] and [`dmsaa_finish_second_layer`], or
+// without [`dmsaa_begin_frame`] since the last resolve;
+// `DMSAA_STATUS_TWINS_NOT_CLEARED` where nothing cleared the twins after
+// `dmsaa_begin_frame`;
 // `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the host re-allocated,
 // deleted or replaced an attachment since it was read (call
 // [`dmsaa_refresh`]); `DMSAA_STATUS_GL`.

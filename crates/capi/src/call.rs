@@ -49,6 +49,8 @@ impl Failure {
             Error::MemoryBudget { .. } => DmsaaStatus::MemoryBudget,
             Error::SecondLighting(_) => DmsaaStatus::SecondLighting,
             Error::LayerMixUndeclared { .. } => DmsaaStatus::LayerMixUndeclared,
+            Error::TwinsNotCleared { .. } => DmsaaStatus::TwinsNotCleared,
+            Error::FrameNotBegun { .. } => DmsaaStatus::OutOfOrder,
             _ => DmsaaStatus::Gl,
         };
         Failure::new(status, error.to_string())

@@ -198,12 +198,16 @@ pub unsafe extern "C" fn dmsaa_framebuffer(
     })
 }
 
-/// The start of a frame: check that the multisampled framebuffer and its
-/// textures still exist (something that deletes them, such as a
-/// render-target wrapper deleting what it wraps, makes every later frame
-/// stale), clear the twins to the options' `clear_*` values where
-/// `clear_twins` is 1, and give [`dmsaa_framebuffer`]'s framebuffer in
-/// `*out_fbo`, to bind for the geometry pass.
+/// The start of a frame, required before each frame's geometry pass: check
+/// that the multisampled framebuffer and its textures still exist
+/// (something that deletes them, such as a render-target wrapper deleting
+/// what it wraps, makes every later frame stale), prepare the twins, and
+/// give [`dmsaa_framebuffer`]'s framebuffer in `*out_fbo`, to bind for the
+/// geometry pass. With `clear_twins` 1 the twins are cleared to the
+/// options' `clear_*` values; with 0 their depth is cleared to a sentinel
+/// that the host's own clear of `*out_fbo` replaces, and [`dmsaa_resolve`]
+/// returns `DMSAA_STATUS_TWINS_NOT_CLEARED` for a frame in which much of
+/// it is left.
 ///
 /// Threading: the host's context current on the calling thread. The host's
 /// GL state is as it was.
@@ -306,7 +310,10 @@ pub unsafe extern "C" fn dmsaa_second_layer_selection(
 /// `projection`, or a null `view_or_null` with world-space positions;
 /// `DMSAA_STATUS_INVALID_ARGUMENT` for a projection that is not a GL
 /// perspective matrix; `DMSAA_STATUS_OUT_OF_ORDER` between
-/// [`dmsaa_begin_second_layer`] and [`dmsaa_finish_second_layer`];
+/// [`dmsaa_begin_second_layer`] and [`dmsaa_finish_second_layer`], or
+/// without [`dmsaa_begin_frame`] since the last resolve;
+/// `DMSAA_STATUS_TWINS_NOT_CLEARED` where nothing cleared the twins after
+/// `dmsaa_begin_frame`;
 /// `DMSAA_STATUS_UNSUITABLE_FRAMEBUFFER` when the host re-allocated,
 /// deleted or replaced an attachment since it was read (call
 /// [`dmsaa_refresh`]); `DMSAA_STATUS_GL`.

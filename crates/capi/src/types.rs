@@ -27,7 +27,9 @@ pub enum DmsaaStatus {
     InvalidArgument = 2,
     /// A call out of order: `dmsaa_begin_second_layer` before this frame's
     /// `dmsaa_resolve` or twice, `dmsaa_finish_second_layer` without
-    /// `dmsaa_begin_second_layer`, `dmsaa_resolve` between the two.
+    /// `dmsaa_begin_second_layer`, `dmsaa_resolve` between the two or
+    /// without `dmsaa_begin_frame` since the last `dmsaa_resolve` (or
+    /// `dmsaa_refresh`).
     OutOfOrder = 3,
     /// The host framebuffer cannot be retrofitted as it is (no depth
     /// attachment, an already multisampled attachment, a rule or key naming
@@ -61,6 +63,17 @@ pub enum DmsaaStatus {
     /// `dmsaa_begin_second_layer` and `dmsaa_begin_forward`, having done
     /// nothing.
     LayerMixUndeclared = 10,
+    /// The multisampled twins were not cleared between
+    /// [`dmsaa_begin_frame`](crate::dmsaa_begin_frame) and
+    /// [`dmsaa_resolve`](crate::dmsaa_resolve) (the host clears its
+    /// G-buffer through another framebuffer, or before
+    /// `dmsaa_begin_frame`, and declared no clear values): much of their
+    /// depth still holds the value `dmsaa_begin_frame` put there. Returned
+    /// by `dmsaa_resolve`, having resolved nothing: by the first frame's
+    /// at once, by a later frame's at the next `dmsaa_resolve`. Clear
+    /// through `dmsaa_begin_frame`'s framebuffer after the call, or set
+    /// `clear_twins` and the clear values.
+    TwinsNotCleared = 11,
 }
 
 /// The GL loader a host already has: returns the address of the GL entry

@@ -152,6 +152,35 @@ pub enum Error {
     #[error("{0}")]
     SecondLighting(String),
 
+    /// `resolve` without `begin_frame` since the last `resolve` (or since
+    /// `refresh`): the crate cannot know the twins were cleared for this
+    /// frame.
+    #[error(
+        "resolve was called without begin_frame since the last resolve{since}: call MsaaRetrofit::begin_frame (C dmsaa_begin_frame) at the start of every frame, before the geometry pass clears and draws into the framebuffer it returns; nothing was resolved"
+    )]
+    FrameNotBegun {
+        /// `""`, or `" or refresh"` where new twins were made since.
+        since: &'static str,
+    },
+
+    /// The multisampled twins were not cleared between `begin_frame` and
+    /// `resolve`: their depth still holds the value `begin_frame` put
+    /// there over much of the frame.
+    #[error(
+        "{pixels} of {total} pixels of the multisampled G-buffer were not cleared between begin_frame and resolve{when} (their depth still holds the value begin_frame put there), so the geometry pass drew against stale depth and the frame would be black or stale; {}: clear through the framebuffer begin_frame returns (MsaaRetrofit::framebuffer, dmsaa_begin_frame's) after begin_frame, as the host cleared its own G-buffer, or declare the host's clear values in RetrofitOptions::twin_clear (C: DmsaaOptions::clear_twins = 1 with clear_colors, clear_depth and clear_stencil) for begin_frame to clear to; docs/hosts.md, \"Clears and wrappers\"",
+        if *last_frame { "this frame was not resolved" } else { "nothing was resolved" },
+        when = if *last_frame { " in the last frame" } else { "" }
+    )]
+    TwinsNotCleared {
+        /// Pixels whose depth still held the sentinel.
+        pixels: u64,
+        /// Pixels of the frame.
+        total: u64,
+        /// Whether the count is the last frame's (read a frame late so that
+        /// no frame waits on the GPU).
+        last_frame: bool,
+    },
+
     /// Two lit layers (or the forward target's samples) would be mixed in
     /// a floating-point output with [`LayerMix::Auto`](crate::LayerMix::Auto):
     /// the right domain is the host's tonemap, which GL state cannot tell.

@@ -25,8 +25,11 @@
 //! // on this thread.
 //! let mut msaa = unsafe { ForeignRetrofit::new(load, gbuffer, &RetrofitOptions::default())? };
 //!
-//! // Every frame: bind `msaa.framebuffer()` (a `NonZeroU32`; in glow 0.17,
-//! // `glow::NativeFramebuffer(msaa.framebuffer())`) for the geometry pass.
+//! // Every frame: bind what `begin_frame` gives (a `NonZeroU32`; in glow
+//! // 0.17, `glow::NativeFramebuffer(fbo)`) for the geometry pass, whose
+//! // own clear then clears it.
+//! let fbo = msaa.begin_frame()?;
+//! # let _ = fbo;
 //! msaa.resolve(&Frame::from_matrix(projection))?; // into the host's own textures
 //! // ... the host's lighting ...
 //!
@@ -158,8 +161,10 @@ impl ForeignRetrofit {
         self.retrofit.framebuffer().0
     }
 
-    /// [`MsaaRetrofit::begin_frame`]: check the twins still exist, clear
-    /// them where [`RetrofitOptions::twin_clear`] says, and give
+    /// [`MsaaRetrofit::begin_frame`], required each frame before the
+    /// geometry pass: check the twins still exist, clear them to
+    /// [`RetrofitOptions::twin_clear`]'s values (or their depth to the
+    /// sentinel the host's own clear replaces), and give
     /// [`ForeignRetrofit::framebuffer`].
     pub fn begin_frame(&mut self) -> Result<NonZeroU32> {
         Ok(self.retrofit.begin_frame(&self.gl)?.0)

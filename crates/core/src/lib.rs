@@ -1,8 +1,9 @@
 //! # deferred-msaa
 //!
 //! Depth-aware multi-sample anti-aliasing for OpenGL 3.2+ deferred renderers,
-//! added to an existing engine in two lines: bind the crate's multisampled
-//! twin of the engine's G-buffer for the geometry pass, then call `resolve`,
+//! added to an existing engine in three calls a frame: `begin_frame`, which
+//! gives the crate's multisampled twin of the engine's G-buffer to bind for
+//! the geometry pass (its own clear and draws, unchanged), then `resolve`,
 //! which writes the engine's **own** G-buffer textures. The engine's model
 //! and lighting shaders do not change.
 //!
@@ -39,15 +40,16 @@
 //! let mut msaa = MsaaRetrofit::new(gl, engine_fbo, &RetrofitOptions::default())?;
 //!
 //! // Every frame:
-//! unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) }; // 1. instead of the engine's FBO
-//! // ... the engine's unchanged geometry pass (here just a clear) ...
+//! let fbo = msaa.begin_frame(gl)?; // 1. the way into a frame
+//! unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo)) }; // 2. instead of the engine's FBO
+//! // ... the engine's unchanged geometry pass: its clear, its draws (here just a clear) ...
 //! # unsafe {
 //! #     gl.viewport(0, 0, width, height);
 //! #     gl.clear_color(0.25, 0.5, 0.75, 1.0);
 //! #     gl.clear_depth_f64(1.0);
 //! #     gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
 //! # }
-//! msaa.resolve(gl, &Frame::from_matrix(projection))?; // 2. into the engine's own textures
+//! msaa.resolve(gl, &Frame::from_matrix(projection))?; // 3. into the engine's own textures
 //! // ... the engine's unchanged lighting pass reads its own G-buffer ...
 //! # let mut texel = [0u16; 4];
 //! # unsafe {
@@ -97,6 +99,7 @@
 //! (`deferred-msaa-lab`) sit on top and are never needed by a host.
 #![warn(missing_docs)]
 
+mod clear_check;
 pub mod error;
 pub mod foreign;
 pub mod forward;

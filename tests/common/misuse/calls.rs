@@ -429,19 +429,19 @@ impl Run<'_> {
         }
     }
 
-    /// The host's geometry pass into `which`'s framebuffer: a uniform
-    /// value per attachment.
+    /// The host's frame into `which`'s framebuffer, begun as every frame
+    /// is: a uniform value per attachment.
     pub(super) fn draw(&mut self, index: usize, which: Which) {
         let raw = self.handle(which);
         let mut fbo = 0u32;
-        let status = self.call(index, "dmsaa_framebuffer", |_| unsafe {
-            c::dmsaa_framebuffer(raw, &mut fbo)
+        let status = self.call(index, "dmsaa_begin_frame", |_| unsafe {
+            c::dmsaa_begin_frame(raw, &mut fbo)
         });
         if status != c::DmsaaStatus::Ok {
             return;
         }
         let Some(fbo) = std::num::NonZeroU32::new(fbo).map(glow::NativeFramebuffer) else {
-            self.fail(index, "dmsaa_framebuffer gave 0".into());
+            self.fail(index, "dmsaa_begin_frame gave 0".into());
             return;
         };
         self.draw_into(fbo);

@@ -276,7 +276,7 @@ impl Run<'_> {
             }
             Op::Draw(which) => {
                 if let Some(k) = live(self, which) {
-                    if let Some(fbo) = self.retrofits[k].as_ref().map(|(r, _)| r.framebuffer()) {
+                    if let Some(fbo) = self.begin_rust(index, k) {
                         self.draw_into(fbo);
                     }
                 }
@@ -325,7 +325,7 @@ impl Run<'_> {
                     return true;
                 }
                 let expected = self.expected_frame();
-                if let Some(fbo) = self.retrofits[k].as_ref().map(|(r, _)| r.framebuffer()) {
+                if let Some(fbo) = self.begin_rust(index, k) {
                     self.draw_into(fbo);
                 }
                 if self.resolve_rust(index, which, Projection::Perspective, true) {
@@ -353,6 +353,20 @@ impl Run<'_> {
             }
         }
         true
+    }
+
+    /// A Rust API `begin_frame` of retrofit `k`: the framebuffer to draw
+    /// the frame into, where it succeeded.
+    fn begin_rust(&mut self, index: usize, k: usize) -> Option<glow::Framebuffer> {
+        let gl = self.gl;
+        let mut fbo = None;
+        self.call_rust(index, "MsaaRetrofit::begin_frame", |run| {
+            if let Some((r, _)) = run.retrofits[k].as_mut() {
+                fbo = Some(r.begin_frame(gl)?);
+            }
+            Ok(())
+        });
+        fbo
     }
 
     /// A Rust API resolve of `which`'s retrofit (if it has one); whether it

@@ -245,7 +245,14 @@ pub(super) fn frame_checks(
 ) {
     geometry.draw(gl, host, host.fbo);
     let reference = read_planes(gl, host);
-    geometry.draw(gl, host, msaa.framebuffer());
+    let fbo = match msaa.begin_frame(gl) {
+        Ok(fbo) => fbo,
+        Err(e) => {
+            failures.push(format!("{what}: begin_frame failed: {e}"));
+            return;
+        }
+    };
+    geometry.draw(gl, host, fbo);
     clutter(gl, rng, host, geometry);
     let resolved = around(gl, &format!("{what}: resolve"), host, failures, || {
         msaa.resolve(gl, &frame(host))

@@ -82,7 +82,16 @@ fn retrofitted(
     checked("ForeignRetrofit::new", &before, &mut failures);
 
     // The geometry pass into the retrofit's framebuffer, named in glow 0.17.
-    host.geometry_pass(gl, glow017::NativeFramebuffer(msaa.framebuffer()));
+    let before = GlState::capture(state);
+    let fbo = match msaa.begin_frame() {
+        Ok(f) => f,
+        Err(e) => {
+            failures.push(format!("begin_frame: {e}"));
+            msaa.framebuffer()
+        }
+    };
+    checked("begin_frame", &before, &mut failures);
+    host.geometry_pass(gl, glow017::NativeFramebuffer(fbo));
     let before = GlState::capture(state);
     if let Err(e) = msaa.resolve(&Frame::from_matrix(projection())) {
         failures.push(format!("resolve: {e}"));
@@ -123,8 +132,8 @@ fn retrofitted(
         }
     }
 
-    // A second frame through the other calls: begin_frame, the second
-    // layer lit into the crate's own target, and the forward target with
+    // A second frame through the other calls: the second layer lit into
+    // the crate's own target, and the forward target with
     // no forward object drawn, which must leave the lit image as it was.
     let frame_fbo = match msaa.begin_frame() {
         Ok(f) => f,

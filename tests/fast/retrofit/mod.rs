@@ -145,7 +145,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
         "the driver offered {samples}x but allocated another count"
     );
     // Two lines: draw into our FBO, resolve.
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
     host.draw(gl, &projection(), false);
 
     let mut readback = Readback::new(gl).unwrap();
@@ -245,6 +245,11 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
                     ..default_options.clone()
                 };
                 msaa.set_options(gl, &options).unwrap();
+                // The same frame again: a resolve takes a begun one.
+                unsafe {
+                    gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap()))
+                };
+                host.draw(gl, &projection(), false);
                 msaa.resolve(gl, &frame()).unwrap();
                 let resolved: Vec<_> = [host.color(), host.position(), host.normal()]
                     .iter()
@@ -347,7 +352,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
         // A second layer changes what the retrofit allocates, so its twins
         // are new: the host draws into them again.
         msaa.set_options(gl, &options).unwrap();
-        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
         host.draw(gl, &projection(), false);
         msaa.resolve(gl, &frame()).unwrap();
         let (colors, depth) = msaa.second_layer_gbuffer().unwrap();
@@ -474,7 +479,7 @@ fn sample_count_and_size_changes_rebuild_the_twins() {
         msaa.set_samples(gl, requested).unwrap();
         // Drivers round: the count is read back, never assumed.
         assert!(msaa.samples() >= requested.max(1));
-        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
         host.draw(gl, &projection(), false);
         msaa.resolve(gl, &frame()).unwrap();
     }
@@ -483,6 +488,8 @@ fn sample_count_and_size_changes_rebuild_the_twins() {
     assert!(matches!(e, Error::UnsupportedSampleCount { .. }), "{e}");
     assert!(e.to_string().contains("offers"), "{e}");
     // A failed change leaves the retrofit working.
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
+    host.draw(gl, &projection(), false);
     msaa.resolve(gl, &frame()).unwrap();
     msaa.destroy(gl);
     host.destroy(gl);
@@ -514,7 +521,7 @@ fn profiling_times_each_step_and_changes_nothing() {
     };
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
     let mut frame_of = |msaa: &mut MsaaRetrofit| {
-        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
         host.draw(gl, &projection(), false);
         msaa.resolve(gl, &frame()).unwrap();
         host.light(gl, fbo.raw(), 1.0);
@@ -539,7 +546,7 @@ fn profiling_times_each_step_and_changes_nothing() {
     assert!(times_ok);
     assert_eq!(
         steps,
-        "resolve, second layer: selection, second layer: resolve, second layer: count, \
+        "clear check, resolve, second layer: selection, second layer: resolve, second layer: count, \
          second layer: keep lit first layer, second layer: save host G-buffer, \
          second layer: copy in, second layer: depth into host, the host's second lighting, \
          second layer: keep lit second layer, second layer: mix, \

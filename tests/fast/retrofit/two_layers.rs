@@ -51,7 +51,7 @@ fn second_layer_calls_out_of_order_are_errors() {
     assert!(text.contains("resolve"), "{text}");
     let text = one_line(msaa.finish_second_layer(gl, output).unwrap_err());
     assert!(text.contains("begin_second_layer"), "{text}");
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
     host.draw(gl, &projection(), false);
     msaa.resolve(gl, &frame()).unwrap();
     assert!(msaa.begin_second_layer(gl, output).unwrap());
@@ -194,7 +194,7 @@ fn the_lit_layers_mix_by_coverage_in_the_chosen_domain() {
             ..RetrofitOptions::default()
         };
         let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
-        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
         host.draw(gl, &projection(), false);
         msaa.resolve(gl, &frame()).unwrap();
         let coverage = readback
@@ -298,7 +298,7 @@ fn nothing_declared_into_a_float_output_is_refused() {
     };
     assert_eq!(options.layer_mix, LayerMix::Auto, "the default");
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
     host.draw(gl, &projection(), false);
     msaa.resolve(gl, &frame()).unwrap();
     host.light(gl, fbo.raw(), 1.0);
@@ -337,7 +337,7 @@ fn nothing_declared_into_a_float_output_is_refused() {
     // Declared, the same retrofit runs the second layer.
     options.layer_mix = LayerMix::Tonemapped;
     msaa.set_options(gl, &options).unwrap();
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
     host.draw(gl, &projection(), false);
     msaa.resolve(gl, &frame()).unwrap();
     host.light(gl, fbo.raw(), 1.0);
@@ -404,7 +404,7 @@ fn without_restoring_the_first_layer_the_lit_image_is_the_same() {
             let mut options = options.clone();
             options.restore_first_layer = restore;
             msaa.set_options(gl, &options).unwrap();
-            unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+            unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
             host.draw(gl, &projection(), false);
             msaa.resolve(gl, &frame()).unwrap();
             host.light(gl, fbo.raw(), 1.0);
@@ -528,7 +528,7 @@ fn the_second_layer_selection_marks_exactly_the_covered_pixels() {
         ..one
     };
     msaa.set_options(gl, &two).unwrap();
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
     host.draw(gl, &projection(), false);
     msaa.resolve(gl, &frame()).unwrap();
     let selection = msaa
@@ -680,7 +680,7 @@ fn two_layers_on_wide_gbuffers_at_the_contexts_draw_buffers() {
         };
         let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options)
             .unwrap_or_else(|e| panic!("{label}: two layers refused where one is accepted: {e}"));
-        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+        unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
         host.draw(gl, &projection(), false);
         msaa.resolve(gl, &frame()).unwrap();
         let n = msaa.samples();
@@ -822,7 +822,7 @@ fn the_second_layer_leaves_out_the_attachments_the_host_names() {
     options.resolve.layers = 2;
     let mut msaa = MsaaRetrofit::new(gl, host.fbo.raw(), &options).unwrap();
     let mut readback = Readback::new(gl).unwrap();
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.framebuffer())) };
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
     host.draw(gl, &projection(), false);
     msaa.resolve(gl, &frame()).unwrap();
     let first: Vec<_> = host

@@ -787,7 +787,7 @@ fn a_world_space_key_without_the_view_matrix_is_refused_in_one_line() {
     let host = LearnOpenGl::new(gl, W, harness::H);
     let mut msaa = deferred_msaa::MsaaRetrofit::new(gl, host.gbuffer(), &world_key_options())
         .expect("the tutorial layout is accepted");
-    host.geometry_pass(gl, msaa.framebuffer());
+    host.geometry_pass(gl, msaa.begin_frame(gl).unwrap());
     let error = msaa
         .resolve(gl, &host.frame())
         .expect_err("a world-space key needs the view matrix");

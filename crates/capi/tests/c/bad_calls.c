@@ -2,7 +2,8 @@
  * Every bad call a C host can make returns an error status with a
  * one-line message, and the process keeps running: null options, a null
  * handle, a zero FBO, an FBO without depth, the second layer's calls out
- * of order, options out of range, a projection that is not one, a loader
+ * of order, a resolve of a frame not begun or of twins nothing cleared,
+ * options out of range, a projection that is not one, a loader
  * without one GL function, a name that is no framebuffer. Each bad
  * call prints one line, "bad call: NAME: status S: MESSAGE"; a valid
  * retrofit made afterwards still resolves. Exits non-zero, saying why, if
@@ -54,6 +55,19 @@ static void expect_message(const char *text, const char *name)
         fprintf(stderr, "FAIL: %s left GL error 0x%x\n", name, error);
         failures++;
     }
+}
+
+/* A frame as a host begins it: dmsaa_begin_frame, then its own clear of
+   the framebuffer it gives (the geometry pass draws nothing here). */
+static int begin_cleared(DmsaaRetrofit *msaa)
+{
+    uint32_t fbo = 0;
+    if (dmsaa_begin_frame(msaa, &fbo) != DMSAA_STATUS_OK)
+        return 0;
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    return 1;
 }
 
 static GLuint texture(GLint internal, GLenum format, GLenum type)
@@ -200,8 +214,21 @@ int main(void)
     expect(dmsaa_second_layer_selection(msaa, NULL), DMSAA_STATUS_NULL_POINTER,
            "null out_texture");
 
+    /* a frame not begun, and one begun but never cleared */
+    expect(dmsaa_resolve(msaa, projection, NULL), DMSAA_STATUS_OUT_OF_ORDER,
+           "resolve without begin_frame");
+    expect_message("begin_frame", "resolve without begin_frame");
+    uint32_t twin = 0;
+    if (dmsaa_begin_frame(msaa, &twin) != DMSAA_STATUS_OK) {
+        fprintf(stderr, "FAIL: begin_frame: %s\n", dmsaa_last_error());
+        failures++;
+    }
+    expect(dmsaa_resolve(msaa, projection, NULL), DMSAA_STATUS_TWINS_NOT_CLEARED,
+           "resolve of twins nothing cleared");
+    expect_message("clear_twins", "resolve of twins nothing cleared");
+
     /* the process keeps running and the retrofit keeps working */
-    if (dmsaa_resolve(msaa, projection, NULL) != DMSAA_STATUS_OK) {
+    if (!begin_cleared(msaa) || dmsaa_resolve(msaa, projection, NULL) != DMSAA_STATUS_OK) {
         fprintf(stderr, "FAIL: resolve after the bad calls: %s\n", dmsaa_last_error());
         failures++;
     }
@@ -229,7 +256,7 @@ int main(void)
     expect(dmsaa_refresh_with(msaa, 0), DMSAA_STATUS_INVALID_ARGUMENT, "refresh_with 0");
     expect(dmsaa_refresh_with(msaa, 9999), DMSAA_STATUS_INVALID_ARGUMENT,
            "refresh_with a name that is no framebuffer");
-    if (dmsaa_refresh_with(msaa, gbuffer) != DMSAA_STATUS_OK ||
+    if (dmsaa_refresh_with(msaa, gbuffer) != DMSAA_STATUS_OK || !begin_cleared(msaa) ||
         dmsaa_resolve(msaa, projection, NULL) != DMSAA_STATUS_OK) {
         fprintf(stderr, "FAIL: refresh_with the G-buffer, then resolve: %s\n", dmsaa_last_error());
         failures++;

@@ -17,7 +17,7 @@
 // values out of the shaders) beside the chapter's own.
 //
 // The retrofit as a new user adds it from docs/capi.md: the G-buffer
-// bound through dmsaa_framebuffer and dmsaa_resolve after the geometry
+// bound through dmsaa_begin_frame and dmsaa_resolve after the geometry
 // pass (one layer); dmsaa_begin_second_layer_own_target, the lighting
 // quad again into the framebuffer it gives (stencil-tested on the
 // selection), dmsaa_finish_second_layer (two layers); and the light cubes
@@ -112,7 +112,7 @@ static void frame(Engine &e, const Variant &v, DmsaaRetrofit *msaa)
 
     GLuint geometryTarget = e.gBuffer;
     if (msaa)
-        ok(dmsaa_framebuffer(msaa, &geometryTarget), "dmsaa_framebuffer");
+        ok(dmsaa_begin_frame(msaa, &geometryTarget), "dmsaa_begin_frame");
     geometryPass(e, geometryTarget);
     if (msaa)
         ok(dmsaa_resolve(msaa, e.projection.m.data(), e.view.m.data()), "dmsaa_resolve");
@@ -306,7 +306,7 @@ static void naiveSecondLighting(Engine &e)
         return;
     glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
     GLuint fbo = 0;
-    ok(dmsaa_framebuffer(msaa, &fbo), "dmsaa_framebuffer");
+    ok(dmsaa_begin_frame(msaa, &fbo), "dmsaa_begin_frame");
     geometryPass(e, fbo);
     ok(dmsaa_resolve(msaa, e.projection.m.data(), e.view.m.data()), "dmsaa_resolve");
     glBindFramebuffer(GL_FRAMEBUFFER, 0);

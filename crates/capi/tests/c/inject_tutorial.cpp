@@ -245,7 +245,7 @@ int main(int argc, char **argv)
         // 1. geometry pass
         GLuint geometryTarget = e.gBuffer;
 #ifdef DMSAA_IN_SOURCE
-        ok(dmsaa_framebuffer(msaa, &geometryTarget), "dmsaa_framebuffer");
+        ok(dmsaa_begin_frame(msaa, &geometryTarget), "dmsaa_begin_frame");
 #endif
         geometryPass(e, geometryTarget);
 #ifdef DMSAA_IN_SOURCE

@@ -4,7 +4,7 @@
  * deferred-msaa`): a tutorial-style G-buffer (RGBA16F position and normal,
  * unsized GL_RGBA albedo, a GL_DEPTH_COMPONENT renderbuffer, three draw
  * buffers) retrofitted through dmsaa_options_default, dmsaa_retrofit_new,
- * dmsaa_framebuffer, dmsaa_resolve and dmsaa_destroy. A clear of the
+ * dmsaa_begin_frame, dmsaa_resolve and dmsaa_destroy. A clear of the
  * multisampled framebuffer stands for the geometry pass; the resolve must
  * then have written the clear colour into the host's own albedo texture.
  *
@@ -50,8 +50,8 @@ int main(void)
         return 1;
     }
     uint32_t fbo = 0;
-    if (dmsaa_framebuffer(msaa, &fbo) != DMSAA_STATUS_OK || fbo == 0) {
-        fprintf(stderr, "FAIL: dmsaa_framebuffer: %s\n", dmsaa_last_error());
+    if (dmsaa_begin_frame(msaa, &fbo) != DMSAA_STATUS_OK || fbo == 0) {
+        fprintf(stderr, "FAIL: dmsaa_begin_frame: %s\n", dmsaa_last_error());
         return 1;
     }
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);

@@ -758,7 +758,7 @@ static void retrofitted_frame(Engine *e, uint32_t layers, bool masked, const cha
 
     /* 1. the geometry pass, into the multisampled framebuffer */
     GLuint fbo = 0;
-    check_status(dmsaa_framebuffer(msaa, &fbo), "dmsaa_framebuffer");
+    check_status(dmsaa_begin_frame(msaa, &fbo), "dmsaa_begin_frame");
     geometry_pass(e, fbo);
     /* 2. the resolve, into the engine's own G-buffer */
     capture(e, &state);

@@ -375,12 +375,7 @@ impl Resolver {
         params: &ResolveParams,
         run: DrawRun<'_>,
     ) -> Result<()> {
-        if matches!(inputs.key, KeySource::WorldPosition(_)) && params.view_row.is_none() {
-            return Err(Error::invalid(
-                "the depth key is a world-space position, so each frame needs the view matrix \
-                 (Frame::with_view)",
-            ));
-        }
+        check_view(inputs.key, params.view_row)?;
         // An error the host left pending is not the resolve's: report it apart.
         if let Err(e) = check_error(gl, "the host's GL calls before the resolve") {
             log::warn!("{e}");
@@ -548,4 +543,15 @@ fn build_program(gl: &glow::Context, key: &ResolveProgramKey) -> Result<Program>
         p.set_f32(gl, "u_infinity", f32::INFINITY);
     });
     Ok(program)
+}
+
+/// A world-space key needs each frame's view matrix.
+pub(crate) fn check_view(key: KeySource, view_row: Option<[f64; 4]>) -> Result<()> {
+    if matches!(key, KeySource::WorldPosition(_)) && view_row.is_none() {
+        return Err(Error::invalid(
+            "the depth key is a world-space position, so each frame needs the view matrix \
+             (Frame::with_view)",
+        ));
+    }
+    Ok(())
 }

@@ -1,8 +1,9 @@
-//! The two-line integration: multisampled twins of a host engine's G-buffer,
+//! The integration: multisampled twins of a host engine's G-buffer,
 //! resolved back into the host's own textures.
 //!
 //! ```text
-//! geometry pass:  gl.bind_framebuffer(FRAMEBUFFER, Some(msaa.framebuffer()));   // instead of the host's
+//! each frame:     let fbo = msaa.begin_frame(&gl)?;                              // checks, prepares the twins
+//! geometry pass:  gl.bind_framebuffer(FRAMEBUFFER, Some(fbo));                   // instead of the host's, then its clear
 //! after it:       msaa.resolve(&gl, &params)?;                                    // writes the host's textures
 //! ```
 //! The host's model and lighting shaders do not change: the twins have the
@@ -15,6 +16,7 @@ mod rebuild;
 mod stencil_copy;
 mod twins;
 
+use crate::clear_check::{ClearCheck, SENTINEL_DEPTH};
 use crate::forward::ForwardTarget;
 use crate::frame::Frame;
 use crate::gbuffer::{MemoryBudget, MultisampleTwin, TwinSpec, budget_twins};
@@ -36,7 +38,7 @@ use checks::{check_stencil_copy_point, clear_host_errors, not_resolved, settle};
 use glow::HasContext;
 pub use options::{NormalAttachment, PositionSpace, RetrofitOptions, TwinClear};
 use stencil_copy::StencilCopyTargets;
-use twins::{clear_twins, twin_format, unsigned_normalised};
+use twins::{clear_twin_depth, clear_twins, twin_format, unsigned_normalised};
 
 /// A host G-buffer retrofitted with MSAA: multisampled twins to draw into and
 /// a resolve that writes the host's original textures.
@@ -61,6 +63,13 @@ pub struct MsaaRetrofit {
     profile: StepProfile,
     /// The forward target, once asked for ([`MsaaRetrofit::begin_forward`]).
     forward: Option<ForwardTarget>,
+    /// `begin_frame` was called since the last `resolve` (or `refresh`).
+    frame_begun: bool,
+    /// Whether a `refresh` made new twins since the last `resolve`.
+    refreshed: bool,
+    /// The check that the twins were cleared, where the host declared no
+    /// clear values (`begin_frame` then clears the depth to a sentinel).
+    clear_check: Option<ClearCheck>,
 }
 
 /// What [`MsaaRetrofit::build`] makes from the host's framebuffer.
@@ -125,9 +134,10 @@ impl MsaaRetrofit {
         host_fbo: glow::Framebuffer,
         options: &RetrofitOptions,
     ) -> Result<Self> {
-        let (resolver, built) = Made::build(gl, |made| {
+        let (resolver, clear_check, built) = Made::build(gl, |made| {
             let resolver = made.keep(Resolver::new(gl)?);
-            Ok::<_, Error>((resolver, Self::build(gl, host_fbo, options)?))
+            let clear_check = made.keep(ClearCheck::new(gl)?);
+            Ok::<_, Error>((resolver, clear_check, Self::build(gl, host_fbo, options)?))
         })?;
         let mut retrofit = Owned::new(
             gl,
@@ -145,6 +155,9 @@ impl MsaaRetrofit {
                 second: built.second,
                 profile: StepProfile::default(),
                 forward: None,
+                frame_begun: false,
+                refreshed: false,
+                clear_check: Some(clear_check),
             },
         );
         retrofit.prepare(gl)?;
@@ -527,29 +540,40 @@ impl MsaaRetrofit {
         self.twin.fbo.raw()
     }
 
-    /// The start of a frame: check that the multisampled framebuffer and
-    /// its twins still exist (a render-target wrapper that deletes what it
-    /// wraps when dropped deletes them, and the frame after would resolve
-    /// stale samples), clear the twins to
-    /// [`RetrofitOptions::twin_clear`]'s values where the host declared
-    /// them, and return [`MsaaRetrofit::framebuffer`] to bind for the
-    /// geometry pass. The host's GL state is as it was.
+    /// The start of a frame, required before each frame's geometry pass:
+    /// check that the multisampled framebuffer and its twins still exist (a
+    /// render-target wrapper that deletes what it wraps when dropped
+    /// deletes them, and the frame after would resolve stale samples),
+    /// prepare the twins, and return [`MsaaRetrofit::framebuffer`] to bind
+    /// for the geometry pass. The host's GL state is as it was.
+    ///
+    /// With [`RetrofitOptions::twin_clear`] declared, the twins are cleared
+    /// to its values. Without, their depth is cleared to a sentinel value
+    /// that the host's own clear of the framebuffer replaces, and
+    /// [`MsaaRetrofit::resolve`] returns [`Error::TwinsNotCleared`] for a
+    /// frame in which much of it is left (nothing cleared the twins after
+    /// this call: the host clears its G-buffer through another
+    /// framebuffer, or before `begin_frame`), instead of resolving a black
+    /// or stale frame.
     ///
     /// Errors: [`Error::Retrofit`] naming the deleted object (then
     /// [`MsaaRetrofit::refresh`] makes new twins), and the GL layer's.
     pub fn begin_frame(&mut self, gl: &glow::Context) -> Result<glow::Framebuffer> {
         clear_host_errors(gl);
         self.check_twins(gl)?;
-        if let Some(clear) = &self.options.twin_clear {
-            let host = SetupState::capture(gl).guard(gl);
-            clear_twins(gl, &self.host, &self.twin, clear);
-            drop(host);
+        let host = SetupState::capture(gl).guard(gl);
+        match &self.options.twin_clear {
+            Some(clear) => clear_twins(gl, &self.host, &self.twin, clear),
+            None => clear_twin_depth(gl, &self.twin, SENTINEL_DEPTH),
         }
-        settle(
+        drop(host);
+        let result = settle(
             gl,
             "clearing the multisampled twins",
             Ok(self.twin.fbo.raw()),
-        )
+        );
+        self.frame_begun = result.is_ok();
+        result
     }
 
     /// The multisampled framebuffer and textures exist: nobody else deleted
@@ -680,7 +704,11 @@ impl MsaaRetrofit {
     /// `finish_second_layer` or for a projection that is not a GL
     /// perspective; [`Error::Retrofit`] when the host re-allocated, deleted
     /// or replaced an attachment since the retrofit read it (call
-    /// [`MsaaRetrofit::refresh`]); [`Error::Gl`].
+    /// [`MsaaRetrofit::refresh`]); [`Error::HostGl`] for an error the
+    /// host's calls left pending; [`Error::FrameNotBegun`] without
+    /// [`MsaaRetrofit::begin_frame`] since the last resolve (or refresh);
+    /// [`Error::TwinsNotCleared`] where nothing cleared the twins after it
+    /// (nothing is resolved; see `begin_frame`); [`Error::Gl`].
     pub fn resolve(&mut self, gl: &glow::Context, frame: &Frame) -> Result<()> {
         if self.second.as_ref().is_some_and(|s| s.lighting) {
             return Err(Error::invalid(
@@ -688,6 +716,7 @@ impl MsaaRetrofit {
             ));
         }
         let params = self.params(frame)?;
+        crate::resolve::check_view(self.key, params.view_row)?;
         self.check_twins(gl)?;
         // An error the host's calls left pending (a geometry pass that
         // failed to bind its framebuffer, say) means the twins may not hold
@@ -699,6 +728,14 @@ impl MsaaRetrofit {
             return Err(Error::HostGl { code, code_name });
         }
         crate::host::check_unchanged(gl, &self.host)?;
+        if !self.frame_begun {
+            return Err(Error::FrameNotBegun {
+                since: if self.refreshed { " or refresh" } else { "" },
+            });
+        }
+        // The frame is this call's from here, resolved or refused.
+        self.frame_begun = false;
+        self.refreshed = false;
         let extra = self.extra_outputs();
         if let Some(second) = &mut self.second {
             second.end_first_lighting(gl);
@@ -706,9 +743,24 @@ impl MsaaRetrofit {
         // A frame begins: its profile replaces the last one's.
         let mut profile = std::mem::take(&mut self.profile);
         profile.clear();
-        let result = self.resolve_profiled(gl, &params, extra, &mut profile);
+        let result = self
+            .check_cleared(gl, &mut profile)
+            .and_then(|()| self.resolve_profiled(gl, &params, extra, &mut profile));
         self.profile = profile;
         settle(gl, "resolving", result)
+    }
+
+    /// Where the host declared no clear values: check that it cleared the
+    /// twins after `begin_frame` (the sentinel's pixels counted).
+    fn check_cleared(&mut self, gl: &glow::Context, profile: &mut StepProfile) -> Result<()> {
+        if self.options.twin_clear.is_some() {
+            return Ok(());
+        }
+        let (Some(check), Some(depth)) = (&mut self.clear_check, self.twin.depth()) else {
+            return Ok(());
+        };
+        let target = &self.target;
+        profile.time(gl, "clear check", || check.check(gl, depth, target))
     }
 
     fn resolve_profiled(
@@ -791,5 +843,6 @@ impl GlObject for MsaaRetrofit {
         self.second.handles(out);
         self.resolver.handles(out);
         self.forward.handles(out);
+        self.clear_check.handles(out);
     }
 }

@@ -127,6 +127,13 @@ impl MsaaRetrofit {
         match self.prepare(gl) {
             Ok(()) => {
                 drop(old);
+                // New twins: a frame begins on them with begin_frame, and
+                // their first check waits for its count.
+                self.frame_begun = false;
+                self.refreshed = true;
+                if let Some(check) = &mut self.clear_check {
+                    check.reset();
+                }
                 // The forward target attaches the old twins' depth.
                 if let Some(forward) = self.forward.take() {
                     destroy_object(gl, forward);

@@ -137,3 +137,15 @@ pub(super) fn clear_twins(
         }
     }
 }
+
+/// Clear `twin`'s depth alone to `depth` (its stencil, colours and the
+/// host's state as they are; the caller keeps the host's state).
+pub(super) fn clear_twin_depth(gl: &glow::Context, twin: &MultisampleTwin, depth: f32) {
+    unsafe {
+        twin.fbo.bind(gl);
+        gl.disable(glow::SCISSOR_TEST);
+        gl.disable(glow::RASTERIZER_DISCARD);
+        gl.depth_mask(true);
+        gl.clear_buffer_f32_slice(glow::DEPTH, 0, &[depth]);
+    }
+}

@@ -57,6 +57,9 @@ pub(super) struct Retrofit {
     pub(super) layers: u32,
     /// Whether the G-buffer was read back after its first resolve.
     pub(super) looked: bool,
+    /// Whether `dmsaa_begin_frame` began the frame being drawn (at the
+    /// first hand-out of the twin or replayed clear after a resolve).
+    pub(super) begun: bool,
 }
 
 // SAFETY: the handle is used only under the state's lock, with the

@@ -27,9 +27,13 @@ impl Context {
             }
             self.make(g)?;
         }
-        let handle = self.retrofit.as_ref()?.handle;
+        let (handle, begun) = self.retrofit.as_ref().map(|r| (r.handle, r.begun))?;
         if self.needs_refresh {
             self.needs_refresh = false;
+            // New twins: the frame begins on them.
+            if let Some(r) = self.retrofit.as_mut() {
+                r.begun = false;
+            }
             // SAFETY: a live handle; this context current.
             let status = self.checked("dmsaa_refresh", |_| unsafe { capi::dmsaa_refresh(handle) });
             if status != capi::DmsaaStatus::Ok {
@@ -37,14 +41,34 @@ impl Context {
                 return None;
             }
         }
+        let begun = begun && self.retrofit.as_ref().is_some_and(|r| r.begun);
         let mut twin = 0u32;
-        // SAFETY: a live handle and a writable u32.
-        let status = self.checked("dmsaa_framebuffer", |_| unsafe {
-            capi::dmsaa_framebuffer(handle, &mut twin)
-        });
+        // The frame's first use of the twins (a bind of the G-buffer or a
+        // clear through a framebuffer sharing it) begins it: before the
+        // program's clear reaches the twins.
+        let (call, status) = if begun {
+            // SAFETY: a live handle and a writable u32.
+            (
+                "dmsaa_framebuffer",
+                self.checked("dmsaa_framebuffer", |_| unsafe {
+                    capi::dmsaa_framebuffer(handle, &mut twin)
+                }),
+            )
+        } else {
+            // SAFETY: as above, this context current.
+            (
+                "dmsaa_begin_frame",
+                self.checked("dmsaa_begin_frame", |_| unsafe {
+                    capi::dmsaa_begin_frame(handle, &mut twin)
+                }),
+            )
+        };
         if status != capi::DmsaaStatus::Ok || twin == 0 {
-            self.fail("dmsaa_framebuffer");
+            self.fail(call);
             return None;
+        }
+        if let Some(r) = self.retrofit.as_mut() {
+            r.begun = true;
         }
         Some(twin)
     }
@@ -135,15 +159,23 @@ impl Context {
             world_space,
             layers: options.layers,
             looked: false,
+            begun: false,
         });
         Some(())
     }
 
     pub(super) fn resolve(&mut self) {
         self.twin_drawn = false;
-        let Some(r) = self.retrofit.as_ref() else {
+        let Some(r) = self.retrofit.as_mut() else {
             return;
         };
+        // The next frame begins at its first use of the twins.
+        let begun = std::mem::replace(&mut r.begun, false);
+        if !begun {
+            // Nothing of this frame reached the twins: no resolve.
+            return;
+        }
+        let r = &*r;
         let (handle, world_space, layers) = (r.handle, r.world_space, r.layers);
         let (Some(projection), view) = (self.projection, self.view) else {
             return;

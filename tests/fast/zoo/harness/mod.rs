@@ -458,7 +458,18 @@ pub fn run<T: ZooHost>(
         failures.push(format!("MsaaRetrofit::new changed the host's state: {d}"));
     }
     let samples = msaa.samples();
-    host.geometry_pass(gl, msaa.framebuffer());
+    let before_begin = GlState::capture(gl);
+    let twin = match msaa.begin_frame(gl) {
+        Ok(fbo) => fbo,
+        Err(e) => {
+            failures.push(format!("begin_frame failed: {e}"));
+            msaa.framebuffer()
+        }
+    };
+    for d in before_begin.differences(&GlState::capture(gl)) {
+        failures.push(format!("begin_frame changed the host's state: {d}"));
+    }
+    host.geometry_pass(gl, twin);
     clutter.apply(ctx, &host);
     let before = GlState::capture(gl);
     let resolved = msaa.resolve(gl, &frame(&host));
