@@ -25,6 +25,10 @@ macro_rules! watched_functions {
             glUniformMatrix4fv(location: i32, count: i32, transpose: u8, value: *const f32);
             glGetIntegerv(pname: u32, data: *mut i32);
             glClear(mask: u32);
+            glClearBufferfv(buffer: u32, drawbuffer: i32, value: *const f32);
+            glClearBufferiv(buffer: u32, drawbuffer: i32, value: *const i32);
+            glClearBufferuiv(buffer: u32, drawbuffer: i32, value: *const u32);
+            glClearBufferfi(buffer: u32, drawbuffer: i32, depth: f32, stencil: i32);
             glDrawArrays(mode: u32, first: i32, count: i32);
             glDrawArraysInstanced(mode: u32, first: i32, count: i32, instances: i32);
             glDrawElements(mode: u32, count: i32, kind: u32, indices: *const c_void);

@@ -2,8 +2,10 @@
 //! G-buffer's textures (an engine's "clear" framebuffer) clears the
 //! G-buffer's textures, not the retrofit's framebuffer standing in for it:
 //! it is replayed there, attachment by attachment, with the values GL
-//! used (the clear colour, depth and stencil the program set; the same
-//! masks and scissor apply), and the draw framebuffer put back.
+//! used (the clear colour, depth and stencil the program set for
+//! `glClear`; each `glClearBuffer*` call's own values, on the attachment
+//! it reached; the same masks and scissor apply), and the draw framebuffer
+//! put back.
 
 use super::context::Context;
 use deferred_msaa_capi as capi;
@@ -34,20 +36,46 @@ unsafe fn attached(gl: &glow::Context, target: u32, attachment: u32) -> (u32, u3
     }
 }
 
+/// A `glClearBuffer*` call as the program made it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ClearBuffer {
+    /// `GL_COLOR`, `GL_DEPTH`, `GL_STENCIL` or `GL_DEPTH_STENCIL`.
+    pub(crate) buffer: u32,
+    /// The draw buffer (for `GL_COLOR`; 0 otherwise).
+    pub(crate) drawbuffer: i32,
+    /// The values it cleared to.
+    pub(crate) value: ClearValue,
+}
+
+/// The values of a `glClearBuffer*` call, by its kind.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum ClearValue {
+    /// `glClearBufferfv`: four colour values, or the depth first.
+    Float([f32; 4]),
+    /// `glClearBufferiv`: four colour values, or the stencil first.
+    Int([i32; 4]),
+    /// `glClearBufferuiv`: four colour values.
+    Uint([u32; 4]),
+    /// `glClearBufferfi`: depth and stencil.
+    DepthStencil(f32, i32),
+}
+
 impl Context {
     /// After `glClear(mask)` into the bound draw framebuffer: where it is
     /// not the G-buffer but shares attachments with it, the same clear on
     /// the retrofit's framebuffer.
-    pub(super) fn after_clear(&mut self, mask: u32) {
-        let Some(g) = self.gbuffer else {
-            return;
-        };
+    /// Where the bound draw framebuffer is not the G-buffer but shares a
+    /// colour texture with it: the G-buffer, that framebuffer, and the
+    /// twin to replay a clear on (the retrofit made now if it is not yet:
+    /// the G-buffer's next bind would make it, after this clear).
+    fn sharing_gbuffer(&mut self) -> Option<(u32, u32, u32)> {
+        let g = self.gbuffer?;
         let d = self.draw_fbo;
         if d == 0 || d == g || self.twin_bound || self.off || self.learning() {
-            return;
+            return None;
         }
-        // Whether the cleared framebuffer shares a colour texture with the
-        // G-buffer (the bound one, read as it is now).
+        // The G-buffer's textures, and the cleared framebuffer's read as
+        // it is now.
         let ours: Vec<u32> = self
             .framebuffers
             .get(&g)
@@ -59,11 +87,114 @@ impl Context {
             .iter()
             .any(|(_, t)| ours.contains(t))
         {
-            return;
+            return None;
         }
-        // The retrofit made now if it is not yet (the G-buffer's next bind
-        // would make it, after this clear).
-        let Some(twin) = self.twin() else {
+        let twin = self.twin()?;
+        Some((g, d, twin))
+    }
+
+    /// After `glClearBuffer*` into the bound draw framebuffer: where it is
+    /// not the G-buffer but shares attachments with it, the same clear of
+    /// the same attachment, with the same value, on the twin.
+    pub(super) fn after_clear_buffer(&mut self, call: ClearBuffer) {
+        let Some((g, d, twin)) = self.sharing_gbuffer() else {
+            return;
+        };
+        let mut replayed = false;
+        self.checked(
+            "a clear through a framebuffer sharing the G-buffer's, replayed",
+            |gl| {
+                // SAFETY: queries of the current context; the library's own
+                // framebuffer bound for the replay, the program's put back.
+                unsafe {
+                    let fbo = |n: u32| NonZeroU32::new(n).map(glow::NativeFramebuffer);
+                    let read_fbo = gl.get_parameter_i32(glow::READ_FRAMEBUFFER_BINDING) as u32;
+                    // The object the call cleared, and the G-buffer's
+                    // attachment point that holds it.
+                    let point = match call.buffer {
+                        glow::COLOR => {
+                            let b = gl.get_parameter_i32(
+                                glow::DRAW_BUFFER0 + call.drawbuffer.max(0) as u32,
+                            ) as u32;
+                            if !(glow::COLOR_ATTACHMENT0..glow::COLOR_ATTACHMENT0 + 8).contains(&b)
+                            {
+                                return capi::DmsaaStatus::Ok;
+                            }
+                            let object = attached(gl, glow::DRAW_FRAMEBUFFER, b);
+                            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, fbo(g));
+                            let found = (0..8).map(|k| glow::COLOR_ATTACHMENT0 + k).find(|&a| {
+                                object.0 != glow::NONE
+                                    && attached(gl, glow::READ_FRAMEBUFFER, a) == object
+                            });
+                            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, fbo(read_fbo));
+                            match found {
+                                Some(a) => a,
+                                None => return capi::DmsaaStatus::Ok,
+                            }
+                        }
+                        glow::DEPTH | glow::DEPTH_STENCIL | glow::STENCIL => {
+                            let a = if call.buffer == glow::STENCIL {
+                                glow::STENCIL_ATTACHMENT
+                            } else {
+                                glow::DEPTH_ATTACHMENT
+                            };
+                            let object = attached(gl, glow::DRAW_FRAMEBUFFER, a);
+                            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, fbo(g));
+                            let shares = object.0 != glow::NONE
+                                && attached(gl, glow::READ_FRAMEBUFFER, a) == object;
+                            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, fbo(read_fbo));
+                            if !shares {
+                                return capi::DmsaaStatus::Ok;
+                            }
+                            a
+                        }
+                        _ => return capi::DmsaaStatus::Ok,
+                    };
+                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, fbo(twin));
+                    if call.buffer == glow::COLOR {
+                        let max = gl.get_parameter_i32(glow::MAX_DRAW_BUFFERS).clamp(0, 8) as u32;
+                        let slot = (0..max).find(|&i| {
+                            gl.get_parameter_i32(glow::DRAW_BUFFER0 + i) as u32 == point
+                        });
+                        if let Some(i) = slot {
+                            match call.value {
+                                ClearValue::Float(v) => {
+                                    gl.clear_buffer_f32_slice(glow::COLOR, i, &v)
+                                }
+                                ClearValue::Int(v) => gl.clear_buffer_i32_slice(glow::COLOR, i, &v),
+                                ClearValue::Uint(v) => {
+                                    gl.clear_buffer_u32_slice(glow::COLOR, i, &v)
+                                }
+                                ClearValue::DepthStencil(..) => {}
+                            }
+                            replayed = true;
+                        }
+                    } else {
+                        match (call.buffer, call.value) {
+                            (glow::DEPTH, ClearValue::Float(v)) => {
+                                gl.clear_buffer_f32_slice(glow::DEPTH, 0, &v[..1])
+                            }
+                            (glow::STENCIL, ClearValue::Int(v)) => {
+                                gl.clear_buffer_i32_slice(glow::STENCIL, 0, &v[..1])
+                            }
+                            (glow::DEPTH_STENCIL, ClearValue::DepthStencil(depth, stencil)) => gl
+                                .clear_buffer_depth_stencil(glow::DEPTH_STENCIL, 0, depth, stencil),
+                            _ => {}
+                        }
+                        replayed = true;
+                    }
+                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, fbo(d));
+                }
+                capi::DmsaaStatus::Ok
+            },
+        );
+        if replayed {
+            self.twin_drawn = true;
+        }
+    }
+
+    pub(super) fn after_clear(&mut self, mask: u32) {
+        let Some((g, d, twin)) = self.sharing_gbuffer() else {
             return;
         };
         let mut replayed = false;

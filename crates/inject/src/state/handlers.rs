@@ -4,6 +4,7 @@
 // The handlers have the GL functions' own names.
 #![allow(non_snake_case)]
 
+use super::clears::{ClearBuffer, ClearValue};
 use super::context::Context;
 use super::run::{FRAMES, SEEN, left_alone, outcome_said, say_once, settings};
 use crate::real::{current_context, real_type};
@@ -349,6 +350,109 @@ pub(crate) fn glClear(real: real_type::glClear, mask: u32) {
     });
     unsafe { real(mask) };
     with_context(|cx| cx.after_clear(mask));
+}
+
+/// A `glClearBuffer*` call: through the twin it draws the frame; through
+/// a framebuffer sharing the G-buffer's textures it is replayed on the
+/// twin ([`Context::after_clear_buffer`]).
+fn clear_buffer(call: ClearBuffer, real: impl FnOnce()) {
+    with_context(|cx| {
+        if cx.twin_bound {
+            cx.twin_drawn = true;
+        }
+    });
+    real();
+    with_context(|cx| cx.after_clear_buffer(call));
+}
+
+pub(crate) fn glClearBufferfv(
+    real: real_type::glClearBufferfv,
+    buffer: u32,
+    drawbuffer: i32,
+    value: *const f32,
+) {
+    // SAFETY: GL reads four values for a colour, one for depth.
+    let values = unsafe { read_values(value, buffer) };
+    clear_buffer(
+        ClearBuffer {
+            buffer,
+            drawbuffer,
+            value: ClearValue::Float(values.map(|v| v.unwrap_or(0.0))),
+        },
+        || unsafe { real(buffer, drawbuffer, value) },
+    );
+}
+
+pub(crate) fn glClearBufferiv(
+    real: real_type::glClearBufferiv,
+    buffer: u32,
+    drawbuffer: i32,
+    value: *const i32,
+) {
+    // SAFETY: GL reads four values for a colour, one for stencil.
+    let values = unsafe { read_values(value, buffer) };
+    clear_buffer(
+        ClearBuffer {
+            buffer,
+            drawbuffer,
+            value: ClearValue::Int(values.map(|v| v.unwrap_or(0))),
+        },
+        || unsafe { real(buffer, drawbuffer, value) },
+    );
+}
+
+pub(crate) fn glClearBufferuiv(
+    real: real_type::glClearBufferuiv,
+    buffer: u32,
+    drawbuffer: i32,
+    value: *const u32,
+) {
+    // SAFETY: GL reads four values for a colour.
+    let values = unsafe { read_values(value, buffer) };
+    clear_buffer(
+        ClearBuffer {
+            buffer,
+            drawbuffer,
+            value: ClearValue::Uint(values.map(|v| v.unwrap_or(0))),
+        },
+        || unsafe { real(buffer, drawbuffer, value) },
+    );
+}
+
+pub(crate) fn glClearBufferfi(
+    real: real_type::glClearBufferfi,
+    buffer: u32,
+    drawbuffer: i32,
+    depth: f32,
+    stencil: i32,
+) {
+    clear_buffer(
+        ClearBuffer {
+            buffer,
+            drawbuffer,
+            value: ClearValue::DepthStencil(depth, stencil),
+        },
+        || unsafe { real(buffer, drawbuffer, depth, stencil) },
+    );
+}
+
+/// The values a `glClearBuffer*v` call reads: four for `GL_COLOR`, one
+/// otherwise (the rest `None`); none from a null pointer (GL's error).
+///
+/// # Safety
+///
+/// `value` is null or points at as many values as GL reads for `buffer`.
+unsafe fn read_values<T: Copy>(value: *const T, buffer: u32) -> [Option<T>; 4] {
+    let count = if buffer == glow::COLOR { 4 } else { 1 };
+    let mut out = [None; 4];
+    if value.is_null() {
+        return out;
+    }
+    for (k, slot) in out.iter_mut().enumerate().take(count) {
+        // SAFETY: the caller's.
+        *slot = Some(unsafe { *value.add(k) });
+    }
+    out
 }
 
 pub(crate) fn glDrawArrays(real: real_type::glDrawArrays, mode: u32, first: i32, count: i32) {
