@@ -108,6 +108,12 @@ pub struct Attachment {
     /// `"default"`, `"blend"`, `"blend-normal"`, `"blend-hdr"`, `"select"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rule: Option<String>,
+    /// The four values the program clears this attachment to, for a
+    /// program whose clear the library cannot follow: the retrofit then
+    /// clears its framebuffer to the profile's values at each frame's
+    /// start (`clear_twins`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clear: Option<Vec<f32>>,
 }
 
 /// Where the projection comes from: a uniform the program sets, or fixed
@@ -153,6 +159,17 @@ pub struct Retrofit {
     /// Whether the second lighting's occlusion check runs.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub check_second_lighting: Option<bool>,
+    /// Whether what the program draws into its lit target after the
+    /// lighting goes into the forward target (default true).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub forward: Option<bool>,
+    /// The depth the program clears its G-buffer to (with the attachments'
+    /// `clear`: the retrofit's framebuffer cleared to them each frame).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clear_depth: Option<f32>,
+    /// The stencil it clears to.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clear_stencil: Option<i32>,
 }
 
 /// The shipped profile for programs written as the LearnOpenGL
@@ -252,6 +269,17 @@ impl Profile {
                 }
                 _ => {}
             }
+            if let Some(clear) = &a.clear {
+                let values: [f32; 4] = clear.as_slice().try_into().map_err(|_| {
+                    bad(format!(
+                        "attachment {}: clear needs 4 numbers, has {}",
+                        a.index,
+                        clear.len()
+                    ))
+                })?;
+                options.clear_twins = 1;
+                options.clear_colors[k] = values;
+            }
             if let Some(rule) = &a.rule {
                 options.rules[k] = match rule.as_str() {
                     "default" => capi::DMSAA_RULE_DEFAULT,
@@ -324,6 +352,14 @@ impl Profile {
         if let Some(check) = r.check_second_lighting {
             options.check_second_lighting = u8::from(check);
         }
+        if let Some(depth) = r.clear_depth {
+            options.clear_twins = 1;
+            options.clear_depth = depth;
+        }
+        if let Some(stencil) = r.clear_stencil {
+            options.clear_twins = 1;
+            options.clear_stencil = stencil;
+        }
         Ok(options)
     }
 }
@@ -345,6 +381,20 @@ mod tests {
     }
 
     #[test]
+    fn stated_clear_values_clear_the_twins() {
+        let text = "[[attachment]]\nindex = 2\nclear = [0.0, 0.0, 65504.0, 1.0]\n\n[retrofit]\nclear_depth = 0.0\nforward = false\n";
+        let p = Profile::parse(text, "p.toml").expect("parses");
+        let o = p.options("p.toml").expect("valid");
+        assert_eq!(o.clear_twins, 1);
+        assert_eq!(o.clear_colors[2], [0.0, 0.0, 65504.0, 1.0]);
+        assert_eq!(o.clear_depth, 0.0);
+        assert_eq!(o.clear_stencil, 0);
+        assert_eq!(p.retrofit.and_then(|r| r.forward), Some(false));
+        let none = Profile::parse(TUTORIAL, "tutorial.toml").expect("parses");
+        assert_eq!(none.options("tutorial.toml").expect("valid").clear_twins, 0);
+    }
+
+    #[test]
     fn bad_values_are_one_line_errors() {
         for (text, needle) in [
             ("[retrofit]\nlayers = 3\n", "layers = 3"),
@@ -357,6 +407,10 @@ mod tests {
             ("[retrofit]\nsampels = 4\n", "not valid"),
             ("[lighting]\npass = 0\n", "counts from 1"),
             ("[projection]\nmatrix = [1.0, 0.0]\n", "16 numbers"),
+            (
+                "[[attachment]]\nindex = 1\nclear = [0.0, 1.0]\n",
+                "clear needs 4 numbers",
+            ),
         ] {
             let e = Profile::parse(text, "p.toml").expect_err(text).to_string();
             assert!(e.contains(needle), "{text:?}: {e}");

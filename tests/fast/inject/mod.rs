@@ -8,7 +8,9 @@
 //! run by the `deferred-msaa` binary's `inject --check`, draws the first's
 //! last frame bit for bit, through GLX and EGL, with the default options,
 //! with the shipped tutorial profile, and with that profile at two layers
-//! (the lighting pass recorded and replayed); the library's check finds no
+//! (the lighting pass recorded and replayed), its light cubes drawn after
+//! the lighting going into the forward target as the in-source build's
+//! `--forward` draws them; the library's check finds no
 //! GL state value changed and no GL error around any of its calls, and the
 //! frame differs from the program's own without MSAA (and two layers from
 //! one). The same after a resize and after the G-buffer is remade; and for
@@ -156,11 +158,14 @@ impl Run<'_> {
         let what = &self.what;
         let file = what.replace([' ', ','], "-");
         let expected = self.out.join(format!("{file}-in-source.rgba"));
+        // Under inject the light cubes drawn after the lighting go into the
+        // forward target (its default): the in-source build draws them so.
         capi::run(
             Command::new(in_source)
                 .arg(&expected)
                 .args(self.args)
                 .args(self.in_source_args)
+                .arg("--forward")
                 .env("DISPLAY", &self.display),
             &format!("the program retrofitted in its source, {what}"),
         );

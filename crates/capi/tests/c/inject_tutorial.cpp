@@ -12,7 +12,10 @@
 //                            before the first frame; with two layers, the
 //                            lighting quad drawn again into
 //                            dmsaa_begin_second_layer_own_target's
-//                            framebuffer, then dmsaa_finish_second_layer.
+//                            framebuffer, then dmsaa_finish_second_layer;
+//                            with --forward, the light cubes drawn into
+//                            dmsaa_begin_forward's framebuffer, then
+//                            dmsaa_finish_forward.
 //
 // Built with -DTUTORIAL_SDL, the window and the loader are SDL2's; with
 // -DTUTORIAL_LINK_GL (and -lGL), GL is called through libGL's symbols.
@@ -22,13 +25,15 @@
 // Exit status non-zero, with a line saying why, on a GL error or a failed
 // call.
 //
-// Usage: inject_tutorial OUT_FILE [--egl] [--tutorial-options] [--two-layers]
+// Usage: inject_tutorial OUT_FILE [--egl] [--tutorial-options] [--two-layers] [--forward]
 //                       [--resize | --recreate] [--pre-pass]
 //   --egl               the context through EGL (GLFW_EGL_CONTEXT_API)
 //   --tutorial-options  (in-source build) the options
 //                       crates/inject/profiles/tutorial.toml declares,
 //                       rather than dmsaa_options_default()
 //   --two-layers        (in-source build) two layers
+//   --forward           (in-source build) the light cubes into the forward
+//                       target, as `deferred-msaa inject` draws them
 //   --resize            before the last frame (the injected program is
 //                       retrofitted by then), the G-buffer's textures and
 //                       depth made anew at RESIZED_WIDTH x RESIZED_HEIGHT and
@@ -112,10 +117,11 @@ static bool ok(DmsaaStatus status, const char *call)
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options] [--two-layers] [--resize | --recreate] [--pre-pass]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options] [--two-layers] [--forward] [--resize | --recreate] [--pre-pass]\n", argv[0]);
         return 2;
     }
-    bool egl = false, tutorialOptions = false, twoLayers = false, resize = false, recreate = false, prePass = false;
+    bool egl = false, tutorialOptions = false, twoLayers = false, forward = false, resize = false, recreate = false,
+         prePass = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -123,6 +129,8 @@ int main(int argc, char **argv)
             tutorialOptions = true;
         else if (std::strcmp(argv[i], "--two-layers") == 0)
             twoLayers = true;
+        else if (std::strcmp(argv[i], "--forward") == 0)
+            forward = true;
         else if (std::strcmp(argv[i], "--resize") == 0)
             resize = true;
         else if (std::strcmp(argv[i], "--recreate") == 0)
@@ -207,6 +215,7 @@ int main(int argc, char **argv)
 #else
     (void)tutorialOptions;
     (void)twoLayers;
+    (void)forward;
 #endif
 
     Shader prePassShader(quadVs, prePassFs);
@@ -277,7 +286,16 @@ int main(int argc, char **argv)
         }
 #endif
         blitDepth(e, 0);
+#ifdef DMSAA_IN_SOURCE
+        GLuint forwardTarget = 0;
+        if (forward && ok(dmsaa_begin_forward(msaa, 0, &forwardTarget), "dmsaa_begin_forward"))
+            glBindFramebuffer(GL_FRAMEBUFFER, forwardTarget);
+#endif
         lightCubes(e);
+#ifdef DMSAA_IN_SOURCE
+        if (forwardTarget != 0)
+            ok(dmsaa_finish_forward(msaa, 0), "dmsaa_finish_forward");
+#endif
         checkGlErrors("a frame");
 
         if (frame == FRAMES - 1) {

@@ -16,6 +16,7 @@ macro_rules! watched_functions {
             glFramebufferRenderbuffer(target: u32, attachment: u32, rbtarget: u32, renderbuffer: u32);
             glNamedFramebufferTexture(framebuffer: u32, attachment: u32, texture: u32, level: i32);
             glNamedFramebufferRenderbuffer(framebuffer: u32, attachment: u32, rbtarget: u32, renderbuffer: u32);
+            glBlitFramebuffer(sx0: i32, sy0: i32, sx1: i32, sy1: i32, dx0: i32, dy0: i32, dx1: i32, dy1: i32, mask: u32, filter: u32);
             glBlitNamedFramebuffer(read: u32, draw: u32, sx0: i32, sy0: i32, sx1: i32, sy1: i32, dx0: i32, dy0: i32, dx1: i32, dy1: i32, mask: u32, filter: u32);
             glBindTextureUnit(unit: u32, texture: u32);
             glActiveTexture(unit: u32);

@@ -106,8 +106,10 @@ pub(crate) struct Context {
     pub(crate) draws: u64,
     pub(crate) passes: Vec<Pass>,
     pub(crate) last_frame: Vec<Pass>,
-    /// With two layers: the draws after this frame's resolve.
+    /// The draws after this frame's resolve, up to the lighting's end.
     pub(super) recording: Option<Recording>,
+    /// After the lighting: the forward target of the frame.
+    pub(super) forward: Option<super::forward::Forward>,
 }
 
 impl Context {
@@ -149,6 +151,7 @@ impl Context {
             passes: Vec::new(),
             last_frame: Vec::new(),
             recording: None,
+            forward: None,
         }
     }
 
@@ -225,6 +228,16 @@ impl Context {
     /// so the program goes on drawing into its own framebuffer.
     pub(super) fn give_up(&mut self) {
         self.off = true;
+        // A forward target bound in the lit target's place: the lit target
+        // bound back, so the program goes on drawing into it.
+        if let Some(super::forward::Forward {
+            output,
+            fbo: Some(_),
+        }) = self.forward.take()
+            && self.draw_fbo == output
+        {
+            real_bind(GL_DRAW_FRAMEBUFFER, output);
+        }
         if self.twin_bound {
             if let Some(g) = self.gbuffer {
                 real_bind(GL_DRAW_FRAMEBUFFER, g);

@@ -25,6 +25,14 @@ impl Context {
         }
         let draw = target == GL_FRAMEBUFFER || target == GL_DRAW_FRAMEBUFFER;
         let read = target == GL_FRAMEBUFFER || target == GL_READ_FRAMEBUFFER;
+        if self.forward_bind(target, name) {
+            // The forward target drawn in the lit target's place.
+            if read {
+                real(GL_READ_FRAMEBUFFER, name);
+                self.read_fbo = name;
+            }
+            return;
+        }
         let is_gbuffer = name != 0 && self.gbuffer == Some(name);
         if draw && is_gbuffer {
             if let Some(twin) = self.twin() {

@@ -28,6 +28,7 @@ impl Context {
             return;
         }
         let d = self.draw_fbo;
+        self.forward_draw(d);
         if self
             .recording
             .as_ref()
@@ -239,6 +240,7 @@ impl Context {
             self.second_layer();
         }
         self.recording = None;
+        self.forward_frame_ends();
         self.frames += 1;
         FRAMES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.last_frame = std::mem::take(&mut self.passes);

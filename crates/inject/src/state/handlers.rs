@@ -209,10 +209,18 @@ pub(crate) fn glBlitNamedFramebuffer(
     mask: u32,
     filter: u32,
 ) {
-    // A blit from the G-buffer reads it: resolved first.
+    // A blit from the G-buffer reads it: resolved first. One into (or
+    // from) the lit target while the forward target stands in for it: the
+    // forward target finished first.
     with_context(|cx| {
         if cx.twin_drawn && read != 0 && cx.gbuffer == Some(read) {
             cx.resolve();
+        }
+        if cx
+            .forward
+            .is_some_and(|f| f.fbo.is_some() && (f.output == draw || f.output == read))
+        {
+            cx.finish_forward();
         }
     });
     unsafe {
@@ -220,6 +228,27 @@ pub(crate) fn glBlitNamedFramebuffer(
             read, draw, sx0, sy0, sx1, sy1, dx0, dy0, dx1, dy1, mask, filter,
         )
     }
+}
+
+/// A blit into the bound draw framebuffer: where the forward target stands
+/// in for the lit target, finished first, so the blit reaches the lit
+/// target itself (a multisampled target takes no blit in GL 3.2).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn glBlitFramebuffer(
+    real: real_type::glBlitFramebuffer,
+    sx0: i32,
+    sy0: i32,
+    sx1: i32,
+    sy1: i32,
+    dx0: i32,
+    dy0: i32,
+    dx1: i32,
+    dy1: i32,
+    mask: u32,
+    filter: u32,
+) {
+    with_context(Context::forward_before_blit);
+    unsafe { real(sx0, sy0, sx1, sy1, dx0, dy0, dx1, dy1, mask, filter) }
 }
 
 pub(crate) fn glBindTextureUnit(real: real_type::glBindTextureUnit, unit: u32, texture: u32) {

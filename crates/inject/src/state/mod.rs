@@ -7,13 +7,15 @@
 //! another framebuffer sharing the G-buffer's attachments, replayed), [`content`] (the first resolve's G-buffer
 //! read back, a warning where it shows nothing), [`gbuffer`] (finding the G-buffer),
 //! [`framebuffers`] (the binds and attachments followed), [`retrofit`] (the
-//! C API's retrofit made, bound, resolved, its second layer), [`run`]
+//! C API's retrofit made, bound, resolved, its second layer), [`forward`]
+//! (what is drawn forward after the lighting, into the forward target), [`run`]
 //! (the settings and messages of the whole run) and [`learn`] (`--learn`'s
 //! profile).
 
 mod clears;
 mod content;
 mod context;
+mod forward;
 mod framebuffers;
 mod gbuffer;
 pub(crate) mod handlers;

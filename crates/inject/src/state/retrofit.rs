@@ -176,7 +176,7 @@ impl Context {
             return;
         }
         let r = &*r;
-        let (handle, world_space, layers) = (r.handle, r.world_space, r.layers);
+        let (handle, world_space) = (r.handle, r.world_space);
         let (Some(projection), view) = (self.projection, self.view) else {
             return;
         };
@@ -196,17 +196,17 @@ impl Context {
                     self.look_at_resolved(g);
                 }
             }
-            if layers == 2 {
-                let pass = settings()
-                    .profile
-                    .as_ref()
-                    .and_then(|p| p.lighting.as_ref())
-                    .map_or(1, |l| l.pass);
-                self.recording = Some(Recording {
-                    skip: pass.saturating_sub(1),
-                    ..Recording::default()
-                });
-            }
+            // The lighting's draws are recorded: replayed with two layers,
+            // and where they end, what follows is forward.
+            let pass = settings()
+                .profile
+                .as_ref()
+                .and_then(|p| p.lighting.as_ref())
+                .map_or(1, |l| l.pass);
+            self.recording = Some(Recording {
+                skip: pass.saturating_sub(1),
+                ..Recording::default()
+            });
         } else {
             self.fail("dmsaa_resolve");
         }
@@ -219,10 +219,14 @@ impl Context {
         let Some(recording) = self.recording.take() else {
             return;
         };
-        let Some(handle) = self.retrofit.as_ref().map(|r| r.handle) else {
+        let Some((handle, layers)) = self.retrofit.as_ref().map(|r| (r.handle, r.layers)) else {
             return;
         };
         let output = recording.target.unwrap_or(0);
+        if layers < 2 {
+            self.lighting_ended(output);
+            return;
+        }
         let draws = recording.draws;
         let mut failed = "the second layer";
         let status = self.checked(
@@ -256,6 +260,8 @@ impl Context {
         );
         if status != capi::DmsaaStatus::Ok {
             self.fail(failed);
+            return;
         }
+        self.lighting_ended(output);
     }
 }
