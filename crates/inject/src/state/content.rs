@@ -25,13 +25,24 @@ impl Context {
             return;
         };
         let textures = f.colour_textures.clone();
+        // A G-buffer of one array's layers: its size is the array's.
+        let target = if f.layered {
+            glow::TEXTURE_2D_ARRAY
+        } else {
+            glow::TEXTURE_2D
+        };
+        let binding = if f.layered {
+            glow::TEXTURE_BINDING_2D_ARRAY
+        } else {
+            glow::TEXTURE_BINDING_2D
+        };
         let mut uniform: Vec<(u32, [f32; 4])> = Vec::new();
         let mut read = 0;
         self.checked("the resolved G-buffer read back", |gl| {
             // SAFETY: queries and reads of the current context; every
             // binding and pixel-store value changed is put back.
             unsafe {
-                let active_binding = gl.get_parameter_i32(glow::TEXTURE_BINDING_2D) as u32;
+                let active_binding = gl.get_parameter_i32(binding) as u32;
                 let read_fbo = gl.get_parameter_i32(glow::READ_FRAMEBUFFER_BINDING) as u32;
                 let pack_buffer = gl.get_parameter_i32(glow::PIXEL_PACK_BUFFER_BINDING) as u32;
                 let pack: Vec<(u32, i32)> = [
@@ -61,11 +72,9 @@ impl Context {
                     if component == glow::INT || component == glow::UNSIGNED_INT {
                         continue;
                     }
-                    gl.bind_texture(glow::TEXTURE_2D, fbo(texture).map(glow::NativeTexture));
-                    let w =
-                        gl.get_tex_level_parameter_i32(glow::TEXTURE_2D, 0, glow::TEXTURE_WIDTH);
-                    let h =
-                        gl.get_tex_level_parameter_i32(glow::TEXTURE_2D, 0, glow::TEXTURE_HEIGHT);
+                    gl.bind_texture(target, fbo(texture).map(glow::NativeTexture));
+                    let w = gl.get_tex_level_parameter_i32(target, 0, glow::TEXTURE_WIDTH);
+                    let h = gl.get_tex_level_parameter_i32(target, 0, glow::TEXTURE_HEIGHT);
                     if w <= 0 || h <= 0 {
                         continue;
                     }
@@ -86,10 +95,7 @@ impl Context {
                     }
                 }
                 gl.read_buffer(read_buffer);
-                gl.bind_texture(
-                    glow::TEXTURE_2D,
-                    fbo(active_binding).map(glow::NativeTexture),
-                );
+                gl.bind_texture(target, fbo(active_binding).map(glow::NativeTexture));
                 for (p, v) in pack {
                     gl.pixel_store_i32(p, v);
                 }

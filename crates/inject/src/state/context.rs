@@ -85,6 +85,9 @@ pub(crate) struct Context {
     pub(super) program: u32,
     pub(super) active_unit: u32,
     pub(super) unit_textures: HashMap<u32, u32>,
+    /// The `GL_TEXTURE_2D_ARRAY` bound on each unit (a G-buffer of one
+    /// array's layers is read through it; never replayed).
+    pub(super) unit_arrays: HashMap<u32, u32>,
     /// (program, location) → "projection" or "view".
     pub(super) matrix_uniforms: HashMap<(u32, i32), bool>,
     /// (program, location) → uniform name, for `--learn`.
@@ -133,6 +136,7 @@ impl Context {
             program: 0,
             active_unit: 0,
             unit_textures: HashMap::new(),
+            unit_arrays: HashMap::new(),
             matrix_uniforms: HashMap::new(),
             uniform_names: HashMap::new(),
             matrices_set: Vec::new(),

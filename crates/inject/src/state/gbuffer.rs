@@ -80,9 +80,6 @@ impl Context {
                         if f.looks_like_gbuffer() {
                             s.candidates.insert(d);
                         }
-                        if f.layered {
-                            s.layered.insert(d);
-                        }
                     });
                 }
                 f.drawn = true;
@@ -162,18 +159,6 @@ impl Context {
             if let Some(f) = self.framebuffers.get(&draw)
                 && Self::matches_profile(p, f)
             {
-                if f.layered {
-                    say_once(
-                        "layered",
-                        &format!(
-                            "framebuffer {draw} has the profile's signature, but its colour attachments are layers \
-                             of one texture (glFramebufferTextureLayer): the retrofit takes a G-buffer of 2D \
-                             textures only; leaving the program untouched"
-                        ),
-                    );
-                    self.off = true;
-                    return;
-                }
                 self.gbuffer = Some(draw);
                 seen(|s| s.found = Some(draw));
             }
@@ -182,10 +167,13 @@ impl Context {
         let bound: HashSet<u32> = self
             .unit_textures
             .values()
+            .chain(self.unit_arrays.values())
             .copied()
             .filter(|&t| t != 0)
             .collect();
-        if bound.len() < 2 {
+        // Two colour attachments read together: two textures, or one
+        // array texture whose layers they are.
+        if bound.is_empty() {
             return;
         }
         let found: Vec<u32> = self

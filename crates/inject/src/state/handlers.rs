@@ -269,6 +269,10 @@ pub(crate) fn glBindTexture(real: real_type::glBindTexture, target: u32, texture
         with_context(|cx| {
             cx.unit_textures.insert(cx.active_unit, texture);
         });
+    } else if target == glow::TEXTURE_2D_ARRAY {
+        with_context(|cx| {
+            cx.unit_arrays.insert(cx.active_unit, texture);
+        });
     }
 }
 

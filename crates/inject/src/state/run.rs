@@ -77,8 +77,6 @@ pub(crate) struct Seen {
     pub(crate) draws: u64,
     /// Framebuffers drawn into with a G-buffer's shape.
     pub(crate) candidates: BTreeSet<u32>,
-    /// Framebuffers whose colour attachments are layers of one texture.
-    pub(crate) layered: BTreeSet<u32>,
     /// The G-buffer found last, and whether it was retrofitted.
     pub(crate) found: Option<u32>,
     pub(crate) retrofitted: bool,
@@ -92,7 +90,6 @@ pub(crate) struct Seen {
 pub(crate) static SEEN: Mutex<Seen> = Mutex::new(Seen {
     draws: 0,
     candidates: BTreeSet::new(),
-    layered: BTreeSet::new(),
     found: None,
     retrofitted: false,
     made_and_deleted: None,
@@ -147,13 +144,7 @@ pub(crate) fn left_alone(seen: &Seen, frames: u64, ended: bool) -> String {
              the program untouched"
         );
     }
-    let what = if !seen.layered.is_empty() {
-        format!(
-            "framebuffer(s) {:?} attach layers of one texture (glFramebufferTextureLayer): the retrofit takes a \
-             G-buffer of 2D textures only",
-            seen.layered.iter().collect::<Vec<_>>()
-        )
-    } else if !seen.candidates.is_empty() {
+    let what = if !seen.candidates.is_empty() {
         format!(
             "framebuffer(s) {:?} have the shape of a G-buffer, but no later draw read two of their colour \
              textures together (a profile can name it)",
