@@ -8,7 +8,7 @@
 // `deferred-msaa inject` is run on, to show the line the library says when
 // it leaves such a program alone.
 //
-// Usage: inject_oneshot OUT_FILE [--calls N] [--no-swap] [--keep [--clear-fbo [--clear-buffers]]] [--array]
+// Usage: inject_oneshot OUT_FILE [--calls N] [--no-swap] [--keep [--clear-fbo [--clear-buffers]] [--clear-named]] [--array]
 //   --calls N   call `render` N times (default 1: a screenshot harness)
 //   --no-swap   never swap (as a surfaceless renderer does); otherwise the
 //               window's buffers are swapped after each call
@@ -20,6 +20,11 @@
 //               textures and depth, not with the G-buffer bound (glClear)
 //   --clear-buffers  (with --clear-fbo) that clear made per attachment,
 //               each with its own value (glClearBufferfv)
+//   --clear-named  (with --keep) the clear made per attachment by name,
+//               through direct state access, as GL 4.5 engines make it
+//               (glClearNamedFramebufferfv), of the clear framebuffer with
+//               --clear-fbo, else of the G-buffer itself, never bound for
+//               it; exits 4 on a context older than 4.5
 //   --array     the G-buffer made once, as some engines make it: one
 //               GL_TEXTURE_2D_ARRAY whose three layers are attached with
 //               glFramebufferTextureLayer, read by the lighting as a
@@ -37,6 +42,8 @@ static PFNGLTEXIMAGE3DPROC glTexImage3D;
 static PFNGLFRAMEBUFFERTEXTURELAYERPROC glFramebufferTextureLayer;
 static PFNGLCLEARBUFFERFVPROC glClearBufferfv;
 #endif
+// Loaded by its own name whichever way GL is reached: a 4.5 function.
+static PFNGLCLEARNAMEDFRAMEBUFFERFVPROC clearNamedFramebufferfv;
 
 // The lighting of the array G-buffer: one light from above, on the albedo
 // layer, by the normal layer.
@@ -84,17 +91,26 @@ static ArrayGBuffer makeArrayGBuffer()
 }
 
 // The geometry pass with the G-buffer cleared through `clearFbo`, a
-// framebuffer sharing its attachments (the tutorial's draws otherwise).
-static void geometryPassClearedElsewhere(Engine &e, GLuint clearFbo, bool perAttachment)
+// framebuffer sharing its attachments, or by name (the tutorial's draws
+// otherwise).
+static void geometryPassClearedElsewhere(Engine &e, GLuint clearFbo, bool perAttachment, bool named)
 {
-    glBindFramebuffer(GL_FRAMEBUFFER, clearFbo);
-    if (perAttachment) {
+    if (named) {
+        const float none[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+        const float far = 1.0f;
+        GLuint cleared = clearFbo ? clearFbo : e.gBuffer;
+        for (int i = 0; i < 3; i++)
+            clearNamedFramebufferfv(cleared, GL_COLOR, i, none);
+        clearNamedFramebufferfv(cleared, GL_DEPTH, 0, &far);
+    } else if (perAttachment) {
+        glBindFramebuffer(GL_FRAMEBUFFER, clearFbo);
         const float none[4] = {0.0f, 0.0f, 0.0f, 0.0f};
         const float far = 1.0f;
         for (int i = 0; i < 3; i++)
             glClearBufferfv(GL_COLOR, i, none);
         glClearBufferfv(GL_DEPTH, 0, &far);
     } else {
+        glBindFramebuffer(GL_FRAMEBUFFER, clearFbo);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     }
     glBindFramebuffer(GL_FRAMEBUFFER, e.gBuffer);
@@ -136,6 +152,7 @@ struct Kept {
     Engine *engine = nullptr;
     GLuint clearFbo = 0;
     bool clearBuffers = false;
+    bool clearNamed = false;
 };
 
 // One image, start to end: the G-buffer made, used and deleted (with an
@@ -155,8 +172,8 @@ static void render(std::vector<unsigned char> &pixels, const ArrayGBuffer *array
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, outputColor, 0);
     CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "the output is incomplete");
 
-    if (kept.clearFbo)
-        geometryPassClearedElsewhere(e, kept.clearFbo, kept.clearBuffers);
+    if (kept.clearFbo || kept.clearNamed)
+        geometryPassClearedElsewhere(e, kept.clearFbo, kept.clearBuffers, kept.clearNamed);
     else
         geometryPass(e, array ? array->framebuffer : e.gBuffer);
     glBindFramebuffer(GL_FRAMEBUFFER, output);
@@ -193,7 +210,7 @@ int main(int argc, char **argv)
         return 2;
     }
     int calls = 1;
-    bool swap = true, useArray = false, keep = false, clearFbo = false, clearBuffers = false;
+    bool swap = true, useArray = false, keep = false, clearFbo = false, clearBuffers = false, clearNamed = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--calls") == 0 && i + 1 < argc)
             calls = std::atoi(argv[++i]);
@@ -207,6 +224,8 @@ int main(int argc, char **argv)
             clearFbo = true;
         else if (std::strcmp(argv[i], "--clear-buffers") == 0)
             clearBuffers = true;
+        else if (std::strcmp(argv[i], "--clear-named") == 0)
+            clearNamed = true;
         else {
             std::fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;
@@ -242,6 +261,13 @@ int main(int argc, char **argv)
     glGetIntegerv(GL_MINOR_VERSION, &minor);
     if (major * 10 + minor < 33)
         glslVersion = "#version 150 core\n#extension GL_ARB_explicit_attrib_location : require\n";
+    clearNamedFramebufferfv =
+        reinterpret_cast<PFNGLCLEARNAMEDFRAMEBUFFERFVPROC>(glfwGetProcAddress("glClearNamedFramebufferfv"));
+    if (clearNamed && (major * 10 + minor < 45 || !clearNamedFramebufferfv)) {
+        std::fprintf(stderr, "--clear-named needs OpenGL 4.5 (direct state access); this context is %d.%d\n", major, minor);
+        glfwTerminate();
+        return 4;
+    }
     glViewport(0, 0, WIDTH, HEIGHT);
 
     ArrayGBuffer array;
@@ -255,6 +281,7 @@ int main(int argc, char **argv)
         if (clearFbo)
             kept.clearFbo = makeClearFbo(keptEngine);
         kept.clearBuffers = clearBuffers;
+        kept.clearNamed = clearNamed;
     }
     std::vector<unsigned char> pixels(static_cast<size_t>(WIDTH) * HEIGHT * 4);
     for (int call = 0; call < calls; call++) {

@@ -30,6 +30,10 @@ macro_rules! watched_functions {
             glClearBufferiv(buffer: u32, drawbuffer: i32, value: *const i32);
             glClearBufferuiv(buffer: u32, drawbuffer: i32, value: *const u32);
             glClearBufferfi(buffer: u32, drawbuffer: i32, depth: f32, stencil: i32);
+            glClearNamedFramebufferfv(framebuffer: u32, buffer: u32, drawbuffer: i32, value: *const f32);
+            glClearNamedFramebufferiv(framebuffer: u32, buffer: u32, drawbuffer: i32, value: *const i32);
+            glClearNamedFramebufferuiv(framebuffer: u32, buffer: u32, drawbuffer: i32, value: *const u32);
+            glClearNamedFramebufferfi(framebuffer: u32, buffer: u32, drawbuffer: i32, depth: f32, stencil: i32);
             glDrawArrays(mode: u32, first: i32, count: i32);
             glDrawArraysInstanced(mode: u32, first: i32, count: i32, instances: i32);
             glDrawElements(mode: u32, count: i32, kind: u32, indices: *const c_void);

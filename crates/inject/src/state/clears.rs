@@ -193,6 +193,70 @@ impl Context {
         }
     }
 
+    /// After `glClearNamedFramebuffer*` of framebuffer `f` (direct state
+    /// access: nothing bound): the G-buffer cleared by name is the same
+    /// clear on the twin, at the same draw buffer (the twin's mirror the
+    /// G-buffer's); a framebuffer sharing its textures is replayed as
+    /// [`Context::after_clear_buffer`] replays a clear through it.
+    pub(super) fn after_clear_named(&mut self, f: u32, call: ClearBuffer) {
+        let Some(g) = self.gbuffer else {
+            return;
+        };
+        if f == 0 || self.off || self.learning() {
+            return;
+        }
+        // The framebuffer cleared, bound for drawing as the program would
+        // have bound it to clear it the old way; the program's bindings put
+        // back after.
+        // SAFETY: a query of the current context.
+        let real_draw =
+            unsafe { self.gl().get_parameter_i32(glow::DRAW_FRAMEBUFFER_BINDING) } as u32;
+        let (draw_fbo, twin_bound) = (self.draw_fbo, self.twin_bound);
+        if f == g {
+            let Some(twin) = self.twin() else {
+                return;
+            };
+            super::context::real_bind(glow::DRAW_FRAMEBUFFER, twin);
+            self.checked("a clear of the G-buffer by name, replayed", |gl| {
+                // SAFETY: the twin bound for drawing; its draw buffers are
+                // the G-buffer's.
+                unsafe {
+                    let i = call.drawbuffer.max(0) as u32;
+                    match (call.buffer, call.value) {
+                        (glow::COLOR, ClearValue::Float(v)) => {
+                            gl.clear_buffer_f32_slice(glow::COLOR, i, &v)
+                        }
+                        (glow::COLOR, ClearValue::Int(v)) => {
+                            gl.clear_buffer_i32_slice(glow::COLOR, i, &v)
+                        }
+                        (glow::COLOR, ClearValue::Uint(v)) => {
+                            gl.clear_buffer_u32_slice(glow::COLOR, i, &v)
+                        }
+                        (glow::DEPTH, ClearValue::Float(v)) => {
+                            gl.clear_buffer_f32_slice(glow::DEPTH, 0, &v[..1])
+                        }
+                        (glow::STENCIL, ClearValue::Int(v)) => {
+                            gl.clear_buffer_i32_slice(glow::STENCIL, 0, &v[..1])
+                        }
+                        (glow::DEPTH_STENCIL, ClearValue::DepthStencil(depth, stencil)) => {
+                            gl.clear_buffer_depth_stencil(glow::DEPTH_STENCIL, 0, depth, stencil)
+                        }
+                        _ => {}
+                    }
+                }
+                capi::DmsaaStatus::Ok
+            });
+            self.twin_drawn = true;
+        } else {
+            super::context::real_bind(glow::DRAW_FRAMEBUFFER, f);
+            self.draw_fbo = f;
+            self.twin_bound = false;
+            self.after_clear_buffer(call);
+            (self.draw_fbo, self.twin_bound) = (draw_fbo, twin_bound);
+        }
+        super::context::real_bind(glow::DRAW_FRAMEBUFFER, real_draw);
+    }
+
     pub(super) fn after_clear(&mut self, mask: u32) {
         let Some((g, d, twin)) = self.sharing_gbuffer() else {
             return;

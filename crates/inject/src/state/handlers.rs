@@ -469,6 +469,93 @@ pub(crate) fn glClearBufferfi(
     );
 }
 
+/// A `glClearNamedFramebuffer*` call (direct state access): of the
+/// G-buffer itself, or of a framebuffer sharing its textures, replayed on
+/// the twin ([`Context::after_clear_named`]).
+fn clear_named(framebuffer: u32, call: ClearBuffer, real: impl FnOnce()) {
+    real();
+    with_context(|cx| cx.after_clear_named(framebuffer, call));
+}
+
+pub(crate) fn glClearNamedFramebufferfv(
+    real: real_type::glClearNamedFramebufferfv,
+    framebuffer: u32,
+    buffer: u32,
+    drawbuffer: i32,
+    value: *const f32,
+) {
+    // SAFETY: GL reads four values for a colour, one for depth.
+    let values = unsafe { read_values(value, buffer) };
+    clear_named(
+        framebuffer,
+        ClearBuffer {
+            buffer,
+            drawbuffer,
+            value: ClearValue::Float(values.map(|v| v.unwrap_or(0.0))),
+        },
+        || unsafe { real(framebuffer, buffer, drawbuffer, value) },
+    );
+}
+
+pub(crate) fn glClearNamedFramebufferiv(
+    real: real_type::glClearNamedFramebufferiv,
+    framebuffer: u32,
+    buffer: u32,
+    drawbuffer: i32,
+    value: *const i32,
+) {
+    // SAFETY: GL reads four values for a colour, one for stencil.
+    let values = unsafe { read_values(value, buffer) };
+    clear_named(
+        framebuffer,
+        ClearBuffer {
+            buffer,
+            drawbuffer,
+            value: ClearValue::Int(values.map(|v| v.unwrap_or(0))),
+        },
+        || unsafe { real(framebuffer, buffer, drawbuffer, value) },
+    );
+}
+
+pub(crate) fn glClearNamedFramebufferuiv(
+    real: real_type::glClearNamedFramebufferuiv,
+    framebuffer: u32,
+    buffer: u32,
+    drawbuffer: i32,
+    value: *const u32,
+) {
+    // SAFETY: GL reads four values for a colour.
+    let values = unsafe { read_values(value, buffer) };
+    clear_named(
+        framebuffer,
+        ClearBuffer {
+            buffer,
+            drawbuffer,
+            value: ClearValue::Uint(values.map(|v| v.unwrap_or(0))),
+        },
+        || unsafe { real(framebuffer, buffer, drawbuffer, value) },
+    );
+}
+
+pub(crate) fn glClearNamedFramebufferfi(
+    real: real_type::glClearNamedFramebufferfi,
+    framebuffer: u32,
+    buffer: u32,
+    drawbuffer: i32,
+    depth: f32,
+    stencil: i32,
+) {
+    clear_named(
+        framebuffer,
+        ClearBuffer {
+            buffer,
+            drawbuffer,
+            value: ClearValue::DepthStencil(depth, stencil),
+        },
+        || unsafe { real(framebuffer, buffer, drawbuffer, depth, stencil) },
+    );
+}
+
 /// The values a `glClearBuffer*v` call reads: four for `GL_COLOR`, one
 /// otherwise (the rest `None`); none from a null pointer (GL's error).
 ///
