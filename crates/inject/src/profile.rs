@@ -133,6 +133,30 @@ pub struct Projection {
     /// A fixed view matrix, likewise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub view: Option<Vec<f32>>,
+    /// The uniform-buffer binding point (`glBindBufferBase(GL_UNIFORM_BUFFER,
+    /// N, …)`) of the block the program keeps its camera in: the matrices
+    /// are read from the buffer bound there at each resolve.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub block_binding: Option<u32>,
+    /// The projection's byte offset in that block (default 0; std140
+    /// keeps a `mat4` as 16 floats, column by column).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<u32>,
+    /// The view matrix's byte offset in that block (world-space positions).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub view_offset: Option<u32>,
+}
+
+/// Where in a uniform buffer the camera is: the binding point and the
+/// byte offsets of the projection and (optionally) the view.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CameraBlock {
+    /// The `GL_UNIFORM_BUFFER` binding point.
+    pub binding: u32,
+    /// The projection's byte offset.
+    pub offset: u32,
+    /// The view's byte offset.
+    pub view_offset: Option<u32>,
 }
 
 /// The options of [`capi::DmsaaOptions`] a profile sets; the others keep
@@ -201,7 +225,7 @@ impl Profile {
     /// names another or gives fixed values).
     pub fn projection_uniform(&self) -> Option<&str> {
         match &self.projection {
-            Some(p) if p.matrix.is_some() => None,
+            Some(p) if p.matrix.is_some() || p.block_binding.is_some() => None,
             Some(Projection {
                 uniform: Some(u), ..
             }) => Some(u),
@@ -213,13 +237,24 @@ impl Profile {
     /// fixed).
     pub fn view_uniform(&self) -> Option<&str> {
         match &self.projection {
-            Some(p) if p.view.is_some() => None,
+            Some(p) if p.view.is_some() || p.view_offset.is_some() => None,
             Some(Projection {
                 view_uniform: Some(u),
                 ..
             }) => Some(u),
             _ => Some("view"),
         }
+    }
+
+    /// The uniform block the camera is read from, where the profile names
+    /// one.
+    pub fn camera_block(&self) -> Option<CameraBlock> {
+        let p = self.projection.as_ref()?;
+        Some(CameraBlock {
+            binding: p.block_binding?,
+            offset: p.offset.unwrap_or(0),
+            view_offset: p.view_offset,
+        })
     }
 
     /// The fixed projection and view, where the profile gives them.

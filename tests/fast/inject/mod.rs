@@ -349,6 +349,59 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
             }
         }
     }
+    // The camera in a uniform block (`--camera-block`: no shader has a
+    // `projection` uniform): without a profile the program is left alone,
+    // saying it saw no projection; with the tutorial profile naming the
+    // block's binding and the view's offset, the matrices are read from the
+    // buffer at each resolve and the frame is the in-source one, bit for bit.
+    let camera: &[&str] = &["--camera-block"];
+    let own = own_frame(&plain, &out, "GLX-camera-block", camera, &xvfb.display());
+    let left = out.join("camera-block-no-profile.rgba");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(capi::built("libdeferred_msaa_inject", "so"))
+            .arg("--")
+            .arg(&plain)
+            .arg(&left)
+            .args(camera)
+            .env("DISPLAY", xvfb.display()),
+        "deferred-msaa inject, the camera in a uniform block, no profile",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("but no projection matrix")
+            && stderr.contains("leaving the program untouched"),
+        "the camera block without a profile:\n{stderr}"
+    );
+    assert!(
+        frame(&left) == own,
+        "left alone, yet not the program's own frame"
+    );
+    let block_profile = build.join("tutorial-camera-block.toml");
+    std::fs::write(
+        &block_profile,
+        text.replace(
+            "[projection]\nuniform = \"projection\"\nview_uniform = \"view\"\n",
+            "[projection]\nblock_binding = 0\noffset = 0\nview_offset = 64\n",
+        ),
+    )
+    .expect("writing the camera-block profile");
+    assert!(
+        std::fs::read_to_string(&block_profile).is_ok_and(|t| t.contains("block_binding")),
+        "the tutorial profile's [projection] table changed: the camera-block profile was not made"
+    );
+    Run {
+        what: "GLFW GLX, camera block, tutorial options".into(),
+        out: &out,
+        display: xvfb.display(),
+        args: camera,
+        in_source_args: &["--tutorial-options"],
+        profile: Some(&block_profile),
+        resolves: 2,
+        calls: &["the camera read from its uniform block 2"],
+    }
+    .compare(&in_source, &plain, &own, "GLX");
     // `--learn`: the program untouched, a first profile written with the
     // G-buffer's signature; that profile as it is (every attachment
     // "other", the matrix uniforms seen) gives the default options' frame.

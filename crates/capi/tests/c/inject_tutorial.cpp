@@ -34,6 +34,11 @@
 //   --two-layers        (in-source build) two layers
 //   --forward           (in-source build) the light cubes into the forward
 //                       target, as `deferred-msaa inject` draws them
+//   --camera-block      the projection and view in a uniform block
+//                       (`Camera`, std140, binding 0: projection then view),
+//                       written with glBufferSubData each frame, as engines
+//                       keep their camera: no shader has a `projection`
+//                       uniform (the in-source build passes the matrices)
 //   --resize            before the last frame (the injected program is
 //                       retrofitted by then), the G-buffer's textures and
 //                       depth made anew at RESIZED_WIDTH x RESIZED_HEIGHT and
@@ -71,6 +76,65 @@ void main()
     FragColor = vec4(fract(texture(gPosition, TexCoords).rgb), 1.0);
 }
 )";
+
+// The geometry pass's and the light cubes' vertex shaders with the camera in
+// a uniform block.
+static const char *cameraBlock = R"(
+layout(std140) uniform Camera
+{
+    mat4 projection;
+    mat4 view;
+};
+)";
+static const char *gBufferBlockVs = R"(
+layout (location = 0) in vec3 aPos;
+layout (location = 1) in vec3 aNormal;
+layout (location = 2) in vec2 aTexCoords;
+out vec3 FragPos;
+out vec2 TexCoords;
+out vec3 Normal;
+uniform mat4 model;
+void main()
+{
+    vec4 worldPos = model * vec4(aPos, 1.0);
+    FragPos = worldPos.xyz;
+    TexCoords = aTexCoords;
+    Normal = mat3(transpose(inverse(model))) * aNormal;
+    gl_Position = projection * view * worldPos;
+}
+)";
+static const char *lightBoxBlockVs = R"(
+layout (location = 0) in vec3 aPos;
+layout (location = 1) in vec3 aNormal;
+layout (location = 2) in vec2 aTexCoords;
+uniform mat4 model;
+void main()
+{
+    gl_Position = projection * view * model * vec4(aPos, 1.0);
+}
+)";
+
+// The uniform-block functions, loaded by the program itself (the shared
+// loader lists the tutorial's calls only).
+static PFNGLBINDBUFFERBASEPROC cbBindBufferBase;
+static PFNGLBUFFERSUBDATAPROC cbBufferSubData;
+static PFNGLGETUNIFORMBLOCKINDEXPROC cbGetUniformBlockIndex;
+static PFNGLUNIFORMBLOCKBINDINGPROC cbUniformBlockBinding;
+
+// The engine's shaders made anew with the camera block at binding 0.
+static void useCameraBlock(Engine &e)
+{
+    std::string vs = std::string(cameraBlock) + gBufferBlockVs;
+    std::string box = std::string(cameraBlock) + lightBoxBlockVs;
+    glDeleteProgram(e.shaderGeometryPass->ID);
+    glDeleteProgram(e.shaderLightBox->ID);
+    delete e.shaderGeometryPass;
+    delete e.shaderLightBox;
+    e.shaderGeometryPass = new Shader(vs.c_str(), gBufferFs);
+    e.shaderLightBox = new Shader(box.c_str(), lightBoxFs);
+    for (GLuint program : {e.shaderGeometryPass->ID, e.shaderLightBox->ID})
+        cbUniformBlockBinding(program, cbGetUniformBlockIndex(program, "Camera"), 0);
+}
 
 // A resize as a program handles one: new textures and depth of the new
 // size, attached to the same G-buffer.
@@ -121,7 +185,7 @@ int main(int argc, char **argv)
         return 2;
     }
     bool egl = false, tutorialOptions = false, twoLayers = false, forward = false, resize = false, recreate = false,
-         prePass = false;
+         prePass = false, cameraBlockOn = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -131,6 +195,8 @@ int main(int argc, char **argv)
             twoLayers = true;
         else if (std::strcmp(argv[i], "--forward") == 0)
             forward = true;
+        else if (std::strcmp(argv[i], "--camera-block") == 0)
+            cameraBlockOn = true;
         else if (std::strcmp(argv[i], "--resize") == 0)
             resize = true;
         else if (std::strcmp(argv[i], "--recreate") == 0)
@@ -195,8 +261,22 @@ int main(int argc, char **argv)
     std::printf("GL %s through %s\n", reinterpret_cast<const char *>(glGetString(GL_VERSION)), egl ? "EGL" : "GLX");
     glViewport(0, 0, WIDTH, HEIGHT);
 
+    cbBindBufferBase = reinterpret_cast<PFNGLBINDBUFFERBASEPROC>(TUTORIAL_GET_PROC_ADDRESS("glBindBufferBase"));
+    cbBufferSubData = reinterpret_cast<PFNGLBUFFERSUBDATAPROC>(TUTORIAL_GET_PROC_ADDRESS("glBufferSubData"));
+    cbGetUniformBlockIndex =
+        reinterpret_cast<PFNGLGETUNIFORMBLOCKINDEXPROC>(TUTORIAL_GET_PROC_ADDRESS("glGetUniformBlockIndex"));
+    cbUniformBlockBinding =
+        reinterpret_cast<PFNGLUNIFORMBLOCKBINDINGPROC>(TUTORIAL_GET_PROC_ADDRESS("glUniformBlockBinding"));
     Engine e;
     engineInit(e, WIDTH, HEIGHT, false);
+    GLuint cameraBuffer = 0;
+    if (cameraBlockOn) {
+        useCameraBlock(e);
+        glGenBuffers(1, &cameraBuffer);
+        glBindBuffer(GL_UNIFORM_BUFFER, cameraBuffer);
+        glBufferData(GL_UNIFORM_BUFFER, 128, nullptr, GL_DYNAMIC_DRAW);
+        glBindBuffer(GL_UNIFORM_BUFFER, 0);
+    }
 #ifdef DMSAA_IN_SOURCE
     DmsaaOptions options = dmsaa_options_default();
     if (tutorialOptions) {
@@ -243,6 +323,8 @@ int main(int argc, char **argv)
             engineFree(e);
             e = Engine();
             engineInit(e, WIDTH, HEIGHT, false);
+            if (cameraBlockOn)
+                useCameraBlock(e);
 #ifdef DMSAA_IN_SOURCE
             if (!ok(dmsaa_retrofit_new(loadForLibrary, nullptr, e.gBuffer, &options, &msaa), "dmsaa_retrofit_new"))
                 return 1;
@@ -250,6 +332,14 @@ int main(int argc, char **argv)
         }
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        if (cameraBlockOn) {
+            // The frame's camera into its block, as engines update theirs.
+            cbBindBufferBase(GL_UNIFORM_BUFFER, 0, cameraBuffer);
+            glBindBuffer(GL_UNIFORM_BUFFER, cameraBuffer);
+            cbBufferSubData(GL_UNIFORM_BUFFER, 0, 64, e.projection.m.data());
+            cbBufferSubData(GL_UNIFORM_BUFFER, 64, 64, e.view.m.data());
+            glBindBuffer(GL_UNIFORM_BUFFER, 0);
+        }
 
         // 1. geometry pass
         GLuint geometryTarget = e.gBuffer;
@@ -317,6 +407,8 @@ int main(int argc, char **argv)
 #ifdef DMSAA_IN_SOURCE
     dmsaa_destroy(msaa);
 #endif
+    if (cameraBuffer)
+        glDeleteBuffers(1, &cameraBuffer);
     glDeleteFramebuffers(1, &prePassFbo);
     glDeleteTextures(1, &prePassColor);
     glDeleteProgram(prePassShader.ID);

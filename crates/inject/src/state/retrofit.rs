@@ -97,7 +97,8 @@ impl Context {
             None => capi::dmsaa_options_default(),
         };
         let world_space = options.world_space_position == 1;
-        if self.projection.is_none() {
+        let block = profile.and_then(|p| p.camera_block());
+        if self.projection.is_none() && block.is_none() {
             say_once(
                 "projection",
                 &format!(
@@ -111,7 +112,7 @@ impl Context {
             self.off = true;
             return None;
         }
-        if world_space && self.view.is_none() {
+        if world_space && self.view.is_none() && block.is_none_or(|b| b.view_offset.is_none()) {
             say_once(
                 "view",
                 "the profile declares world-space positions but no view matrix was seen; leaving the program untouched",
@@ -177,6 +178,9 @@ impl Context {
         }
         let r = &*r;
         let (handle, world_space) = (r.handle, r.world_space);
+        if let Some(block) = settings().profile.as_ref().and_then(|p| p.camera_block()) {
+            self.read_camera_block(block);
+        }
         let (Some(projection), view) = (self.projection, self.view) else {
             return;
         };
@@ -209,6 +213,71 @@ impl Context {
             });
         } else {
             self.fail("dmsaa_resolve");
+        }
+    }
+
+    /// The camera as the program's uniform block holds it now (the buffer
+    /// bound at the profile's binding point, read back at the profile's
+    /// offsets), in place of a uniform's.
+    fn read_camera_block(&mut self, block: crate::profile::CameraBlock) {
+        let mut read: (Option<[f32; 16]>, Option<[f32; 16]>) = (None, None);
+        self.checked("the camera read from its uniform block", |gl| {
+            // SAFETY: queries and a buffer read of the current context;
+            // the copy-read binding is put back.
+            unsafe {
+                let buffer = gl
+                    .get_parameter_indexed_i32(glow::UNIFORM_BUFFER_BINDING, block.binding)
+                    as u32;
+                let Some(name) = std::num::NonZeroU32::new(buffer) else {
+                    return capi::DmsaaStatus::Ok;
+                };
+                let start = gl
+                    .get_parameter_indexed_i32(glow::UNIFORM_BUFFER_START, block.binding)
+                    .max(0);
+                let saved = gl.get_parameter_i32(glow::COPY_READ_BUFFER_BINDING) as u32;
+                gl.bind_buffer(glow::COPY_READ_BUFFER, Some(glow::NativeBuffer(name)));
+                let size = gl.get_buffer_parameter_i32(glow::COPY_READ_BUFFER, glow::BUFFER_SIZE);
+                let matrix = |offset: u32| -> Option<[f32; 16]> {
+                    let at = start + offset as i32;
+                    if at + 64 > size {
+                        return None;
+                    }
+                    let mut bytes = [0u8; 64];
+                    gl.get_buffer_sub_data(glow::COPY_READ_BUFFER, at, &mut bytes);
+                    let mut m = [0f32; 16];
+                    for (k, v) in m.iter_mut().enumerate() {
+                        *v = f32::from_ne_bytes([
+                            bytes[4 * k],
+                            bytes[4 * k + 1],
+                            bytes[4 * k + 2],
+                            bytes[4 * k + 3],
+                        ]);
+                    }
+                    Some(m)
+                };
+                read = (matrix(block.offset), block.view_offset.and_then(matrix));
+                gl.bind_buffer(
+                    glow::COPY_READ_BUFFER,
+                    std::num::NonZeroU32::new(saved).map(glow::NativeBuffer),
+                );
+            }
+            capi::DmsaaStatus::Ok
+        });
+        match read {
+            (Some(projection), view) => {
+                self.projection = Some(projection);
+                if view.is_some() {
+                    self.view = view;
+                }
+            }
+            (None, _) => say_once(
+                "camera-block",
+                &format!(
+                    "the profile's camera block (uniform-buffer binding {}, projection at byte {}) holds no \
+                     matrix there: no buffer bound, or one too small; the frame is not resolved",
+                    block.binding, block.offset
+                ),
+            ),
         }
     }
 
