@@ -16,6 +16,7 @@
 //! into the library, summed up on stderr at exit), `DMSAA_INJECT_LEARN`
 //! (write a first profile there from one observed frame; retrofit nothing).
 
+mod camera;
 mod check;
 mod hooks;
 pub mod profile;

@@ -145,6 +145,12 @@ pub struct Projection {
     /// The view matrix's byte offset in that block (world-space positions).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub view_offset: Option<u32>,
+    /// The uniform the program sets its view-projection product through
+    /// (`viewProjection`), in place of a projection and a view: taken
+    /// apart into the projection's depth terms and field of view and the
+    /// view's z row (a rigid view assumed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub view_projection_uniform: Option<String>,
 }
 
 /// Where in a uniform buffer the camera is: the binding point and the
@@ -225,7 +231,13 @@ impl Profile {
     /// names another or gives fixed values).
     pub fn projection_uniform(&self) -> Option<&str> {
         match &self.projection {
-            Some(p) if p.matrix.is_some() || p.block_binding.is_some() => None,
+            Some(p)
+                if p.matrix.is_some()
+                    || p.block_binding.is_some()
+                    || p.view_projection_uniform.is_some() =>
+            {
+                None
+            }
             Some(Projection {
                 uniform: Some(u), ..
             }) => Some(u),
@@ -237,13 +249,24 @@ impl Profile {
     /// fixed).
     pub fn view_uniform(&self) -> Option<&str> {
         match &self.projection {
-            Some(p) if p.view.is_some() || p.view_offset.is_some() => None,
+            Some(p)
+                if p.view.is_some()
+                    || p.view_offset.is_some()
+                    || p.view_projection_uniform.is_some() =>
+            {
+                None
+            }
             Some(Projection {
                 view_uniform: Some(u),
                 ..
             }) => Some(u),
             _ => Some("view"),
         }
+    }
+
+    /// The view-projection uniform's name, where the profile names one.
+    pub fn view_projection_uniform(&self) -> Option<&str> {
+        self.projection.as_ref()?.view_projection_uniform.as_deref()
     }
 
     /// The uniform block the camera is read from, where the profile names

@@ -155,6 +155,61 @@ impl Run<'_> {
     /// Runs both; asserts the injected frame is the in-source one, the
     /// check clean, and the frame not `own`'s. Returns the injected frame.
     fn compare(&self, in_source: &Path, plain: &Path, own: &[u8], api: &str) -> Vec<u8> {
+        let (injected, expected) = self.both(in_source, plain, api);
+        let what = &self.what;
+        assert!(
+            injected == expected,
+            "{what}: the injected frame differs from the frame of the program retrofitted in its source"
+        );
+        assert!(
+            injected != own,
+            "{what}: the injected frame is the program's own (no MSAA)"
+        );
+        injected
+    }
+
+    /// Runs both, as [`Run::compare`], for a camera the library derives
+    /// (rounded otherwise than the in-source build's matrices): the frames
+    /// differ in at most `share` of the pixels, each channel by at most
+    /// `most`, and the injected one is not `own`.
+    fn compare_within(
+        &self,
+        in_source: &Path,
+        plain: &Path,
+        own: &[u8],
+        api: &str,
+        share: f64,
+        most: u8,
+    ) {
+        let (injected, expected) = self.both(in_source, plain, api);
+        let what = &self.what;
+        let pixels = injected.len() / 4;
+        let differing = injected
+            .chunks(4)
+            .zip(expected.chunks(4))
+            .filter(|(a, b)| a != b)
+            .count();
+        let largest = injected
+            .iter()
+            .zip(&expected)
+            .map(|(a, b)| a.abs_diff(*b))
+            .max()
+            .unwrap_or(0);
+        eprintln!(
+            "{what}: {differing} of {pixels} pixels differ from the in-source frame, by at most {largest}"
+        );
+        assert!(
+            differing as f64 <= share * pixels as f64 && largest <= most,
+            "{what}: {differing} of {pixels} pixels differ from the in-source frame, by up to {largest}"
+        );
+        assert!(
+            injected != own,
+            "{what}: the injected frame is the program's own (no MSAA)"
+        );
+    }
+
+    /// The injected frame and the in-source one, the check read.
+    fn both(&self, in_source: &Path, plain: &Path, api: &str) -> (Vec<u8>, Vec<u8>) {
         let what = &self.what;
         let file = what.replace([' ', ','], "-");
         let expected = self.out.join(format!("{file}-in-source.rgba"));
@@ -213,16 +268,7 @@ impl Run<'_> {
         for call in self.calls {
             assert!(check.contains(call), "{what}: no `{call}` in {check}");
         }
-        let injected = frame(&injected);
-        assert!(
-            injected == frame(&expected),
-            "{what}: the injected frame differs from the frame of the program retrofitted in its source"
-        );
-        assert!(
-            injected != own,
-            "{what}: the injected frame is the program's own (no MSAA)"
-        );
-        injected
+        (frame(&injected), frame(&expected))
     }
 }
 
@@ -402,6 +448,38 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
         calls: &["the camera read from its uniform block 2"],
     }
     .compare(&in_source, &plain, &own, "GLX");
+    // The camera as one `viewProjection` uniform (`--view-projection`):
+    // with the profile naming it, it is taken apart into the projection and
+    // the view's z row. The matrices are the product's, rounded otherwise
+    // than the in-source build's own, so the frame may differ from the
+    // in-source one where the depth window's weights round apart: in at
+    // most 1% of the pixels, by at most 8 of 255.
+    let vp: &[&str] = &["--view-projection"];
+    let own = own_frame(&plain, &out, "GLX-view-projection", vp, &xvfb.display());
+    let vp_profile = build.join("tutorial-view-projection.toml");
+    std::fs::write(
+        &vp_profile,
+        text.replace(
+            "[projection]\nuniform = \"projection\"\nview_uniform = \"view\"\n",
+            "[projection]\nview_projection_uniform = \"viewProjection\"\n",
+        ),
+    )
+    .expect("writing the view-projection profile");
+    assert!(
+        std::fs::read_to_string(&vp_profile).is_ok_and(|t| t.contains("view_projection_uniform")),
+        "the tutorial profile's [projection] table changed: the view-projection profile was not made"
+    );
+    Run {
+        what: "GLFW GLX, view-projection uniform, tutorial options".into(),
+        out: &out,
+        display: xvfb.display(),
+        args: vp,
+        in_source_args: &["--tutorial-options"],
+        profile: Some(&vp_profile),
+        resolves: 2,
+        calls: &["dmsaa_resolve 2"],
+    }
+    .compare_within(&in_source, &plain, &own, "GLX", 0.01, 8);
     // `--learn`: the program untouched, a first profile written with the
     // G-buffer's signature; that profile as it is (every attachment
     // "other", the matrix uniforms seen) gives the default options' frame.

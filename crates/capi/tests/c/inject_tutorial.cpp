@@ -39,6 +39,9 @@
 //                       written with glBufferSubData each frame, as engines
 //                       keep their camera: no shader has a `projection`
 //                       uniform (the in-source build passes the matrices)
+//   --view-projection   the camera as one `viewProjection` uniform (the
+//                       product, made on the CPU), as engines upload it: no
+//                       shader has a `projection` uniform
 //   --resize            before the last frame (the injected program is
 //                       retrofitted by then), the G-buffer's textures and
 //                       depth made anew at RESIZED_WIDTH x RESIZED_HEIGHT and
@@ -114,6 +117,48 @@ void main()
 }
 )";
 
+// The same shaders with the camera as one view-projection uniform.
+static const char *gBufferViewProjectionVs = R"(
+layout (location = 0) in vec3 aPos;
+layout (location = 1) in vec3 aNormal;
+layout (location = 2) in vec2 aTexCoords;
+out vec3 FragPos;
+out vec2 TexCoords;
+out vec3 Normal;
+uniform mat4 model;
+uniform mat4 viewProjection;
+void main()
+{
+    vec4 worldPos = model * vec4(aPos, 1.0);
+    FragPos = worldPos.xyz;
+    TexCoords = aTexCoords;
+    Normal = mat3(transpose(inverse(model))) * aNormal;
+    gl_Position = viewProjection * worldPos;
+}
+)";
+static const char *lightBoxViewProjectionVs = R"(
+layout (location = 0) in vec3 aPos;
+layout (location = 1) in vec3 aNormal;
+layout (location = 2) in vec2 aTexCoords;
+uniform mat4 model;
+uniform mat4 viewProjection;
+void main()
+{
+    gl_Position = viewProjection * model * vec4(aPos, 1.0);
+}
+)";
+
+// The engine's shaders made anew with the view-projection uniform.
+static void useViewProjection(Engine &e)
+{
+    glDeleteProgram(e.shaderGeometryPass->ID);
+    glDeleteProgram(e.shaderLightBox->ID);
+    delete e.shaderGeometryPass;
+    delete e.shaderLightBox;
+    e.shaderGeometryPass = new Shader(gBufferViewProjectionVs, gBufferFs);
+    e.shaderLightBox = new Shader(lightBoxViewProjectionVs, lightBoxFs);
+}
+
 // The uniform-block functions, loaded by the program itself (the shared
 // loader lists the tutorial's calls only).
 static PFNGLBINDBUFFERBASEPROC cbBindBufferBase;
@@ -185,7 +230,7 @@ int main(int argc, char **argv)
         return 2;
     }
     bool egl = false, tutorialOptions = false, twoLayers = false, forward = false, resize = false, recreate = false,
-         prePass = false, cameraBlockOn = false;
+         prePass = false, cameraBlockOn = false, viewProjectionOn = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -197,6 +242,8 @@ int main(int argc, char **argv)
             forward = true;
         else if (std::strcmp(argv[i], "--camera-block") == 0)
             cameraBlockOn = true;
+        else if (std::strcmp(argv[i], "--view-projection") == 0)
+            viewProjectionOn = true;
         else if (std::strcmp(argv[i], "--resize") == 0)
             resize = true;
         else if (std::strcmp(argv[i], "--recreate") == 0)
@@ -270,6 +317,8 @@ int main(int argc, char **argv)
     Engine e;
     engineInit(e, WIDTH, HEIGHT, false);
     GLuint cameraBuffer = 0;
+    if (viewProjectionOn)
+        useViewProjection(e);
     if (cameraBlockOn) {
         useCameraBlock(e);
         glGenBuffers(1, &cameraBuffer);
@@ -325,6 +374,8 @@ int main(int argc, char **argv)
             engineInit(e, WIDTH, HEIGHT, false);
             if (cameraBlockOn)
                 useCameraBlock(e);
+            if (viewProjectionOn)
+                useViewProjection(e);
 #ifdef DMSAA_IN_SOURCE
             if (!ok(dmsaa_retrofit_new(loadForLibrary, nullptr, e.gBuffer, &options, &msaa), "dmsaa_retrofit_new"))
                 return 1;
@@ -332,6 +383,14 @@ int main(int argc, char **argv)
         }
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        if (viewProjectionOn) {
+            // The frame's camera as one product, into both programs.
+            Mat4 viewProjection = e.projection * e.view;
+            for (Shader *shader : {e.shaderGeometryPass, e.shaderLightBox}) {
+                shader->use();
+                shader->setMat4("viewProjection", viewProjection);
+            }
+        }
         if (cameraBlockOn) {
             // The frame's camera into its block, as engines update theirs.
             cbBindBufferBase(GL_UNIFORM_BUFFER, 0, cameraBuffer);

@@ -51,6 +51,17 @@ impl Framebuffer {
 }
 
 /// The retrofit made for a context's G-buffer.
+/// What a matrix uniform the library follows holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum MatrixRole {
+    /// The projection.
+    Projection,
+    /// The view.
+    View,
+    /// Their product (`viewProjection`), taken apart.
+    ViewProjection,
+}
+
 pub(super) struct Retrofit {
     pub(super) handle: *mut capi::DmsaaRetrofit,
     pub(super) world_space: bool,
@@ -89,7 +100,7 @@ pub(crate) struct Context {
     /// array's layers is read through it; never replayed).
     pub(super) unit_arrays: HashMap<u32, u32>,
     /// (program, location) → "projection" or "view".
-    pub(super) matrix_uniforms: HashMap<(u32, i32), bool>,
+    pub(super) matrix_uniforms: HashMap<(u32, i32), MatrixRole>,
     /// (program, location) → uniform name, for `--learn`.
     pub(crate) uniform_names: HashMap<(u32, i32), String>,
     pub(crate) matrices_set: Vec<String>,

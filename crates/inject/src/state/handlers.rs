@@ -5,7 +5,7 @@
 #![allow(non_snake_case)]
 
 use super::clears::{ClearBuffer, ClearValue};
-use super::context::Context;
+use super::context::{Context, MatrixRole};
 use super::run::{FRAMES, SEEN, left_alone, outcome_said, say_once, settings};
 use crate::real::{current_context, real_type};
 use crate::replay::DrawCall;
@@ -294,10 +294,18 @@ pub(crate) fn glGetUniformLocation(
             let profile = settings().profile.as_ref();
             let projection = profile.map_or(Some("projection"), |p| p.projection_uniform());
             let view = profile.map_or(Some("view"), |p| p.view_uniform());
-            if projection == Some(&*name) {
-                cx.matrix_uniforms.insert((program, location), true);
+            let both = profile.and_then(|p| p.view_projection_uniform());
+            let role = if projection == Some(&*name) {
+                Some(MatrixRole::Projection)
             } else if view == Some(&*name) {
-                cx.matrix_uniforms.insert((program, location), false);
+                Some(MatrixRole::View)
+            } else if both == Some(&*name) {
+                Some(MatrixRole::ViewProjection)
+            } else {
+                None
+            };
+            if let Some(role) = role {
+                cx.matrix_uniforms.insert((program, location), role);
             }
             if cx.learning() {
                 cx.uniform_names
@@ -328,7 +336,7 @@ pub(crate) fn glUniformMatrix4fv(
             let name = name.clone();
             cx.matrices_set.push(name);
         }
-        let Some(&is_projection) = cx.matrix_uniforms.get(&key) else {
+        let Some(&role) = cx.matrix_uniforms.get(&key) else {
             return;
         };
         let mut m = [0f32; 16];
@@ -342,10 +350,15 @@ pub(crate) fn glUniformMatrix4fv(
                 }
             }
         }
-        if is_projection {
-            cx.projection = Some(m);
-        } else {
-            cx.view = Some(m);
+        match role {
+            MatrixRole::Projection => cx.projection = Some(m),
+            MatrixRole::View => cx.view = Some(m),
+            MatrixRole::ViewProjection => {
+                if let Some((projection, view)) = crate::camera::split_view_projection(&m) {
+                    cx.projection = Some(projection);
+                    cx.view = Some(view);
+                }
+            }
         }
     });
 }
