@@ -320,6 +320,60 @@ fn a_program_left_alone_says_why_in_one_line() {
         frames[0] == frames[1],
         "the array G-buffer found by its reads and by the profile drew different frames"
     );
+    // The one-call render with a profile that gives the G-buffer's
+    // signature: each call's new G-buffer is the G-buffer from its bind
+    // once the camera is known (the first call sets the projection
+    // uniform after its bind, so it is drawn as it is); the retrofit made
+    // for the second call's and, kept when the program deletes it, made
+    // anew for the third's (`dmsaa_refresh_with`, its programs kept).
+    let signature = build.join("signature.toml");
+    std::fs::write(
+        &signature,
+        "[framebuffer]\ncolour_textures = 3\nformats = [\"float16\", \"float16\", \"unorm8\"]\n",
+    )
+    .expect("writing the signature profile");
+    let args: &[&str] = &["--calls", "3"];
+    let own = build.join("own-one-call.rgba");
+    capi::run(
+        Command::new(&exe)
+            .arg(&own)
+            .args(args)
+            .env("DISPLAY", xvfb.display()),
+        "the one-call render as it is",
+    );
+    let injected = build.join("injected-one-call.rgba");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--check", "--library"])
+            .arg(&library)
+            .arg("--profile")
+            .arg(&signature)
+            .arg("--")
+            .arg(&exe)
+            .arg(&injected)
+            .args(args)
+            .env("DISPLAY", xvfb.display()),
+        "deferred-msaa inject on the one-call render with a signature",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    eprint!("one-call render, signature:\n{stderr}");
+    let lines = said(&stderr);
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(
+        lines[0].contains("inject: retrofitting framebuffer "),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains(" 0 changed, 0 GL errors left by the library")
+            && stderr.contains("2 frames resolved")
+            && stderr.contains("dmsaa_retrofit_new 1")
+            && stderr.contains("dmsaa_refresh_with 1"),
+        "{stderr}"
+    );
+    assert!(
+        frame(&injected) != frame(&own),
+        "the one-call render's frame under inject is its own"
+    );
     // `--learn`: no frame with the G-buffer alive at its end, so the file
     // is written when the program's context goes.
     let learned = build.join("learned.toml");

@@ -444,8 +444,10 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
         args: camera,
         in_source_args: &["--tutorial-options"],
         profile: Some(&block_profile),
-        resolves: 2,
-        calls: &["the camera read from its uniform block 2"],
+        // The camera known from the profile and the G-buffer by its
+        // signature at its first bind: the first frame is retrofitted too.
+        resolves: 3,
+        calls: &["the camera read from its uniform block 3"],
     }
     .compare(&in_source, &plain, &own, "GLX");
     // The camera as one `viewProjection` uniform (`--view-projection`):
@@ -476,8 +478,10 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
         args: vp,
         in_source_args: &["--tutorial-options"],
         profile: Some(&vp_profile),
-        resolves: 2,
-        calls: &["dmsaa_resolve 2"],
+        // The product set before the G-buffer's first bind: the first frame
+        // is retrofitted too.
+        resolves: 3,
+        calls: &["dmsaa_resolve 3"],
     }
     .compare_within(&in_source, &plain, &own, "GLX", 0.01, 8);
     // `--learn`: the program untouched, a first profile written with the

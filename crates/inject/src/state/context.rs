@@ -111,6 +111,10 @@ pub(crate) struct Context {
     /// The G-buffer last deleted, as it was seen (for `--learn`).
     pub(crate) last_gbuffer: Option<Framebuffer>,
     pub(super) retrofit: Option<Retrofit>,
+    /// The retrofit of a G-buffer found by the profile's signature and
+    /// deleted: kept for the next one the program makes
+    /// (`dmsaa_refresh_with`), its programs compiled.
+    pub(super) orphan: Option<Retrofit>,
     pub(super) needs_refresh: bool,
     pub(super) twin_bound: bool,
     pub(super) twin_drawn: bool,
@@ -157,6 +161,7 @@ impl Context {
             gbuffer: None,
             last_gbuffer: None,
             retrofit: None,
+            orphan: None,
             needs_refresh: false,
             twin_bound: false,
             twin_drawn: false,

@@ -3,7 +3,7 @@
 //! goes.
 
 use super::context::{Context, GL_DRAW_FRAMEBUFFER, GL_READ_FRAMEBUFFER, real_bind};
-use super::run::{say_once, seen};
+use super::run::{say_once, seen, settings};
 use deferred_msaa_capi as capi;
 
 const GL_FRAMEBUFFER: u32 = 0x8D40;
@@ -25,6 +25,9 @@ impl Context {
         }
         let draw = target == GL_FRAMEBUFFER || target == GL_DRAW_FRAMEBUFFER;
         let read = target == GL_FRAMEBUFFER || target == GL_READ_FRAMEBUFFER;
+        if draw && name != 0 && self.gbuffer.is_none() {
+            self.match_signature_at_bind(target, name, real);
+        }
         if self.forward_bind(target, name) {
             // The forward target drawn in the lit target's place.
             if read {
@@ -61,6 +64,42 @@ impl Context {
         }
     }
 
+    /// With a profile's signature and the camera known: a framebuffer bound
+    /// for drawing that has the signature is the G-buffer from this bind on
+    /// (so a G-buffer made anew each frame, or a program that renders one
+    /// frame, is retrofitted in the frame that makes it). `real` binds it
+    /// first, for its attachments to be read.
+    fn match_signature_at_bind(&mut self, target: u32, name: u32, real: &dyn Fn(u32, u32)) {
+        if self.off || self.learning() {
+            return;
+        }
+        let Some(profile) = settings()
+            .profile
+            .as_ref()
+            .filter(|p| p.framebuffer.is_some())
+        else {
+            return;
+        };
+        let camera = self.projection.is_some() || profile.camera_block().is_some();
+        if !camera {
+            return;
+        }
+        let fresh = self.framebuffers.get(&name).is_none_or(|f| f.stale);
+        if fresh {
+            real(target, name);
+            let info = self.inspect();
+            self.framebuffers.insert(name, info);
+        }
+        if self
+            .framebuffers
+            .get(&name)
+            .is_some_and(|f| Self::matches_profile(profile, f))
+        {
+            self.gbuffer = Some(name);
+            seen(|s| s.found = Some(name));
+        }
+    }
+
     pub(super) fn delete_framebuffers(&mut self, names: &[u32]) {
         for name in names {
             let seen_as = self.framebuffers.remove(name);
@@ -82,12 +121,24 @@ impl Context {
                     self.twin_bound = false;
                 }
                 self.twin_drawn = false;
+                self.forward = None;
+                let signature = settings()
+                    .profile
+                    .as_ref()
+                    .is_some_and(|p| p.framebuffer.is_some());
                 if let Some(r) = self.retrofit.take() {
-                    // SAFETY: a handle the C API made, on its context.
-                    self.checked("dmsaa_destroy", |_| {
-                        unsafe { capi::dmsaa_destroy(r.handle) };
-                        capi::DmsaaStatus::Ok
-                    });
+                    if signature && self.orphan.is_none() {
+                        // A program that makes its G-buffer anew (each
+                        // frame, or at a resize under a new name): kept for
+                        // the next one its signature finds.
+                        self.orphan = Some(r);
+                    } else {
+                        // SAFETY: a handle the C API made, on its context.
+                        self.checked("dmsaa_destroy", |_| {
+                            unsafe { capi::dmsaa_destroy(r.handle) };
+                            capi::DmsaaStatus::Ok
+                        });
+                    }
                 }
                 // A new G-buffer is looked for as at the start.
                 self.gbuffer = None;

@@ -141,7 +141,7 @@ impl Context {
     }
 
     /// Whether framebuffer `f` is the one the profile names.
-    fn matches_profile(profile: &Profile, f: &Framebuffer) -> bool {
+    pub(super) fn matches_profile(profile: &Profile, f: &Framebuffer) -> bool {
         let Some(m) = &profile.framebuffer else {
             return false;
         };
@@ -236,7 +236,9 @@ impl Context {
             super::learn::after_frame(self);
             return;
         }
-        if self.frames == 2 && self.gbuffer.is_none() && !self.off {
+        // (A program whose G-buffer is made anew each frame has none between
+        // frames: retrofitted, it is not left alone.)
+        if self.frames == 2 && self.gbuffer.is_none() && !self.off && !seen(|s| s.retrofitted) {
             let frames = self.frames;
             say_once("none", &seen(|s| left_alone(s, frames, false)));
         }

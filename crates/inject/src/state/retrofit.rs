@@ -89,8 +89,32 @@ impl Context {
         })
     }
 
-    /// Make the retrofit of framebuffer `g`.
+    /// Make the retrofit of framebuffer `g`: the kept one of a deleted
+    /// G-buffer made anew for it (`dmsaa_refresh_with`), else a new one.
     fn make(&mut self, g: u32) -> Option<()> {
+        if let Some(mut r) = self.orphan.take() {
+            let handle = r.handle;
+            // SAFETY: a live handle; this context current.
+            let status = self.checked("dmsaa_refresh_with", |_| unsafe {
+                capi::dmsaa_refresh_with(handle, g)
+            });
+            if status == capi::DmsaaStatus::Ok {
+                r.begun = false;
+                r.looked = true;
+                self.retrofit = Some(r);
+                return Some(());
+            }
+            // SAFETY: as above.
+            self.checked("dmsaa_destroy", |_| {
+                unsafe { capi::dmsaa_destroy(handle) };
+                capi::DmsaaStatus::Ok
+            });
+        }
+        self.make_new(g)
+    }
+
+    /// Make a new retrofit of framebuffer `g`.
+    fn make_new(&mut self, g: u32) -> Option<()> {
         let profile = settings().profile.as_ref();
         let options = match profile {
             Some(p) => p.options("the profile").ok()?,
