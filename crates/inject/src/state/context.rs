@@ -51,6 +51,15 @@ impl Framebuffer {
 }
 
 /// The retrofit made for a context's G-buffer.
+/// The forward target of one frame (the state of `state/forward.rs`).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Forward {
+    /// The program's lit target (0: the default framebuffer).
+    pub(super) output: u32,
+    /// The forward target, once begun.
+    pub(super) fbo: Option<u32>,
+}
+
 /// What a matrix uniform the library follows holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum MatrixRole {
@@ -127,7 +136,7 @@ pub(crate) struct Context {
     /// The draws after this frame's resolve, up to the lighting's end.
     pub(super) recording: Option<Recording>,
     /// After the lighting: the forward target of the frame.
-    pub(super) forward: Option<super::forward::Forward>,
+    pub(super) forward: Option<Forward>,
 }
 
 impl Context {
@@ -250,7 +259,7 @@ impl Context {
         self.off = true;
         // A forward target bound in the lit target's place: the lit target
         // bound back, so the program goes on drawing into it.
-        if let Some(super::forward::Forward {
+        if let Some(Forward {
             output,
             fbo: Some(_),
         }) = self.forward.take()

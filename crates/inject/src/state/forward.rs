@@ -9,20 +9,11 @@
 //! it (or reads the lit target), at a blit into the lit target, and at the
 //! swap. A profile turns it off with `forward = false`.
 
-use super::context::{Context, GL_DRAW_FRAMEBUFFER, GL_READ_FRAMEBUFFER};
+use super::context::{Context, Forward, GL_DRAW_FRAMEBUFFER, GL_READ_FRAMEBUFFER};
 use super::run::settings;
 use deferred_msaa_capi as capi;
 
 const GL_FRAMEBUFFER: u32 = 0x8D40;
-
-/// The forward target of one frame.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Forward {
-    /// The program's lit target (0: the default framebuffer).
-    pub(super) output: u32,
-    /// The forward target, once begun.
-    pub(super) fbo: Option<u32>,
-}
 
 impl Context {
     /// The lighting pass into `output` ended: what is drawn into it from
