@@ -8,8 +8,8 @@
 //! no clear values ([`RetrofitOptions::twin_clear`](crate::RetrofitOptions::twin_clear)),
 //! `begin_frame` clears the twins' depth to a sentinel no host clears to
 //! and no screen-facing geometry lands on, and `resolve` counts, with a
-//! `GL_SAMPLES_PASSED` query around a pass of its own, the pixels whose
-//! depth still holds it. A frame in which more than
+//! `GL_SAMPLES_PASSED` query around a pass of its own over every fourth
+//! pixel in x and y, the pixels whose depth still holds it. A frame in which more than
 //! [`UNCLEARED_FRACTION`] of the pixels do was not cleared after
 //! `begin_frame`, and is not resolved. The first check waits for its
 //! count, so a host set up wrongly hears of it on its first frame; after a
@@ -31,6 +31,10 @@ const CLEAR_CHECK_FRAG: &str = include_str!("clear_check.frag");
 /// exact in 24-bit depth, far from the values hosts clear to (0, 1) and
 /// from round ones a flat plane would sit at.
 pub(crate) const SENTINEL_DEPTH: f32 = 6_201_795.0 / 16_777_215.0;
+
+/// The check reads every `STEP`-th pixel in x and y (a 1/16 sample of the
+/// frame): the share it judges is a share of the frame, not a few pixels.
+const STEP: u32 = 4;
 
 /// The share of a frame's pixels still at the sentinel above which the
 /// frame was not cleared: geometry that happens to land on the sentinel
@@ -105,7 +109,8 @@ impl ClearCheck {
         depth: &Texture2dMultisample,
         target: &Framebuffer,
     ) -> Result<()> {
-        let total = u64::from(target.width) * u64::from(target.height);
+        let (w, h) = (target.width.div_ceil(STEP), target.height.div_ceil(STEP));
+        let total = u64::from(w) * u64::from(h);
         if self.pending {
             self.pending = false;
             if let Err(e) = judge(self.query.result(gl), total, true) {
@@ -128,6 +133,7 @@ impl ClearCheck {
             let state = SavedState::capture(gl, 1).guard(gl);
             let program = self.pass.begin(gl, target);
             unsafe {
+                gl.viewport(0, 0, w as i32, h as i32);
                 gl.depth_mask(false);
                 gl.color_mask(false, false, false, false);
                 gl.active_texture(glow::TEXTURE0);
@@ -136,6 +142,7 @@ impl ClearCheck {
             program.set_i32(gl, "u_depth", 0);
             program.set_f32(gl, "u_sentinel", SENTINEL_DEPTH);
             program.set_f32(gl, "u_tolerance", tolerance(depth.format));
+            program.set_i32(gl, "u_step", STEP as i32);
             self.pass.draw(gl, &self.vao);
             drop(state);
         }
