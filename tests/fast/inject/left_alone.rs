@@ -167,10 +167,11 @@ fn a_program_left_alone_says_why_in_one_line() {
     let dsa = match dsa.status.code() {
         Some(0) => true,
         Some(4) => {
-            common::skip(&format!(
-                "the clears by name: {}",
+            // A context below 4.5 (the floor's): not a missing package.
+            eprintln!(
+                "not run: the clears by name: {}",
                 String::from_utf8_lossy(&dsa.stderr).trim()
-            ));
+            );
             false
         }
         _ => panic!("the one-shot program with --clear-named failed: {dsa:?}"),
