@@ -497,9 +497,31 @@ fn forward_objects_get_per_sample_coverage_and_the_rest_is_untouched() {
     type Domain = fn(f64, f64) -> f64;
     let tonemap: (Domain, Domain) = (|c, m| c / (1.0 + m), |t, m| t / (1.0 - m));
     let identity: (Domain, Domain) = (|c, _| c, |t, _| t);
+    // IEC 61966-2-1's decode and encode, each clamped to [0, 1] first: a
+    // resolve that skipped the decode (or applied it twice) mixes by k of
+    // N samples in another domain, which no k fits.
+    let srgb: (Domain, Domain) = (
+        |c, _| {
+            let c = c.clamp(0.0, 1.0);
+            if c > 0.04045 {
+                ((c + 0.055) / 1.055).powf(2.4)
+            } else {
+                c / 12.92
+            }
+        },
+        |l, _| {
+            let l = l.clamp(0.0, 1.0);
+            if l > 0.0031308 {
+                1.055 * l.powf(1.0 / 2.4) - 0.055
+            } else {
+                l * 12.92
+            }
+        },
+    );
     for (format, mix, domain) in [
         (Format::Rgba16f, LayerMix::Tonemapped, tonemap),
         (Format::Rgba16f, LayerMix::Linear, identity),
+        (Format::Rgba16f, LayerMix::SrgbEncoded, srgb),
     ] {
         let label = format!("{} {mix:?}", format.name());
         let lit = LitTarget::new(gl, format, false);
@@ -560,7 +582,13 @@ fn forward_objects_get_per_sample_coverage_and_the_rest_is_untouched() {
                     let t: [f64; 3] = [0, 1, 2]
                         .map(|c| (domain.0)(lr[c], ml) * (1.0 - w) + (domain.0)(cr[c], mc) * w);
                     let mt = t[0].max(t[1]).max(t[2]);
-                    let want = t.map(|v| (domain.1)(v, mt));
+                    // Every sample covered: one value, kept as stored (the
+                    // sRGB round trip would clamp the 2.5).
+                    let want = if k == n {
+                        cr
+                    } else {
+                        t.map(|v| (domain.1)(v, mt))
+                    };
                     let off = (0..3)
                         .map(|c| (f64::from(g[c]) - want[c]).abs() / (1e-3 + 2e-3 * want[c].abs()))
                         .fold(0.0, f64::max);

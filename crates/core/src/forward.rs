@@ -142,7 +142,9 @@ impl ForwardTarget {
             let resolve = made.keep(FullscreenPass::new(
                 gl,
                 &format!("forward target resolve ({})", kind.define()),
-                &mix_domain_source(kind, curve).part("forward_resolve.frag", FORWARD_RESOLVE_FRAG),
+                &mix_domain_source(kind, curve)
+                    .define("FORWARD_SAMPLES", &twin.samples.to_string())
+                    .part("forward_resolve.frag", FORWARD_RESOLVE_FRAG),
                 &[("o_color", 0)],
             )?);
             resolve.program().set_at_setup(gl, |p| {

@@ -28,6 +28,17 @@ vec3 srgb_encode(vec3 l) {
     l = clamp(l, 0.0, 1.0);
     return mix(l * 12.92, 1.055 * pow(l, vec3(1.0 / 2.4)) - 0.055, greaterThan(l, vec3(0.0031308)));
 }
+
+// One channel through srgb_decode (encode false) or srgb_encode (encode
+// true), the same arithmetic with one `pow` for either direction: the
+// forward resolve's one transfer step (forward_resolve.frag says why).
+float srgb_transfer(float x, bool encode) {
+    x = clamp(x, 0.0, 1.0);
+    float straight = encode ? x * 12.92 : x / 12.92;
+    float curve = pow(encode ? x : (x + 0.055) / 1.055, encode ? 1.0 / 2.4 : 2.4);
+    curve = encode ? 1.055 * curve - 0.055 : curve;
+    return x > (encode ? 0.0031308 : 0.04045) ? curve : straight;
+}
 #endif
 
 // Into the blend domain, and back.
