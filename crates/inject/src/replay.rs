@@ -6,10 +6,13 @@
 //! retrofit's own target between `dmsaa_begin_second_layer_own_target` and
 //! `dmsaa_finish_second_layer`, and the state is put back.
 //!
-//! What is not recorded: uniforms (each program's values as they are at
-//! the replay, which is what a pass that sets them before its draws and
-//! not between them leaves), clears (the own target comes cleared to the
-//! program's clear colour and depth), and texture kinds other than 2D.
+//! Recorded with each draw: the uniform calls the program made since the
+//! last one (a light volume's position and colour, set before its draw),
+//! and the blend and depth state it drew with (additive lights with depth
+//! writes off, an ambient pass before them with neither); the pass's
+//! colour clear is made again on the own target (its depth and stencil
+//! are the library's). What is not recorded: uniform blocks and buffers
+//! written between draws, other state, and texture kinds other than 2D.
 
 use glow::HasContext;
 use std::num::NonZeroU32;
@@ -51,6 +54,81 @@ pub(crate) enum DrawCall {
     },
 }
 
+/// A `glUniform*` call as the program made it, on the program then bound.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct UniformCall {
+    pub(crate) program: u32,
+    pub(crate) location: i32,
+    pub(crate) value: UniformValue,
+}
+
+/// A uniform call's values, by its kind.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum UniformValue {
+    /// `glUniform{1,2,3,4}f[v]`: the components per element, the values.
+    Float(u8, Vec<f32>),
+    /// `glUniform{1,2,3,4}i[v]`.
+    Int(u8, Vec<i32>),
+    /// `glUniformMatrix4fv`, untransposed.
+    Matrix4(Vec<f32>),
+}
+
+/// The blend and depth state a draw was made with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub(crate) struct DrawState {
+    blend: bool,
+    /// src rgb, dst rgb, src alpha, dst alpha.
+    blend_func: [u32; 4],
+    /// rgb, alpha.
+    blend_equation: [u32; 2],
+    depth_test: bool,
+    depth_func: u32,
+    depth_mask: bool,
+}
+
+impl DrawState {
+    /// The state as GL has it now.
+    pub(crate) fn read(gl: &glow::Context) -> Self {
+        // SAFETY: queries of the current context.
+        unsafe {
+            let get = |p: u32| gl.get_parameter_i32(p) as u32;
+            DrawState {
+                blend: gl.is_enabled(glow::BLEND),
+                blend_func: [
+                    get(glow::BLEND_SRC_RGB),
+                    get(glow::BLEND_DST_RGB),
+                    get(glow::BLEND_SRC_ALPHA),
+                    get(glow::BLEND_DST_ALPHA),
+                ],
+                blend_equation: [
+                    get(glow::BLEND_EQUATION_RGB),
+                    get(glow::BLEND_EQUATION_ALPHA),
+                ],
+                depth_test: gl.is_enabled(glow::DEPTH_TEST),
+                depth_func: get(glow::DEPTH_FUNC),
+                depth_mask: gl.get_parameter_i32(glow::DEPTH_WRITEMASK) != 0,
+            }
+        }
+    }
+
+    /// Make it GL's.
+    fn apply(&self, gl: &glow::Context) {
+        // SAFETY: state calls of the current context.
+        unsafe {
+            let set = |cap: u32, on: bool| {
+                if on { gl.enable(cap) } else { gl.disable(cap) }
+            };
+            set(glow::BLEND, self.blend);
+            let [sr, dr, sa, da] = self.blend_func;
+            gl.blend_func_separate(sr, dr, sa, da);
+            gl.blend_equation_separate(self.blend_equation[0], self.blend_equation[1]);
+            set(glow::DEPTH_TEST, self.depth_test);
+            gl.depth_func(self.depth_func);
+            gl.depth_mask(self.depth_mask);
+        }
+    }
+}
+
 /// A recorded draw and what it drew with.
 #[derive(Clone, Debug)]
 pub(crate) struct RecordedDraw {
@@ -59,6 +137,10 @@ pub(crate) struct RecordedDraw {
     pub(crate) vertex_array: u32,
     /// (unit, texture) for every unit with a 2D texture bound.
     pub(crate) textures: Vec<(u32, u32)>,
+    /// The uniform calls made since the recording's last draw.
+    pub(crate) uniforms: Vec<UniformCall>,
+    /// The blend and depth state it drew with.
+    pub(crate) state: DrawState,
 }
 
 /// The draws after one resolve.
@@ -71,6 +153,11 @@ pub(crate) struct Recording {
     /// Passes still to let go by before the lighting (the profile's
     /// `lighting.pass` - 1).
     pub(crate) skip: u32,
+    /// Uniform calls made since the last recorded draw (the next one's).
+    pub(crate) uniforms: Vec<UniformCall>,
+    /// The framebuffer the pass cleared before its first draw, and the
+    /// colour it cleared to.
+    pub(crate) clear_colour: Option<(u32, [f32; 4])>,
 }
 
 fn program(name: u32) -> Option<glow::Program> {
@@ -87,6 +174,7 @@ fn texture(name: u32) -> Option<glow::Texture> {
 
 /// The state a replay changes, read before it.
 pub(crate) struct Saved {
+    state: DrawState,
     program: u32,
     vertex_array: u32,
     active: u32,
@@ -114,6 +202,7 @@ pub(crate) fn save(gl: &glow::Context, draws: &[RecordedDraw]) -> Saved {
             .collect();
         gl.active_texture(active);
         Saved {
+            state: DrawState::read(gl),
             program: gl.get_parameter_i32(glow::CURRENT_PROGRAM) as u32,
             vertex_array: gl.get_parameter_i32(glow::VERTEX_ARRAY_BINDING) as u32,
             active,
@@ -128,6 +217,11 @@ pub(crate) fn draw(gl: &glow::Context, draws: &[RecordedDraw]) {
     // SAFETY: the program's own objects and calls, as it made them.
     unsafe {
         for d in draws {
+            for u in &d.uniforms {
+                gl.use_program(program(u.program));
+                set_uniform(gl, u);
+            }
+            d.state.apply(gl);
             gl.use_program(program(d.program));
             gl.bind_vertex_array(vertex_array(d.vertex_array));
             for &(unit, name) in &d.textures {
@@ -167,8 +261,33 @@ pub(crate) fn draw(gl: &glow::Context, draws: &[RecordedDraw]) {
     }
 }
 
+/// Make one recorded uniform call again on the bound program.
+///
+/// # Safety
+///
+/// The call's program is bound; its location is that program's.
+unsafe fn set_uniform(gl: &glow::Context, u: &UniformCall) {
+    let location = glow::NativeUniformLocation(u.location as u32);
+    let l = Some(&location);
+    // SAFETY: the caller's.
+    unsafe {
+        match &u.value {
+            UniformValue::Float(1, v) => gl.uniform_1_f32_slice(l, v),
+            UniformValue::Float(2, v) => gl.uniform_2_f32_slice(l, v),
+            UniformValue::Float(3, v) => gl.uniform_3_f32_slice(l, v),
+            UniformValue::Float(_, v) => gl.uniform_4_f32_slice(l, v),
+            UniformValue::Int(1, v) => gl.uniform_1_i32_slice(l, v),
+            UniformValue::Int(2, v) => gl.uniform_2_i32_slice(l, v),
+            UniformValue::Int(3, v) => gl.uniform_3_i32_slice(l, v),
+            UniformValue::Int(_, v) => gl.uniform_4_i32_slice(l, v),
+            UniformValue::Matrix4(v) => gl.uniform_matrix_4_f32_slice(l, false, v),
+        }
+    }
+}
+
 /// Put back what [`save`] read.
 pub(crate) fn restore(gl: &glow::Context, saved: &Saved) {
+    saved.state.apply(gl);
     // SAFETY: the names the context had bound, bound again.
     unsafe {
         for &(unit, name) in &saved.textures {

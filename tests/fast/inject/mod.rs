@@ -395,6 +395,25 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
             }
         }
     }
+    // Light volumes (`--light-volumes`): an ambient quad, then one additive
+    // quad per light, each light's values set as uniforms before its draw,
+    // blending on and depth writes off. Two layers replay each draw with
+    // its own uniforms and blend and depth state, after the pass's colour
+    // clear: the in-source frame (its second lighting cleared and drawn the
+    // same way), bit for bit.
+    let volumes: &[&str] = &["--light-volumes"];
+    let own = own_frame(&plain, &out, "GLX-light-volumes", volumes, &xvfb.display());
+    Run {
+        what: "GLFW GLX, light volumes, tutorial two layers".into(),
+        out: &out,
+        display: xvfb.display(),
+        args: volumes,
+        in_source_args: &["--tutorial-options", "--two-layers"],
+        profile: Some(&two_layers),
+        resolves: 2,
+        calls: &["the second layer (begin, the replayed lighting, finish) 2"],
+    }
+    .compare(&in_source, &plain, &own, "GLX");
     // The camera in a uniform block (`--camera-block`: no shader has a
     // `projection` uniform): without a profile the program is left alone,
     // saying it saw no projection; with the tutorial profile naming the

@@ -39,6 +39,13 @@
 //                       written with glBufferSubData each frame, as engines
 //                       keep their camera: no shader has a `projection`
 //                       uniform (the in-source build passes the matrices)
+//   --light-volumes     the lighting as engines with light volumes draw it:
+//                       an ambient quad, then one quad per light, each added
+//                       to what the clear left (depth test off, blending on,
+//                       depth writes off for the lights), each light's values
+//                       set as uniforms before its draw; the in-source build
+//                       clears its second lighting's target as it clears
+//                       framebuffer 0 before lighting
 //   --view-projection   the camera as one `viewProjection` uniform (the
 //                       product, made on the CPU), as engines upload it: no
 //                       shader has a `projection` uniform
@@ -159,6 +166,91 @@ static void useViewProjection(Engine &e)
     e.shaderLightBox = new Shader(lightBoxViewProjectionVs, lightBoxFs);
 }
 
+// The lighting as light volumes: an ambient pass, then one light a draw.
+static const char *ambientFs = R"(
+out vec4 FragColor;
+in vec2 TexCoords;
+uniform sampler2D gAlbedoSpec;
+void main()
+{
+    FragColor = vec4(texture(gAlbedoSpec, TexCoords).rgb * 0.1, 1.0);
+}
+)";
+static const char *oneLightFs = R"(
+out vec4 FragColor;
+in vec2 TexCoords;
+uniform sampler2D gPosition;
+uniform sampler2D gNormal;
+uniform sampler2D gAlbedoSpec;
+uniform vec3 lightPosition;
+uniform vec3 lightColor;
+uniform float lightLinear;
+uniform float lightQuadratic;
+uniform vec3 viewPos;
+void main()
+{
+    vec3 FragPos = texture(gPosition, TexCoords).rgb;
+    vec3 Normal = texture(gNormal, TexCoords).rgb;
+    vec3 Diffuse = texture(gAlbedoSpec, TexCoords).rgb;
+    float Specular = texture(gAlbedoSpec, TexCoords).a;
+    vec3 viewDir = normalize(viewPos - FragPos);
+    vec3 lightDir = normalize(lightPosition - FragPos);
+    vec3 diffuse = max(dot(Normal, lightDir), 0.0) * Diffuse * lightColor;
+    vec3 halfwayDir = normalize(lightDir + viewDir);
+    float spec = pow(max(dot(Normal, halfwayDir), 0.0), 16.0);
+    vec3 specular = lightColor * spec * Specular;
+    float distance = length(lightPosition - FragPos);
+    float attenuation = 1.0 / (1.0 + lightLinear * distance + lightQuadratic * distance * distance);
+    // A light's haze: the air it lights, on every pixel, background too.
+    vec3 haze = lightColor * 0.02;
+    FragColor = vec4((diffuse + specular) * attenuation + haze, 1.0);
+}
+)";
+
+struct Volumes {
+    Shader *ambient = nullptr, *oneLight = nullptr;
+};
+
+// The lighting into the bound framebuffer, by `volumes` when it has its
+// shaders, else the tutorial's one quad.
+static void lighting(Engine &e, const Volumes &volumes)
+{
+    if (!volumes.ambient) {
+        lightingQuad(e);
+        return;
+    }
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, e.gPosition);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, e.gNormal);
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D, e.gAlbedoSpec);
+    // Full-screen volumes: no depth test (the frame keeps it on elsewhere),
+    // every term added to what the clear left.
+    glDisable(GL_DEPTH_TEST);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_ONE, GL_ONE);
+    volumes.ambient->use();
+    volumes.ambient->setInt("gAlbedoSpec", 2);
+    renderQuad();
+    glDepthMask(GL_FALSE);
+    volumes.oneLight->use();
+    volumes.oneLight->setInt("gPosition", 0);
+    volumes.oneLight->setInt("gNormal", 1);
+    volumes.oneLight->setInt("gAlbedoSpec", 2);
+    volumes.oneLight->setVec3("viewPos", cameraPosition);
+    for (size_t i = 0; i < e.lightPositions.size(); i++) {
+        volumes.oneLight->setVec3("lightPosition", e.lightPositions[i]);
+        volumes.oneLight->setVec3("lightColor", e.lightColors[i]);
+        volumes.oneLight->setFloat("lightLinear", 0.7f);
+        volumes.oneLight->setFloat("lightQuadratic", 1.8f);
+        renderQuad();
+    }
+    glDepthMask(GL_TRUE);
+    glDisable(GL_BLEND);
+    glEnable(GL_DEPTH_TEST);
+}
+
 // The uniform-block functions, loaded by the program itself (the shared
 // loader lists the tutorial's calls only).
 static PFNGLBINDBUFFERBASEPROC cbBindBufferBase;
@@ -230,7 +322,7 @@ int main(int argc, char **argv)
         return 2;
     }
     bool egl = false, tutorialOptions = false, twoLayers = false, forward = false, resize = false, recreate = false,
-         prePass = false, cameraBlockOn = false, viewProjectionOn = false;
+         prePass = false, cameraBlockOn = false, viewProjectionOn = false, lightVolumes = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -244,6 +336,8 @@ int main(int argc, char **argv)
             cameraBlockOn = true;
         else if (std::strcmp(argv[i], "--view-projection") == 0)
             viewProjectionOn = true;
+        else if (std::strcmp(argv[i], "--light-volumes") == 0)
+            lightVolumes = true;
         else if (std::strcmp(argv[i], "--resize") == 0)
             resize = true;
         else if (std::strcmp(argv[i], "--recreate") == 0)
@@ -316,6 +410,11 @@ int main(int argc, char **argv)
         reinterpret_cast<PFNGLUNIFORMBLOCKBINDINGPROC>(TUTORIAL_GET_PROC_ADDRESS("glUniformBlockBinding"));
     Engine e;
     engineInit(e, WIDTH, HEIGHT, false);
+    Volumes volumes;
+    if (lightVolumes) {
+        volumes.ambient = new Shader(quadVs, ambientFs);
+        volumes.oneLight = new Shader(quadVs, oneLightFs);
+    }
     GLuint cameraBuffer = 0;
     if (viewProjectionOn)
         useViewProjection(e);
@@ -423,13 +522,17 @@ int main(int argc, char **argv)
         // 2. lighting pass, 2.5 the depth copy, 3. the light cubes
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-        lightingQuad(e);
+        lighting(e, volumes);
 #ifdef DMSAA_IN_SOURCE
         GLuint secondTarget = 0;
         if (twoLayers && ok(dmsaa_begin_second_layer_own_target(msaa, 0, &secondTarget),
                             "dmsaa_begin_second_layer_own_target")) {
             glBindFramebuffer(GL_DRAW_FRAMEBUFFER, secondTarget);
-            lightingQuad(e);
+            // Additive lights start from the program's clear colour, as the
+            // first lighting's framebuffer 0 did.
+            if (lightVolumes)
+                glClear(GL_COLOR_BUFFER_BIT);
+            lighting(e, volumes);
             ok(dmsaa_finish_second_layer(msaa, 0), "dmsaa_finish_second_layer");
             glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
         }
@@ -471,6 +574,12 @@ int main(int argc, char **argv)
     glDeleteFramebuffers(1, &prePassFbo);
     glDeleteTextures(1, &prePassColor);
     glDeleteProgram(prePassShader.ID);
+    for (Shader *shader : {volumes.ambient, volumes.oneLight}) {
+        if (shader) {
+            glDeleteProgram(shader->ID);
+            delete shader;
+        }
+    }
     engineFree(e);
     checkGlErrors("the end");
 

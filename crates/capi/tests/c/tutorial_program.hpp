@@ -43,6 +43,7 @@
     X(PFNGLBINDFRAMEBUFFERPROC, glBindFramebuffer)                                         \
     X(PFNGLBINDRENDERBUFFERPROC, glBindRenderbuffer)                                       \
     X(PFNGLBINDTEXTUREPROC, glBindTexture)                                                 \
+    X(PFNGLBLENDFUNCPROC, glBlendFunc)                                                     \
     X(PFNGLBINDVERTEXARRAYPROC, glBindVertexArray)                                         \
     X(PFNGLBLITFRAMEBUFFERPROC, glBlitFramebuffer)                                         \
     X(PFNGLBUFFERDATAPROC, glBufferData)                                                   \
@@ -59,6 +60,7 @@
     X(PFNGLDELETESHADERPROC, glDeleteShader)                                               \
     X(PFNGLDELETETEXTURESPROC, glDeleteTextures)                                           \
     X(PFNGLDELETEVERTEXARRAYSPROC, glDeleteVertexArrays)                                   \
+    X(PFNGLDEPTHMASKPROC, glDepthMask)                                                     \
     X(PFNGLDISABLEPROC, glDisable)                                                         \
     X(PFNGLDRAWARRAYSPROC, glDrawArrays)                                                   \
     X(PFNGLDRAWBUFFERSPROC, glDrawBuffers)                                                 \

@@ -257,6 +257,27 @@ impl Context {
         super::context::real_bind(glow::DRAW_FRAMEBUFFER, real_draw);
     }
 
+    /// A colour clear made while the lighting is recorded, before its
+    /// pass's first draw: made again on the own target at the replay, where
+    /// its framebuffer is the lit target.
+    pub(super) fn record_clear(&mut self, mask: u32) {
+        if mask & glow::COLOR_BUFFER_BIT == 0
+            || self.recording.as_ref().is_none_or(|r| !r.draws.is_empty())
+        {
+            return;
+        }
+        let mut colour = [0f32; 4];
+        // SAFETY: a query of the current context.
+        unsafe {
+            self.gl()
+                .get_parameter_f32_slice(glow::COLOR_CLEAR_VALUE, &mut colour)
+        };
+        let d = self.draw_fbo;
+        if let Some(r) = self.recording.as_mut() {
+            r.clear_colour = Some((d, colour));
+        }
+    }
+
     pub(super) fn after_clear(&mut self, mask: u32) {
         let Some((g, d, twin)) = self.sharing_gbuffer() else {
             return;

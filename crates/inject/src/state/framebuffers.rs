@@ -19,6 +19,8 @@ impl Context {
                 r.skip -= 1;
                 r.draws.clear();
                 r.target = None;
+                r.uniforms.clear();
+                r.clear_colour = None;
             } else {
                 self.second_layer();
             }

@@ -13,7 +13,7 @@
 use super::context::{Context, Framebuffer, GL_DRAW_FRAMEBUFFER, Pass};
 use super::run::{FRAMES, left_alone, say_once, seen, settings};
 use crate::profile::Profile;
-use crate::replay::{DrawCall, RecordedDraw};
+use crate::replay::{DrawCall, DrawState, RecordedDraw};
 use glow::HasContext;
 use std::collections::HashSet;
 
@@ -45,13 +45,17 @@ impl Context {
                 .collect();
             textures.sort_unstable();
             let program = self.program;
+            let state = DrawState::read(self.gl());
             if let Some(r) = self.recording.as_mut() {
                 r.target = Some(d);
+                let uniforms = std::mem::take(&mut r.uniforms);
                 r.draws.push(RecordedDraw {
                     call,
                     program,
                     vertex_array,
                     textures,
+                    uniforms,
+                    state,
                 });
             }
         }

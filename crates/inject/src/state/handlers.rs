@@ -8,7 +8,7 @@ use super::clears::{ClearBuffer, ClearValue};
 use super::context::{Context, MatrixRole};
 use super::run::{FRAMES, SEEN, left_alone, outcome_said, say_once, settings};
 use crate::real::{current_context, real_type};
-use crate::replay::DrawCall;
+use crate::replay::{DrawCall, UniformCall, UniformValue};
 use std::collections::HashMap;
 use std::ffi::{CStr, c_char, c_ulong, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -316,6 +316,81 @@ pub(crate) fn glGetUniformLocation(
     location
 }
 
+/// A uniform call made while the lighting is recorded: kept for its
+/// replay, on the program bound now.
+fn record_uniform(location: i32, value: UniformValue) {
+    if location < 0 {
+        return;
+    }
+    with_context(|cx| {
+        let program = cx.program;
+        if let Some(r) = cx.recording.as_mut() {
+            r.uniforms.push(UniformCall {
+                program,
+                location,
+                value,
+            });
+        }
+    });
+}
+
+/// `count` elements of `n` components at `value`, copied (none from a
+/// null pointer or a count below 1, GL's errors).
+///
+/// # Safety
+///
+/// `value` points at `count * n` values, as GL reads them.
+unsafe fn copied<T: Copy>(value: *const T, count: i32, n: usize) -> Option<Vec<T>> {
+    if value.is_null() || count < 1 {
+        return None;
+    }
+    // SAFETY: the caller's.
+    Some(unsafe { std::slice::from_raw_parts(value, count as usize * n) }.to_vec())
+}
+
+macro_rules! uniform_scalars {
+    ($($name:ident($($v:ident),+): $kind:ident, $ty:ty, $n:expr;)*) => {$(
+        pub(crate) fn $name(real: real_type::$name, location: i32, $($v: $ty),+) {
+            unsafe { real(location, $($v),+) };
+            record_uniform(location, UniformValue::$kind($n, vec![$($v),+]));
+        }
+    )*};
+}
+
+uniform_scalars! {
+    glUniform1f(v0): Float, f32, 1;
+    glUniform2f(v0, v1): Float, f32, 2;
+    glUniform3f(v0, v1, v2): Float, f32, 3;
+    glUniform4f(v0, v1, v2, v3): Float, f32, 4;
+    glUniform1i(v0): Int, i32, 1;
+    glUniform2i(v0, v1): Int, i32, 2;
+    glUniform3i(v0, v1, v2): Int, i32, 3;
+    glUniform4i(v0, v1, v2, v3): Int, i32, 4;
+}
+
+macro_rules! uniform_vectors {
+    ($($name:ident: $kind:ident, $ty:ty, $n:expr;)*) => {$(
+        pub(crate) fn $name(real: real_type::$name, location: i32, count: i32, value: *const $ty) {
+            unsafe { real(location, count, value) };
+            // SAFETY: GL read `count` elements of $n components there.
+            if let Some(values) = unsafe { copied(value, count, $n) } {
+                record_uniform(location, UniformValue::$kind($n, values));
+            }
+        }
+    )*};
+}
+
+uniform_vectors! {
+    glUniform1fv: Float, f32, 1;
+    glUniform2fv: Float, f32, 2;
+    glUniform3fv: Float, f32, 3;
+    glUniform4fv: Float, f32, 4;
+    glUniform1iv: Int, i32, 1;
+    glUniform2iv: Int, i32, 2;
+    glUniform3iv: Int, i32, 3;
+    glUniform4iv: Int, i32, 4;
+}
+
 pub(crate) fn glUniformMatrix4fv(
     real: real_type::glUniformMatrix4fv,
     location: i32,
@@ -326,6 +401,20 @@ pub(crate) fn glUniformMatrix4fv(
     unsafe { real(location, count, transpose, value) };
     if count < 1 || value.is_null() {
         return;
+    }
+    // SAFETY: GL read `count` matrices there.
+    if let Some(mut values) = unsafe { copied(value, count, 16) } {
+        if transpose != 0 {
+            for m in values.chunks_mut(16) {
+                let t: Vec<f32> = m.to_vec();
+                for c in 0..4 {
+                    for r in 0..4 {
+                        m[c * 4 + r] = t[r * 4 + c];
+                    }
+                }
+            }
+        }
+        record_uniform(location, UniformValue::Matrix4(values));
     }
     with_context(|cx| {
         let key = (cx.program, location);
@@ -395,7 +484,10 @@ pub(crate) fn glClear(real: real_type::glClear, mask: u32) {
         }
     });
     unsafe { real(mask) };
-    with_context(|cx| cx.after_clear(mask));
+    with_context(|cx| {
+        cx.record_clear(mask);
+        cx.after_clear(mask);
+    });
 }
 
 /// A `glClearBuffer*` call: through the twin it draws the frame; through

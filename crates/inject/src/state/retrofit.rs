@@ -321,6 +321,12 @@ impl Context {
             return;
         }
         let draws = recording.draws;
+        // The pass's colour clear of the lit target, made again on the own
+        // target before the replay (its depth and stencil are the library's).
+        let clear = recording
+            .clear_colour
+            .filter(|&(fbo, _)| fbo == output)
+            .map(|(_, colour)| colour);
         let mut failed = "the second layer";
         let status = self.checked(
             "the second layer (begin, the replayed lighting, finish)",
@@ -339,7 +345,10 @@ impl Context {
                 let saved = replay::save(gl, &draws);
                 // SAFETY: the retrofit's framebuffer, bound for the replay.
                 unsafe {
-                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(glow::NativeFramebuffer(own)))
+                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(glow::NativeFramebuffer(own)));
+                    if let Some(colour) = clear {
+                        gl.clear_buffer_f32_slice(glow::COLOR, 0, &colour);
+                    }
                 };
                 replay::draw(gl, &draws);
                 // SAFETY: as above; the output given to begin.
