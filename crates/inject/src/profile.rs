@@ -64,6 +64,11 @@ pub struct Lighting {
     /// Its position among the passes after the resolve (each pass: the
     /// draws up to the next framebuffer bind), from 1 (the default).
     pub pass: u32,
+    /// How many passes it spans from there (default 1): lights added into
+    /// an accumulation target, then a compose into the lit target, are 2.
+    /// The lit target is the last pass's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub passes: Option<u32>,
 }
 
 /// A framebuffer's attachment signature: a framebuffer that has all of
@@ -356,6 +361,9 @@ impl Profile {
         }
         if self.lighting.as_ref().is_some_and(|l| l.pass == 0) {
             return Err(bad("lighting.pass counts from 1".into()));
+        }
+        if self.lighting.as_ref().is_some_and(|l| l.passes == Some(0)) {
+            return Err(bad("lighting.passes is 1 or more".into()));
         }
         if let Some(p) = &self.projection {
             for (name, m) in [("matrix", &p.matrix), ("view", &p.view)] {

@@ -139,6 +139,8 @@ pub(crate) struct RecordedDraw {
     pub(crate) textures: Vec<(u32, u32)>,
     /// The uniform calls made since the recording's last draw.
     pub(crate) uniforms: Vec<UniformCall>,
+    /// The framebuffer it drew into (the program's name).
+    pub(crate) framebuffer: u32,
     /// The blend and depth state it drew with.
     pub(crate) state: DrawState,
 }
@@ -155,9 +157,27 @@ pub(crate) struct Recording {
     pub(crate) skip: u32,
     /// Uniform calls made since the last recorded draw (the next one's).
     pub(crate) uniforms: Vec<UniformCall>,
-    /// The framebuffer the pass cleared before its first draw, and the
-    /// colour it cleared to.
-    pub(crate) clear_colour: Option<(u32, [f32; 4])>,
+    /// The colour clears made before a pass's first draw: (the draw they
+    /// come before, the framebuffer, the colour).
+    pub(crate) clears: Vec<(usize, u32, [f32; 4])>,
+    /// Passes of the lighting still to come after the one being recorded.
+    pub(crate) passes_left: u32,
+    /// Whether the lighting spans several passes (draws into any
+    /// framebuffer are its), not one (draws into the first one's only).
+    pub(crate) multi_pass: bool,
+    /// Whether the pass being recorded drew.
+    pub(crate) pass_drawn: bool,
+}
+
+impl Recording {
+    /// A pass let go by (one before the lighting).
+    pub(crate) fn let_go(&mut self) {
+        self.draws.clear();
+        self.target = None;
+        self.uniforms.clear();
+        self.clears.clear();
+        self.pass_drawn = false;
+    }
 }
 
 fn program(name: u32) -> Option<glow::Program> {
@@ -212,11 +232,46 @@ pub(crate) fn save(gl: &glow::Context, draws: &[RecordedDraw]) -> Saved {
     }
 }
 
-/// Draw `draws` again into the bound draw framebuffer.
-pub(crate) fn draw(gl: &glow::Context, draws: &[RecordedDraw]) {
-    // SAFETY: the program's own objects and calls, as it made them.
+/// Draw `draws` again, each into its framebuffer, the lit target's
+/// (`output`) replaced by `own`, with `clears` made again before the draws
+/// they came before (the own target's colour attachment 0; another
+/// framebuffer's draw buffers with `glClear` and the clear colour it had).
+pub(crate) fn draw(
+    gl: &glow::Context,
+    draws: &[RecordedDraw],
+    clears: &[(usize, u32, [f32; 4])],
+    output: u32,
+    own: u32,
+) {
+    let fbo = |n: u32| NonZeroU32::new(n).map(glow::NativeFramebuffer);
+    let into = |n: u32| if n == output { own } else { n };
+    // SAFETY: the program's own objects and calls, as it made them; the
+    // clear colour put back after each clear of the program's framebuffers.
     unsafe {
-        for d in draws {
+        let mut bound = own;
+        gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, fbo(own));
+        for (k, d) in draws.iter().enumerate() {
+            for &(_, framebuffer, colour) in clears.iter().filter(|c| c.0 == k) {
+                let target = into(framebuffer);
+                if target != bound {
+                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, fbo(target));
+                    bound = target;
+                }
+                if target == own {
+                    gl.clear_buffer_f32_slice(glow::COLOR, 0, &colour);
+                } else {
+                    let mut was = [0f32; 4];
+                    gl.get_parameter_f32_slice(glow::COLOR_CLEAR_VALUE, &mut was);
+                    gl.clear_color(colour[0], colour[1], colour[2], colour[3]);
+                    gl.clear(glow::COLOR_BUFFER_BIT);
+                    gl.clear_color(was[0], was[1], was[2], was[3]);
+                }
+            }
+            let target = into(d.framebuffer);
+            if target != bound {
+                gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, fbo(target));
+                bound = target;
+            }
             for u in &d.uniforms {
                 gl.use_program(program(u.program));
                 set_uniform(gl, u);

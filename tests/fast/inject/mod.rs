@@ -414,6 +414,56 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
         calls: &["the second layer (begin, the replayed lighting, finish) 2"],
     }
     .compare(&in_source, &plain, &own, "GLX");
+    // The same lights in two passes (`--two-pass-lighting`): added into an
+    // accumulation target of the program's, then composed into
+    // framebuffer 0. With the profile's `[lighting] passes = 2`, the replay
+    // clears and fills the accumulation target again and composes into the
+    // own target: the in-source frame, bit for bit; left at one pass, the
+    // accumulation alone would be the second lighting.
+    let two_pass_profile = build.join("tutorial-two-pass.toml");
+    std::fs::write(
+        &two_pass_profile,
+        format!(
+            "{}\n[lighting]\npass = 1\npasses = 2\n",
+            std::fs::read_to_string(&two_layers).expect("the two-layer profile")
+        ),
+    )
+    .expect("writing the two-pass profile");
+    let two_pass: &[&str] = &["--two-pass-lighting", "--light-volumes"];
+    let own = own_frame(&plain, &out, "GLX-two-pass", two_pass, &xvfb.display());
+    let run = Run {
+        what: "GLFW GLX, two-pass light volumes, tutorial two layers".into(),
+        out: &out,
+        display: xvfb.display(),
+        args: two_pass,
+        in_source_args: &["--tutorial-options", "--two-layers"],
+        profile: Some(&two_pass_profile),
+        resolves: 2,
+        calls: &["the second layer (begin, the replayed lighting, finish) 2"],
+    };
+    run.compare(&in_source, &plain, &own, "GLX");
+    let one_pass = out.join("two-pass-as-one.rgba");
+    capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(capi::built("libdeferred_msaa_inject", "so"))
+            .arg("--profile")
+            .arg(&two_layers)
+            .arg("--")
+            .arg(&plain)
+            .arg(&one_pass)
+            .args(two_pass)
+            .env("DISPLAY", xvfb.display()),
+        "deferred-msaa inject, the two-pass lighting left as one pass",
+    );
+    let expected = out.join(format!(
+        "{}-in-source.rgba",
+        run.what.replace([' ', ','], "-")
+    ));
+    assert!(
+        frame(&one_pass) != frame(&expected),
+        "the two-pass lighting replayed as one pass drew the in-source frame: the test proves nothing"
+    );
     // The camera in a uniform block (`--camera-block`: no shader has a
     // `projection` uniform): without a profile the program is left alone,
     // saying it saw no projection; with the tutorial profile naming the

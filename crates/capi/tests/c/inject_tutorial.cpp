@@ -46,6 +46,12 @@
 //                       set as uniforms before its draw; the in-source build
 //                       clears its second lighting's target as it clears
 //                       framebuffer 0 before lighting
+//   --two-pass-lighting the lighting in two passes, as engines with an
+//                       accumulation target light: into an RGBA16F target of
+//                       its own (cleared first), then a compose quad copying
+//                       it into framebuffer 0; the in-source build's second
+//                       lighting is both passes again, the compose into its
+//                       own target
 //   --view-projection   the camera as one `viewProjection` uniform (the
 //                       product, made on the CPU), as engines upload it: no
 //                       shader has a `projection` uniform
@@ -211,6 +217,23 @@ struct Volumes {
     Shader *ambient = nullptr, *oneLight = nullptr;
 };
 
+// The compose of the two-pass lighting: the accumulated light, as it is.
+static const char *composeFs = R"(
+out vec4 FragColor;
+in vec2 TexCoords;
+uniform sampler2D accumulated;
+void main()
+{
+    FragColor = vec4(texture(accumulated, TexCoords).rgb, 1.0);
+}
+)";
+
+// The two-pass lighting's accumulation target and compose.
+struct Accumulation {
+    GLuint framebuffer = 0, texture = 0;
+    Shader *compose = nullptr;
+};
+
 // The lighting into the bound framebuffer, by `volumes` when it has its
 // shaders, else the tutorial's one quad.
 static void lighting(Engine &e, const Volumes &volumes)
@@ -249,6 +272,16 @@ static void lighting(Engine &e, const Volumes &volumes)
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
     glEnable(GL_DEPTH_TEST);
+}
+
+// The compose pass: the accumulated light into the bound framebuffer.
+static void compose(const Accumulation &a)
+{
+    a.compose->use();
+    a.compose->setInt("accumulated", 0);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, a.texture);
+    renderQuad();
 }
 
 // The uniform-block functions, loaded by the program itself (the shared
@@ -322,7 +355,8 @@ int main(int argc, char **argv)
         return 2;
     }
     bool egl = false, tutorialOptions = false, twoLayers = false, forward = false, resize = false, recreate = false,
-         prePass = false, cameraBlockOn = false, viewProjectionOn = false, lightVolumes = false;
+         prePass = false, cameraBlockOn = false, viewProjectionOn = false, lightVolumes = false,
+         twoPass = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -338,6 +372,8 @@ int main(int argc, char **argv)
             viewProjectionOn = true;
         else if (std::strcmp(argv[i], "--light-volumes") == 0)
             lightVolumes = true;
+        else if (std::strcmp(argv[i], "--two-pass-lighting") == 0)
+            twoPass = true;
         else if (std::strcmp(argv[i], "--resize") == 0)
             resize = true;
         else if (std::strcmp(argv[i], "--recreate") == 0)
@@ -414,6 +450,16 @@ int main(int argc, char **argv)
     if (lightVolumes) {
         volumes.ambient = new Shader(quadVs, ambientFs);
         volumes.oneLight = new Shader(quadVs, oneLightFs);
+    }
+    Accumulation accumulation;
+    if (twoPass) {
+        glGenFramebuffers(1, &accumulation.framebuffer);
+        glBindFramebuffer(GL_FRAMEBUFFER, accumulation.framebuffer);
+        accumulation.texture = makeTexture(WIDTH, HEIGHT, GL_RGBA16F, GL_FLOAT);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, accumulation.texture, 0);
+        CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "the accumulation target is incomplete");
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        accumulation.compose = new Shader(quadVs, composeFs);
     }
     GLuint cameraBuffer = 0;
     if (viewProjectionOn)
@@ -520,19 +566,36 @@ int main(int argc, char **argv)
         }
 
         // 2. lighting pass, 2.5 the depth copy, 3. the light cubes
+        if (twoPass) {
+            // The lights into the accumulation target, then the compose.
+            glBindFramebuffer(GL_FRAMEBUFFER, accumulation.framebuffer);
+            glClear(GL_COLOR_BUFFER_BIT);
+            lighting(e, volumes);
+        }
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-        lighting(e, volumes);
+        if (twoPass)
+            compose(accumulation);
+        else
+            lighting(e, volumes);
 #ifdef DMSAA_IN_SOURCE
         GLuint secondTarget = 0;
         if (twoLayers && ok(dmsaa_begin_second_layer_own_target(msaa, 0, &secondTarget),
                             "dmsaa_begin_second_layer_own_target")) {
-            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, secondTarget);
-            // Additive lights start from the program's clear colour, as the
-            // first lighting's framebuffer 0 did.
-            if (lightVolumes)
+            if (twoPass) {
+                glBindFramebuffer(GL_DRAW_FRAMEBUFFER, accumulation.framebuffer);
                 glClear(GL_COLOR_BUFFER_BIT);
-            lighting(e, volumes);
+                lighting(e, volumes);
+                glBindFramebuffer(GL_DRAW_FRAMEBUFFER, secondTarget);
+                compose(accumulation);
+            } else {
+                glBindFramebuffer(GL_DRAW_FRAMEBUFFER, secondTarget);
+                // Additive lights start from the program's clear colour, as
+                // the first lighting's framebuffer 0 did.
+                if (lightVolumes)
+                    glClear(GL_COLOR_BUFFER_BIT);
+                lighting(e, volumes);
+            }
             ok(dmsaa_finish_second_layer(msaa, 0), "dmsaa_finish_second_layer");
             glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
         }
@@ -574,7 +637,11 @@ int main(int argc, char **argv)
     glDeleteFramebuffers(1, &prePassFbo);
     glDeleteTextures(1, &prePassColor);
     glDeleteProgram(prePassShader.ID);
-    for (Shader *shader : {volumes.ambient, volumes.oneLight}) {
+    if (accumulation.framebuffer) {
+        glDeleteFramebuffers(1, &accumulation.framebuffer);
+        glDeleteTextures(1, &accumulation.texture);
+    }
+    for (Shader *shader : {volumes.ambient, volumes.oneLight, accumulation.compose}) {
         if (shader) {
             glDeleteProgram(shader->ID);
             delete shader;

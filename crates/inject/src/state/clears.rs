@@ -262,7 +262,7 @@ impl Context {
     /// its framebuffer is the lit target.
     pub(super) fn record_clear(&mut self, mask: u32) {
         if mask & glow::COLOR_BUFFER_BIT == 0
-            || self.recording.as_ref().is_none_or(|r| !r.draws.is_empty())
+            || self.recording.as_ref().is_none_or(|r| r.pass_drawn)
         {
             return;
         }
@@ -274,7 +274,8 @@ impl Context {
         };
         let d = self.draw_fbo;
         if let Some(r) = self.recording.as_mut() {
-            r.clear_colour = Some((d, colour));
+            let before = r.draws.len();
+            r.clears.push((before, d, colour));
         }
     }
 

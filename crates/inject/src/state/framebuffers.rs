@@ -13,14 +13,15 @@ impl Context {
         // A pass ends at the first bind after it drew: the lighting's is
         // replayed, an earlier one's let go.
         if let Some(r) = self.recording.as_mut()
-            && !r.draws.is_empty()
+            && r.pass_drawn
         {
             if r.skip > 0 {
                 r.skip -= 1;
-                r.draws.clear();
-                r.target = None;
-                r.uniforms.clear();
-                r.clear_colour = None;
+                r.let_go();
+            } else if r.passes_left > 0 {
+                // The lighting goes on in its next pass.
+                r.passes_left -= 1;
+                r.pass_drawn = false;
             } else {
                 self.second_layer();
             }

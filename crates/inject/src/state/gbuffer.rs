@@ -32,7 +32,7 @@ impl Context {
         if self
             .recording
             .as_ref()
-            .is_some_and(|r| r.target.is_none_or(|t| t == d))
+            .is_some_and(|r| r.multi_pass || r.target.is_none_or(|t| t == d))
         {
             // SAFETY: a query of the current context.
             let vertex_array =
@@ -48,6 +48,7 @@ impl Context {
             let state = DrawState::read(self.gl());
             if let Some(r) = self.recording.as_mut() {
                 r.target = Some(d);
+                r.pass_drawn = true;
                 let uniforms = std::mem::take(&mut r.uniforms);
                 r.draws.push(RecordedDraw {
                     call,
@@ -55,6 +56,7 @@ impl Context {
                     vertex_array,
                     textures,
                     uniforms,
+                    framebuffer: d,
                     state,
                 });
             }
@@ -227,7 +229,7 @@ impl Context {
         if self
             .recording
             .as_ref()
-            .is_some_and(|r| !r.draws.is_empty() && r.skip == 0)
+            .is_some_and(|r| r.pass_drawn && r.skip == 0 && r.passes_left == 0)
         {
             self.second_layer();
         }

@@ -226,13 +226,16 @@ impl Context {
             }
             // The lighting's draws are recorded: replayed with two layers,
             // and where they end, what follows is forward.
-            let pass = settings()
+            let lighting = settings()
                 .profile
                 .as_ref()
-                .and_then(|p| p.lighting.as_ref())
-                .map_or(1, |l| l.pass);
+                .and_then(|p| p.lighting.as_ref());
+            let pass = lighting.map_or(1, |l| l.pass);
+            let passes = lighting.and_then(|l| l.passes).unwrap_or(1).max(1);
             self.recording = Some(Recording {
                 skip: pass.saturating_sub(1),
+                passes_left: passes - 1,
+                multi_pass: passes > 1,
                 ..Recording::default()
             });
         } else {
@@ -321,12 +324,9 @@ impl Context {
             return;
         }
         let draws = recording.draws;
-        // The pass's colour clear of the lit target, made again on the own
-        // target before the replay (its depth and stencil are the library's).
-        let clear = recording
-            .clear_colour
-            .filter(|&(fbo, _)| fbo == output)
-            .map(|(_, colour)| colour);
+        // The passes' colour clears, made again before the draws they came
+        // before (the own target's depth and stencil are the library's).
+        let clears = recording.clears;
         let mut failed = "the second layer";
         let status = self.checked(
             "the second layer (begin, the replayed lighting, finish)",
@@ -343,14 +343,7 @@ impl Context {
                     return status;
                 };
                 let saved = replay::save(gl, &draws);
-                // SAFETY: the retrofit's framebuffer, bound for the replay.
-                unsafe {
-                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(glow::NativeFramebuffer(own)));
-                    if let Some(colour) = clear {
-                        gl.clear_buffer_f32_slice(glow::COLOR, 0, &colour);
-                    }
-                };
-                replay::draw(gl, &draws);
+                replay::draw(gl, &draws, &clears, output, own.get());
                 // SAFETY: as above; the output given to begin.
                 let status = unsafe { capi::dmsaa_finish_second_layer(handle, output) };
                 replay::restore(gl, &saved);
