@@ -17,6 +17,7 @@
 //! the program built on SDL2 (GLX, EGL) and linked with libGL directly.
 //! A forward bloom program is left untouched without a profile.
 
+mod habits;
 mod left_alone;
 
 use super::capi;
@@ -395,164 +396,17 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
             }
         }
     }
-    // Light volumes (`--light-volumes`): an ambient quad, then one additive
-    // quad per light, each light's values set as uniforms before its draw,
-    // blending on and depth writes off. Two layers replay each draw with
-    // its own uniforms and blend and depth state, after the pass's colour
-    // clear: the in-source frame (its second lighting cleared and drawn the
-    // same way), bit for bit.
-    let volumes: &[&str] = &["--light-volumes"];
-    let own = own_frame(&plain, &out, "GLX-light-volumes", volumes, &xvfb.display());
-    Run {
-        what: "GLFW GLX, light volumes, tutorial two layers".into(),
+    // Engines' habits: light volumes, lighting in two passes, the camera in
+    // a uniform block or one view-projection uniform.
+    habits::run(&habits::Setup {
+        build: &build,
         out: &out,
+        in_source: &in_source,
+        plain: &plain,
         display: xvfb.display(),
-        args: volumes,
-        in_source_args: &["--tutorial-options", "--two-layers"],
-        profile: Some(&two_layers),
-        resolves: 2,
-        calls: &["the second layer (begin, the replayed lighting, finish) 2"],
-    }
-    .compare(&in_source, &plain, &own, "GLX");
-    // The same lights in two passes (`--two-pass-lighting`): added into an
-    // accumulation target of the program's, then composed into
-    // framebuffer 0. With the profile's `[lighting] passes = 2`, the replay
-    // clears and fills the accumulation target again and composes into the
-    // own target: the in-source frame, bit for bit; left at one pass, the
-    // accumulation alone would be the second lighting.
-    let two_pass_profile = build.join("tutorial-two-pass.toml");
-    std::fs::write(
-        &two_pass_profile,
-        format!(
-            "{}\n[lighting]\npass = 1\npasses = 2\n",
-            std::fs::read_to_string(&two_layers).expect("the two-layer profile")
-        ),
-    )
-    .expect("writing the two-pass profile");
-    let two_pass: &[&str] = &["--two-pass-lighting", "--light-volumes"];
-    let own = own_frame(&plain, &out, "GLX-two-pass", two_pass, &xvfb.display());
-    let run = Run {
-        what: "GLFW GLX, two-pass light volumes, tutorial two layers".into(),
-        out: &out,
-        display: xvfb.display(),
-        args: two_pass,
-        in_source_args: &["--tutorial-options", "--two-layers"],
-        profile: Some(&two_pass_profile),
-        resolves: 2,
-        calls: &["the second layer (begin, the replayed lighting, finish) 2"],
-    };
-    run.compare(&in_source, &plain, &own, "GLX");
-    let one_pass = out.join("two-pass-as-one.rgba");
-    capi::run(
-        cli()
-            .args(["inject", "--library"])
-            .arg(capi::built("libdeferred_msaa_inject", "so"))
-            .arg("--profile")
-            .arg(&two_layers)
-            .arg("--")
-            .arg(&plain)
-            .arg(&one_pass)
-            .args(two_pass)
-            .env("DISPLAY", xvfb.display()),
-        "deferred-msaa inject, the two-pass lighting left as one pass",
-    );
-    let expected = out.join(format!(
-        "{}-in-source.rgba",
-        run.what.replace([' ', ','], "-")
-    ));
-    assert!(
-        frame(&one_pass) != frame(&expected),
-        "the two-pass lighting replayed as one pass drew the in-source frame: the test proves nothing"
-    );
-    // The camera in a uniform block (`--camera-block`: no shader has a
-    // `projection` uniform): without a profile the program is left alone,
-    // saying it saw no projection; with the tutorial profile naming the
-    // block's binding and the view's offset, the matrices are read from the
-    // buffer at each resolve and the frame is the in-source one, bit for bit.
-    let camera: &[&str] = &["--camera-block"];
-    let own = own_frame(&plain, &out, "GLX-camera-block", camera, &xvfb.display());
-    let left = out.join("camera-block-no-profile.rgba");
-    let output = capi::run(
-        cli()
-            .args(["inject", "--library"])
-            .arg(capi::built("libdeferred_msaa_inject", "so"))
-            .arg("--")
-            .arg(&plain)
-            .arg(&left)
-            .args(camera)
-            .env("DISPLAY", xvfb.display()),
-        "deferred-msaa inject, the camera in a uniform block, no profile",
-    );
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        stderr.contains("but no projection matrix")
-            && stderr.contains("leaving the program untouched"),
-        "the camera block without a profile:\n{stderr}"
-    );
-    assert!(
-        frame(&left) == own,
-        "left alone, yet not the program's own frame"
-    );
-    let block_profile = build.join("tutorial-camera-block.toml");
-    std::fs::write(
-        &block_profile,
-        text.replace(
-            "[projection]\nuniform = \"projection\"\nview_uniform = \"view\"\n",
-            "[projection]\nblock_binding = 0\noffset = 0\nview_offset = 64\n",
-        ),
-    )
-    .expect("writing the camera-block profile");
-    assert!(
-        std::fs::read_to_string(&block_profile).is_ok_and(|t| t.contains("block_binding")),
-        "the tutorial profile's [projection] table changed: the camera-block profile was not made"
-    );
-    Run {
-        what: "GLFW GLX, camera block, tutorial options".into(),
-        out: &out,
-        display: xvfb.display(),
-        args: camera,
-        in_source_args: &["--tutorial-options"],
-        profile: Some(&block_profile),
-        // The camera known from the profile and the G-buffer by its
-        // signature at its first bind: the first frame is retrofitted too.
-        resolves: 3,
-        calls: &["the camera read from its uniform block 3"],
-    }
-    .compare(&in_source, &plain, &own, "GLX");
-    // The camera as one `viewProjection` uniform (`--view-projection`):
-    // with the profile naming it, it is taken apart into the projection and
-    // the view's z row. The matrices are the product's, rounded otherwise
-    // than the in-source build's own, so the frame may differ from the
-    // in-source one where the depth window's weights round apart: in at
-    // most 1% of the pixels, by at most 8 of 255.
-    let vp: &[&str] = &["--view-projection"];
-    let own = own_frame(&plain, &out, "GLX-view-projection", vp, &xvfb.display());
-    let vp_profile = build.join("tutorial-view-projection.toml");
-    std::fs::write(
-        &vp_profile,
-        text.replace(
-            "[projection]\nuniform = \"projection\"\nview_uniform = \"view\"\n",
-            "[projection]\nview_projection_uniform = \"viewProjection\"\n",
-        ),
-    )
-    .expect("writing the view-projection profile");
-    assert!(
-        std::fs::read_to_string(&vp_profile).is_ok_and(|t| t.contains("view_projection_uniform")),
-        "the tutorial profile's [projection] table changed: the view-projection profile was not made"
-    );
-    Run {
-        what: "GLFW GLX, view-projection uniform, tutorial options".into(),
-        out: &out,
-        display: xvfb.display(),
-        args: vp,
-        in_source_args: &["--tutorial-options"],
-        profile: Some(&vp_profile),
-        // The product set before the G-buffer's first bind: the first frame
-        // is retrofitted too.
-        resolves: 3,
-        calls: &["dmsaa_resolve 3"],
-    }
-    .compare_within(&in_source, &plain, &own, "GLX", 0.01, 8);
+        text: &text,
+        two_layers: &two_layers,
+    });
     // `--learn`: the program untouched, a first profile written with the
     // G-buffer's signature; that profile as it is (every attachment
     // "other", the matrix uniforms seen) gives the default options' frame.

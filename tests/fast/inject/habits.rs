@@ -1,0 +1,207 @@
+//! The tutorial program written with engines' habits under `inject`
+//! (`inject_tutorial.cpp`'s flags): light volumes, lighting in two passes,
+//! the camera in a uniform block or as one view-projection uniform. Each
+//! is run in-source and under inject, its frame compared
+//! (`an_unmodified_glfw_program_under_inject_draws_the_in_source_frame`).
+
+use super::{Run, capi, cli, frame, own_frame};
+use std::path::Path;
+
+/// What the habits' runs share with the test that built the programs.
+pub(super) struct Setup<'a> {
+    pub(super) build: &'a Path,
+    pub(super) out: &'a Path,
+    pub(super) in_source: &'a Path,
+    pub(super) plain: &'a Path,
+    pub(super) display: String,
+    /// The shipped tutorial profile's text.
+    pub(super) text: &'a str,
+    /// That profile at two layers.
+    pub(super) two_layers: &'a Path,
+}
+
+/// Every habit's run.
+pub(super) fn run(setup: &Setup<'_>) {
+    // Light volumes (`--light-volumes`): an ambient quad, then one additive
+    // quad per light, each light's values set as uniforms before its draw,
+    // blending on and depth writes off. Two layers replay each draw with
+    // its own uniforms and blend and depth state, after the pass's colour
+    // clear: the in-source frame (its second lighting cleared and drawn the
+    // same way), bit for bit.
+    let volumes: &[&str] = &["--light-volumes"];
+    let own = own_frame(
+        setup.plain,
+        setup.out,
+        "GLX-light-volumes",
+        volumes,
+        &setup.display,
+    );
+    Run {
+        what: "GLFW GLX, light volumes, tutorial two layers".into(),
+        out: setup.out,
+        display: setup.display.clone(),
+        args: volumes,
+        in_source_args: &["--tutorial-options", "--two-layers"],
+        profile: Some(setup.two_layers),
+        resolves: 2,
+        calls: &["the second layer (begin, the replayed lighting, finish) 2"],
+    }
+    .compare(setup.in_source, setup.plain, &own, "GLX");
+    // The same lights in two passes (`--two-pass-lighting`): added into an
+    // accumulation target of the program's, then composed into
+    // framebuffer 0. With the profile's `[lighting] passes = 2`, the replay
+    // clears and fills the accumulation target again and composes into the
+    // own target: the in-source frame, bit for bit; left at one pass, the
+    // accumulation alone would be the second lighting.
+    let two_pass_profile = setup.build.join("tutorial-two-pass.toml");
+    std::fs::write(
+        &two_pass_profile,
+        format!(
+            "{}\n[lighting]\npass = 1\npasses = 2\n",
+            std::fs::read_to_string(setup.two_layers).expect("the two-layer profile")
+        ),
+    )
+    .expect("writing the two-pass profile");
+    let two_pass: &[&str] = &["--two-pass-lighting", "--light-volumes"];
+    let own = own_frame(
+        setup.plain,
+        setup.out,
+        "GLX-two-pass",
+        two_pass,
+        &setup.display,
+    );
+    let run = Run {
+        what: "GLFW GLX, two-pass light volumes, tutorial two layers".into(),
+        out: setup.out,
+        display: setup.display.clone(),
+        args: two_pass,
+        in_source_args: &["--tutorial-options", "--two-layers"],
+        profile: Some(&two_pass_profile),
+        resolves: 2,
+        calls: &["the second layer (begin, the replayed lighting, finish) 2"],
+    };
+    run.compare(setup.in_source, setup.plain, &own, "GLX");
+    let one_pass = setup.out.join("two-pass-as-one.rgba");
+    capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(capi::built("libdeferred_msaa_inject", "so"))
+            .arg("--profile")
+            .arg(setup.two_layers)
+            .arg("--")
+            .arg(setup.plain)
+            .arg(&one_pass)
+            .args(two_pass)
+            .env("DISPLAY", &setup.display),
+        "deferred-msaa inject, the two-pass lighting left as one pass",
+    );
+    let expected = setup.out.join(format!(
+        "{}-in-source.rgba",
+        run.what.replace([' ', ','], "-")
+    ));
+    assert!(
+        frame(&one_pass) != frame(&expected),
+        "the two-pass lighting replayed as one pass drew the in-source frame: the test proves nothing"
+    );
+    // The camera in a uniform block (`--camera-block`: no shader has a
+    // `projection` uniform): without a profile the program is left alone,
+    // saying it saw no projection; with the tutorial profile naming the
+    // block's binding and the view's offset, the matrices are read from the
+    // buffer at each resolve and the frame is the in-source one, bit for bit.
+    let camera: &[&str] = &["--camera-block"];
+    let own = own_frame(
+        setup.plain,
+        setup.out,
+        "GLX-camera-block",
+        camera,
+        &setup.display,
+    );
+    let left = setup.out.join("camera-block-no-profile.rgba");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(capi::built("libdeferred_msaa_inject", "so"))
+            .arg("--")
+            .arg(setup.plain)
+            .arg(&left)
+            .args(camera)
+            .env("DISPLAY", &setup.display),
+        "deferred-msaa inject, the camera in a uniform block, no profile",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("but no projection matrix")
+            && stderr.contains("leaving the program untouched"),
+        "the camera block without a profile:\n{stderr}"
+    );
+    assert!(
+        frame(&left) == own,
+        "left alone, yet not the program's own frame"
+    );
+    let block_profile = setup.build.join("tutorial-camera-block.toml");
+    std::fs::write(
+        &block_profile,
+        setup.text.replace(
+            "[projection]\nuniform = \"projection\"\nview_uniform = \"view\"\n",
+            "[projection]\nblock_binding = 0\noffset = 0\nview_offset = 64\n",
+        ),
+    )
+    .expect("writing the camera-block profile");
+    assert!(
+        std::fs::read_to_string(&block_profile).is_ok_and(|t| t.contains("block_binding")),
+        "the tutorial profile's [projection] table changed: the camera-block profile was not made"
+    );
+    Run {
+        what: "GLFW GLX, camera block, tutorial options".into(),
+        out: setup.out,
+        display: setup.display.clone(),
+        args: camera,
+        in_source_args: &["--tutorial-options"],
+        profile: Some(&block_profile),
+        // The camera known from the profile and the G-buffer by its
+        // signature at its first bind: the first frame is retrofitted too.
+        resolves: 3,
+        calls: &["the camera read from its uniform block 3"],
+    }
+    .compare(setup.in_source, setup.plain, &own, "GLX");
+    // The camera as one `viewProjection` uniform (`--view-projection`):
+    // with the profile naming it, it is taken apart into the projection and
+    // the view's z row. The matrices are the product's, rounded otherwise
+    // than the in-source build's own, so the frame may differ from the
+    // in-source one where the depth window's weights round apart: in at
+    // most 1% of the pixels, by at most 8 of 255.
+    let vp: &[&str] = &["--view-projection"];
+    let own = own_frame(
+        setup.plain,
+        setup.out,
+        "GLX-view-projection",
+        vp,
+        &setup.display,
+    );
+    let vp_profile = setup.build.join("tutorial-view-projection.toml");
+    std::fs::write(
+        &vp_profile,
+        setup.text.replace(
+            "[projection]\nuniform = \"projection\"\nview_uniform = \"view\"\n",
+            "[projection]\nview_projection_uniform = \"viewProjection\"\n",
+        ),
+    )
+    .expect("writing the view-projection profile");
+    assert!(
+        std::fs::read_to_string(&vp_profile).is_ok_and(|t| t.contains("view_projection_uniform")),
+        "the tutorial profile's [projection] table changed: the view-projection profile was not made"
+    );
+    Run {
+        what: "GLFW GLX, view-projection uniform, tutorial options".into(),
+        out: setup.out,
+        display: setup.display.clone(),
+        args: vp,
+        in_source_args: &["--tutorial-options"],
+        profile: Some(&vp_profile),
+        // The product set before the G-buffer's first bind: the first frame
+        // is retrofitted too.
+        resolves: 3,
+        calls: &["dmsaa_resolve 3"],
+    }
+    .compare_within(setup.in_source, setup.plain, &own, "GLX", 0.01, 8);
+}
