@@ -73,6 +73,26 @@ pub(crate) enum UniformValue {
     Matrix4(Vec<f32>),
 }
 
+/// A uniform buffer's binding or contents changed between two draws of
+/// the recording (a light's values written into the block it reads).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum BufferChange {
+    /// `glBindBufferBase` (`size` 0) or `glBindBufferRange` on
+    /// `GL_UNIFORM_BUFFER`.
+    Bind {
+        index: u32,
+        buffer: u32,
+        offset: i32,
+        size: i32,
+    },
+    /// `glBufferSubData` into the buffer bound at `GL_UNIFORM_BUFFER`.
+    Data {
+        buffer: u32,
+        offset: i32,
+        bytes: Vec<u8>,
+    },
+}
+
 /// The blend and depth state a draw was made with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub(crate) struct DrawState {
@@ -139,6 +159,8 @@ pub(crate) struct RecordedDraw {
     pub(crate) textures: Vec<(u32, u32)>,
     /// The uniform calls made since the recording's last draw.
     pub(crate) uniforms: Vec<UniformCall>,
+    /// The uniform buffers' changes since the recording's last draw.
+    pub(crate) buffers: Vec<BufferChange>,
     /// The framebuffer it drew into (the program's name).
     pub(crate) framebuffer: u32,
     /// The blend and depth state it drew with.
@@ -157,6 +179,8 @@ pub(crate) struct Recording {
     pub(crate) skip: u32,
     /// Uniform calls made since the last recorded draw (the next one's).
     pub(crate) uniforms: Vec<UniformCall>,
+    /// Uniform-buffer changes since the last recorded draw (the next one's).
+    pub(crate) buffers: Vec<BufferChange>,
     /// The colour clears made before a pass's first draw: (the draw they
     /// come before, the framebuffer, the colour).
     pub(crate) clears: Vec<(usize, u32, [f32; 4])>,
@@ -175,6 +199,7 @@ impl Recording {
         self.draws.clear();
         self.target = None;
         self.uniforms.clear();
+        self.buffers.clear();
         self.clears.clear();
         self.pass_drawn = false;
     }
@@ -195,6 +220,11 @@ fn texture(name: u32) -> Option<glow::Texture> {
 /// The state a replay changes, read before it.
 pub(crate) struct Saved {
     state: DrawState,
+    /// (index, buffer, start, size) of every uniform-buffer binding point
+    /// the replay binds.
+    bindings: Vec<(u32, u32, i32, i32)>,
+    uniform_buffer: u32,
+    copy_write_buffer: u32,
     program: u32,
     vertex_array: u32,
     active: u32,
@@ -221,8 +251,32 @@ pub(crate) fn save(gl: &glow::Context, draws: &[RecordedDraw]) -> Saved {
             })
             .collect();
         gl.active_texture(active);
+        let mut indices: Vec<u32> = draws
+            .iter()
+            .flat_map(|d| d.buffers.iter())
+            .filter_map(|b| match b {
+                BufferChange::Bind { index, .. } => Some(*index),
+                BufferChange::Data { .. } => None,
+            })
+            .collect();
+        indices.sort_unstable();
+        indices.dedup();
+        let bindings = indices
+            .iter()
+            .map(|&i| {
+                (
+                    i,
+                    gl.get_parameter_indexed_i32(glow::UNIFORM_BUFFER_BINDING, i) as u32,
+                    gl.get_parameter_indexed_i32(glow::UNIFORM_BUFFER_START, i),
+                    gl.get_parameter_indexed_i32(glow::UNIFORM_BUFFER_SIZE, i),
+                )
+            })
+            .collect();
         Saved {
             state: DrawState::read(gl),
+            bindings,
+            uniform_buffer: gl.get_parameter_i32(glow::UNIFORM_BUFFER_BINDING) as u32,
+            copy_write_buffer: gl.get_parameter_i32(glow::COPY_WRITE_BUFFER_BINDING) as u32,
             program: gl.get_parameter_i32(glow::CURRENT_PROGRAM) as u32,
             vertex_array: gl.get_parameter_i32(glow::VERTEX_ARRAY_BINDING) as u32,
             active,
@@ -271,6 +325,9 @@ pub(crate) fn draw(
             if target != bound {
                 gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, fbo(target));
                 bound = target;
+            }
+            for b in &d.buffers {
+                change_buffer(gl, b);
             }
             for u in &d.uniforms {
                 gl.use_program(program(u.program));
@@ -340,11 +397,57 @@ unsafe fn set_uniform(gl: &glow::Context, u: &UniformCall) {
     }
 }
 
+fn buffer(name: u32) -> Option<glow::Buffer> {
+    NonZeroU32::new(name).map(glow::NativeBuffer)
+}
+
+/// Make one recorded uniform-buffer change again.
+///
+/// # Safety
+///
+/// The program's buffers, as it used them.
+unsafe fn change_buffer(gl: &glow::Context, change: &BufferChange) {
+    // SAFETY: the caller's.
+    unsafe {
+        match change {
+            BufferChange::Bind {
+                index,
+                buffer: b,
+                offset,
+                size,
+            } => {
+                if *size > 0 {
+                    gl.bind_buffer_range(glow::UNIFORM_BUFFER, *index, buffer(*b), *offset, *size)
+                } else {
+                    gl.bind_buffer_base(glow::UNIFORM_BUFFER, *index, buffer(*b))
+                }
+            }
+            BufferChange::Data {
+                buffer: b,
+                offset,
+                bytes,
+            } => {
+                gl.bind_buffer(glow::COPY_WRITE_BUFFER, buffer(*b));
+                gl.buffer_sub_data_u8_slice(glow::COPY_WRITE_BUFFER, *offset, bytes);
+            }
+        }
+    }
+}
+
 /// Put back what [`save`] read.
 pub(crate) fn restore(gl: &glow::Context, saved: &Saved) {
     saved.state.apply(gl);
     // SAFETY: the names the context had bound, bound again.
     unsafe {
+        for &(index, b, start, size) in &saved.bindings {
+            if size > 0 {
+                gl.bind_buffer_range(glow::UNIFORM_BUFFER, index, buffer(b), start, size);
+            } else {
+                gl.bind_buffer_base(glow::UNIFORM_BUFFER, index, buffer(b));
+            }
+        }
+        gl.bind_buffer(glow::UNIFORM_BUFFER, buffer(saved.uniform_buffer));
+        gl.bind_buffer(glow::COPY_WRITE_BUFFER, buffer(saved.copy_write_buffer));
         for &(unit, name) in &saved.textures {
             gl.active_texture(glow::TEXTURE0 + unit);
             gl.bind_texture(glow::TEXTURE_2D, texture(name));

@@ -47,6 +47,29 @@ pub(super) fn run(setup: &Setup<'_>) {
         calls: &["the second layer (begin, the replayed lighting, finish) 2"],
     }
     .compare(setup.in_source, setup.plain, &own, "GLX");
+    // The same light volumes with each light's values in a uniform block
+    // (`--light-block`), written with glBufferSubData before its draw: the
+    // replay writes each light's bytes again before its draw, the in-source
+    // frame bit for bit.
+    let block: &[&str] = &["--light-volumes", "--light-block"];
+    let own = own_frame(
+        setup.plain,
+        setup.out,
+        "GLX-light-block",
+        block,
+        &setup.display,
+    );
+    Run {
+        what: "GLFW GLX, light volumes from a uniform block, tutorial two layers".into(),
+        out: setup.out,
+        display: setup.display.clone(),
+        args: block,
+        in_source_args: &["--tutorial-options", "--two-layers"],
+        profile: Some(setup.two_layers),
+        resolves: 2,
+        calls: &["the second layer (begin, the replayed lighting, finish) 2"],
+    }
+    .compare(setup.in_source, setup.plain, &own, "GLX");
     // The same lights in two passes (`--two-pass-lighting`): added into an
     // accumulation target of the program's, then composed into
     // framebuffer 0. With the profile's `[lighting] passes = 2`, the replay

@@ -46,6 +46,10 @@
 //                       set as uniforms before its draw; the in-source build
 //                       clears its second lighting's target as it clears
 //                       framebuffer 0 before lighting
+//   --light-block       (with --light-volumes) each light's values in a
+//                       uniform block (`LightBlock`, std140, binding 1),
+//                       written with glBufferSubData before its draw, as
+//                       engines keep per-light data, not as uniforms
 //   --two-pass-lighting the lighting in two passes, as engines with an
 //                       accumulation target light: into an RGBA16F target of
 //                       its own (cleared first), then a compose quad copying
@@ -172,6 +176,13 @@ static void useViewProjection(Engine &e)
     e.shaderLightBox = new Shader(lightBoxViewProjectionVs, lightBoxFs);
 }
 
+// The uniform-block functions, loaded by the program itself (the shared
+// loader lists the tutorial's calls only).
+static PFNGLBINDBUFFERBASEPROC cbBindBufferBase;
+static PFNGLBUFFERSUBDATAPROC cbBufferSubData;
+static PFNGLGETUNIFORMBLOCKINDEXPROC cbGetUniformBlockIndex;
+static PFNGLUNIFORMBLOCKBINDINGPROC cbUniformBlockBinding;
+
 // The lighting as light volumes: an ambient pass, then one light a draw.
 static const char *ambientFs = R"(
 out vec4 FragColor;
@@ -215,7 +226,23 @@ void main()
 
 struct Volumes {
     Shader *ambient = nullptr, *oneLight = nullptr;
+    // With --light-block: the lights' block and its buffer.
+    GLuint lightBuffer = 0;
 };
+
+// The one-light shader's light in a uniform block instead.
+static const char *lightBlockDecl = R"(
+layout(std140) uniform LightBlock
+{
+    vec4 lightPositionBlock;
+    vec4 lightColorBlock;
+    vec4 lightFalloff;
+};
+#define lightPosition lightPositionBlock.xyz
+#define lightColor lightColorBlock.rgb
+#define lightLinear lightFalloff.x
+#define lightQuadratic lightFalloff.y
+)";
 
 // The compose of the two-pass lighting: the accumulated light, as it is.
 static const char *composeFs = R"(
@@ -262,13 +289,25 @@ static void lighting(Engine &e, const Volumes &volumes)
     volumes.oneLight->setInt("gNormal", 1);
     volumes.oneLight->setInt("gAlbedoSpec", 2);
     volumes.oneLight->setVec3("viewPos", cameraPosition);
+    if (volumes.lightBuffer) {
+        cbBindBufferBase(GL_UNIFORM_BUFFER, 1, volumes.lightBuffer);
+        glBindBuffer(GL_UNIFORM_BUFFER, volumes.lightBuffer);
+    }
     for (size_t i = 0; i < e.lightPositions.size(); i++) {
-        volumes.oneLight->setVec3("lightPosition", e.lightPositions[i]);
-        volumes.oneLight->setVec3("lightColor", e.lightColors[i]);
-        volumes.oneLight->setFloat("lightLinear", 0.7f);
-        volumes.oneLight->setFloat("lightQuadratic", 1.8f);
+        if (volumes.lightBuffer) {
+            const Vec3 p = e.lightPositions[i], c = e.lightColors[i];
+            const float light[12] = {p.x, p.y, p.z, 1.0f, c.x, c.y, c.z, 1.0f, 0.7f, 1.8f, 0.0f, 0.0f};
+            cbBufferSubData(GL_UNIFORM_BUFFER, 0, sizeof light, light);
+        } else {
+            volumes.oneLight->setVec3("lightPosition", e.lightPositions[i]);
+            volumes.oneLight->setVec3("lightColor", e.lightColors[i]);
+            volumes.oneLight->setFloat("lightLinear", 0.7f);
+            volumes.oneLight->setFloat("lightQuadratic", 1.8f);
+        }
         renderQuad();
     }
+    if (volumes.lightBuffer)
+        glBindBuffer(GL_UNIFORM_BUFFER, 0);
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
     glEnable(GL_DEPTH_TEST);
@@ -284,12 +323,6 @@ static void compose(const Accumulation &a)
     renderQuad();
 }
 
-// The uniform-block functions, loaded by the program itself (the shared
-// loader lists the tutorial's calls only).
-static PFNGLBINDBUFFERBASEPROC cbBindBufferBase;
-static PFNGLBUFFERSUBDATAPROC cbBufferSubData;
-static PFNGLGETUNIFORMBLOCKINDEXPROC cbGetUniformBlockIndex;
-static PFNGLUNIFORMBLOCKBINDINGPROC cbUniformBlockBinding;
 
 // The engine's shaders made anew with the camera block at binding 0.
 static void useCameraBlock(Engine &e)
@@ -356,7 +389,7 @@ int main(int argc, char **argv)
     }
     bool egl = false, tutorialOptions = false, twoLayers = false, forward = false, resize = false, recreate = false,
          prePass = false, cameraBlockOn = false, viewProjectionOn = false, lightVolumes = false,
-         twoPass = false;
+         twoPass = false, lightBlock = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -374,6 +407,8 @@ int main(int argc, char **argv)
             lightVolumes = true;
         else if (std::strcmp(argv[i], "--two-pass-lighting") == 0)
             twoPass = true;
+        else if (std::strcmp(argv[i], "--light-block") == 0)
+            lightBlock = true;
         else if (std::strcmp(argv[i], "--resize") == 0)
             resize = true;
         else if (std::strcmp(argv[i], "--recreate") == 0)
@@ -449,7 +484,20 @@ int main(int argc, char **argv)
     Volumes volumes;
     if (lightVolumes) {
         volumes.ambient = new Shader(quadVs, ambientFs);
-        volumes.oneLight = new Shader(quadVs, oneLightFs);
+        if (lightBlock) {
+            // The light's uniforms become the block's members.
+            std::string fs = oneLightFs;
+            const std::string from = "uniform vec3 lightPosition;\nuniform vec3 lightColor;\nuniform float lightLinear;\nuniform float lightQuadratic;\n";
+            fs.replace(fs.find(from), from.size(), lightBlockDecl);
+            volumes.oneLight = new Shader(quadVs, fs.c_str());
+            cbUniformBlockBinding(volumes.oneLight->ID, cbGetUniformBlockIndex(volumes.oneLight->ID, "LightBlock"), 1);
+            glGenBuffers(1, &volumes.lightBuffer);
+            glBindBuffer(GL_UNIFORM_BUFFER, volumes.lightBuffer);
+            glBufferData(GL_UNIFORM_BUFFER, 48, nullptr, GL_DYNAMIC_DRAW);
+            glBindBuffer(GL_UNIFORM_BUFFER, 0);
+        } else {
+            volumes.oneLight = new Shader(quadVs, oneLightFs);
+        }
     }
     Accumulation accumulation;
     if (twoPass) {
@@ -637,6 +685,8 @@ int main(int argc, char **argv)
     glDeleteFramebuffers(1, &prePassFbo);
     glDeleteTextures(1, &prePassColor);
     glDeleteProgram(prePassShader.ID);
+    if (volumes.lightBuffer)
+        glDeleteBuffers(1, &volumes.lightBuffer);
     if (accumulation.framebuffer) {
         glDeleteFramebuffers(1, &accumulation.framebuffer);
         glDeleteTextures(1, &accumulation.texture);

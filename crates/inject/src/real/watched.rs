@@ -24,6 +24,9 @@ macro_rules! watched_functions {
             glUseProgram(program: u32);
             glGetUniformLocation(program: u32, name: *const c_char) -> i32;
             glUniformMatrix4fv(location: i32, count: i32, transpose: u8, value: *const f32);
+            glBindBufferBase(target: u32, index: u32, buffer: u32);
+            glBindBufferRange(target: u32, index: u32, buffer: u32, offset: isize, size: isize);
+            glBufferSubData(target: u32, offset: isize, size: isize, data: *const c_void);
             glUniform1f(location: i32, v0: f32);
             glUniform2f(location: i32, v0: f32, v1: f32);
             glUniform3f(location: i32, v0: f32, v1: f32, v2: f32);

@@ -50,12 +50,14 @@ impl Context {
                 r.target = Some(d);
                 r.pass_drawn = true;
                 let uniforms = std::mem::take(&mut r.uniforms);
+                let buffers = std::mem::take(&mut r.buffers);
                 r.draws.push(RecordedDraw {
                     call,
                     program,
                     vertex_array,
                     textures,
                     uniforms,
+                    buffers,
                     framebuffer: d,
                     state,
                 });

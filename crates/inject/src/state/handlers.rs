@@ -8,7 +8,7 @@ use super::clears::{ClearBuffer, ClearValue};
 use super::context::{Context, MatrixRole};
 use super::run::{FRAMES, SEEN, left_alone, outcome_said, say_once, settings};
 use crate::real::{current_context, real_type};
-use crate::replay::{DrawCall, UniformCall, UniformValue};
+use crate::replay::{BufferChange, DrawCall, UniformCall, UniformValue};
 use std::collections::HashMap;
 use std::ffi::{CStr, c_char, c_ulong, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -314,6 +314,88 @@ pub(crate) fn glGetUniformLocation(
         });
     }
     location
+}
+
+/// A uniform buffer's change made while the lighting is recorded: kept for
+/// its replay, before the next recorded draw.
+fn record_buffer(change: impl FnOnce(&mut Context) -> Option<BufferChange>) {
+    with_context(|cx| {
+        if cx.recording.is_none() {
+            return;
+        }
+        if let Some(c) = change(cx)
+            && let Some(r) = cx.recording.as_mut()
+        {
+            r.buffers.push(c);
+        }
+    });
+}
+
+pub(crate) fn glBindBufferBase(
+    real: real_type::glBindBufferBase,
+    target: u32,
+    index: u32,
+    buffer: u32,
+) {
+    unsafe { real(target, index, buffer) };
+    if target == glow::UNIFORM_BUFFER {
+        record_buffer(|_| {
+            Some(BufferChange::Bind {
+                index,
+                buffer,
+                offset: 0,
+                size: 0,
+            })
+        });
+    }
+}
+
+pub(crate) fn glBindBufferRange(
+    real: real_type::glBindBufferRange,
+    target: u32,
+    index: u32,
+    buffer: u32,
+    offset: isize,
+    size: isize,
+) {
+    unsafe { real(target, index, buffer, offset, size) };
+    if target == glow::UNIFORM_BUFFER {
+        record_buffer(|_| {
+            Some(BufferChange::Bind {
+                index,
+                buffer,
+                offset: offset as i32,
+                size: size as i32,
+            })
+        });
+    }
+}
+
+pub(crate) fn glBufferSubData(
+    real: real_type::glBufferSubData,
+    target: u32,
+    offset: isize,
+    size: isize,
+    data: *const c_void,
+) {
+    unsafe { real(target, offset, size, data) };
+    if target != glow::UNIFORM_BUFFER || data.is_null() || size <= 0 {
+        return;
+    }
+    record_buffer(|cx| {
+        // SAFETY: a query of the current context.
+        let buffer =
+            unsafe { glow::HasContext::get_parameter_i32(cx.gl(), glow::UNIFORM_BUFFER_BINDING) }
+                as u32;
+        // SAFETY: GL read `size` bytes there.
+        let bytes =
+            unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size as usize) }.to_vec();
+        Some(BufferChange::Data {
+            buffer,
+            offset: offset as i32,
+            bytes,
+        })
+    });
 }
 
 /// A uniform call made while the lighting is recorded: kept for its
