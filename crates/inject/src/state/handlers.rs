@@ -6,9 +6,10 @@
 
 use super::clears::{ClearBuffer, ClearValue};
 use super::context::{Context, MatrixRole};
+use super::lighting_calls::copied;
 use super::run::{FRAMES, SEEN, left_alone, outcome_said, say_once, settings};
 use crate::real::{current_context, real_type};
-use crate::replay::{BufferChange, DrawCall, UniformCall, UniformValue};
+use crate::replay::{DrawCall, UniformValue};
 use std::collections::HashMap;
 use std::ffi::{CStr, c_char, c_ulong, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -316,21 +317,6 @@ pub(crate) fn glGetUniformLocation(
     location
 }
 
-/// A uniform buffer's change made while the lighting is recorded: kept for
-/// its replay, before the next recorded draw.
-fn record_buffer(change: impl FnOnce(&mut Context) -> Option<BufferChange>) {
-    with_context(|cx| {
-        if cx.recording.is_none() {
-            return;
-        }
-        if let Some(c) = change(cx)
-            && let Some(r) = cx.recording.as_mut()
-        {
-            r.buffers.push(c);
-        }
-    });
-}
-
 pub(crate) fn glBindBufferBase(
     real: real_type::glBindBufferBase,
     target: u32,
@@ -339,14 +325,7 @@ pub(crate) fn glBindBufferBase(
 ) {
     unsafe { real(target, index, buffer) };
     if target == glow::UNIFORM_BUFFER {
-        record_buffer(|_| {
-            Some(BufferChange::Bind {
-                index,
-                buffer,
-                offset: 0,
-                size: 0,
-            })
-        });
+        with_context(|cx| cx.record_binding(index, buffer, 0, 0));
     }
 }
 
@@ -360,14 +339,7 @@ pub(crate) fn glBindBufferRange(
 ) {
     unsafe { real(target, index, buffer, offset, size) };
     if target == glow::UNIFORM_BUFFER {
-        record_buffer(|_| {
-            Some(BufferChange::Bind {
-                index,
-                buffer,
-                offset: offset as i32,
-                size: size as i32,
-            })
-        });
+        with_context(|cx| cx.record_binding(index, buffer, offset, size));
     }
 }
 
@@ -379,55 +351,15 @@ pub(crate) fn glBufferSubData(
     data: *const c_void,
 ) {
     unsafe { real(target, offset, size, data) };
-    if target != glow::UNIFORM_BUFFER || data.is_null() || size <= 0 {
-        return;
+    if target == glow::UNIFORM_BUFFER {
+        // SAFETY: GL read `size` bytes at `data`.
+        with_context(|cx| unsafe { cx.record_buffer_data(offset, size, data) });
     }
-    record_buffer(|cx| {
-        // SAFETY: a query of the current context.
-        let buffer =
-            unsafe { glow::HasContext::get_parameter_i32(cx.gl(), glow::UNIFORM_BUFFER_BINDING) }
-                as u32;
-        // SAFETY: GL read `size` bytes there.
-        let bytes =
-            unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size as usize) }.to_vec();
-        Some(BufferChange::Data {
-            buffer,
-            offset: offset as i32,
-            bytes,
-        })
-    });
 }
 
-/// A uniform call made while the lighting is recorded: kept for its
-/// replay, on the program bound now.
+/// A uniform call made while the lighting is recorded.
 fn record_uniform(location: i32, value: UniformValue) {
-    if location < 0 {
-        return;
-    }
-    with_context(|cx| {
-        let program = cx.program;
-        if let Some(r) = cx.recording.as_mut() {
-            r.uniforms.push(UniformCall {
-                program,
-                location,
-                value,
-            });
-        }
-    });
-}
-
-/// `count` elements of `n` components at `value`, copied (none from a
-/// null pointer or a count below 1, GL's errors).
-///
-/// # Safety
-///
-/// `value` points at `count * n` values, as GL reads them.
-unsafe fn copied<T: Copy>(value: *const T, count: i32, n: usize) -> Option<Vec<T>> {
-    if value.is_null() || count < 1 {
-        return None;
-    }
-    // SAFETY: the caller's.
-    Some(unsafe { std::slice::from_raw_parts(value, count as usize * n) }.to_vec())
+    with_context(|cx| cx.record_uniform(location, value));
 }
 
 macro_rules! uniform_scalars {

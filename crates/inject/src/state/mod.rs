@@ -20,5 +20,6 @@ mod framebuffers;
 mod gbuffer;
 pub(crate) mod handlers;
 mod learn;
+mod lighting_calls;
 mod retrofit;
 mod run;
