@@ -70,6 +70,55 @@ pub(super) fn run(setup: &Setup<'_>) {
         calls: &["the second layer (begin, the replayed lighting, finish) 2"],
     }
     .compare(setup.in_source, setup.plain, &own, "GLX");
+    // An HDR lit target (`--float-lit`: RGBA16F, blitted to the screen),
+    // nothing declared: the forward target, on by default, is refused for
+    // it (its tonemap unknown) and said once; the retrofit goes on, the
+    // cubes single-sampled, the frame the in-source one (whose
+    // dmsaa_begin_forward is refused alike).
+    let float_lit: &[&str] = &["--float-lit"];
+    let own = own_frame(
+        setup.plain,
+        setup.out,
+        "GLX-float-lit",
+        float_lit,
+        &setup.display,
+    );
+    Run {
+        what: "GLFW GLX, float lit target, default options".into(),
+        out: setup.out,
+        display: setup.display.clone(),
+        args: float_lit,
+        in_source_args: &[],
+        profile: None,
+        resolves: 2,
+        // Asked once, refused, not asked again.
+        calls: &["dmsaa_begin_forward 1"],
+    }
+    .compare(setup.in_source, setup.plain, &own, "GLX");
+    let said = capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(capi::built("libdeferred_msaa_inject", "so"))
+            .arg("--")
+            .arg(setup.plain)
+            .arg(setup.out.join("float-lit-said.rgba"))
+            .args(float_lit)
+            .env("DISPLAY", &setup.display),
+        "deferred-msaa inject, float lit target",
+    );
+    let stderr = String::from_utf8_lossy(&said.stderr);
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("deferred-msaa inject: "))
+        .collect();
+    assert!(
+        lines.len() == 2
+            && lines[0].contains("retrofitting framebuffer")
+            && lines[1].contains("dmsaa_begin_forward failed")
+            && lines[1].contains("layer_mix")
+            && lines[1].contains("single-sampled"),
+        "the refused forward target, said once:\n{stderr}"
+    );
     // The same lights in two passes (`--two-pass-lighting`): added into an
     // accumulation target of the program's, then composed into
     // framebuffer 0. With the profile's `[lighting] passes = 2`, the replay

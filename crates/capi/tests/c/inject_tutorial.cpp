@@ -56,6 +56,12 @@
 //                       it into framebuffer 0; the in-source build's second
 //                       lighting is both passes again, the compose into its
 //                       own target
+//   --float-lit         the lighting and the light cubes into an RGBA16F
+//                       target of the program's (with its own depth), then
+//                       blitted to framebuffer 0, as HDR engines light; its
+//                       forward target, with nothing declared, is refused
+//                       (DMSAA_STATUS_LAYER_MIX_UNDECLARED) and the cubes
+//                       stay single-sampled, in-source as under inject
 //   --view-projection   the camera as one `viewProjection` uniform (the
 //                       product, made on the CPU), as engines upload it: no
 //                       shader has a `projection` uniform
@@ -389,7 +395,7 @@ int main(int argc, char **argv)
     }
     bool egl = false, tutorialOptions = false, twoLayers = false, forward = false, resize = false, recreate = false,
          prePass = false, cameraBlockOn = false, viewProjectionOn = false, lightVolumes = false,
-         twoPass = false, lightBlock = false;
+         twoPass = false, lightBlock = false, floatLit = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -409,6 +415,8 @@ int main(int argc, char **argv)
             twoPass = true;
         else if (std::strcmp(argv[i], "--light-block") == 0)
             lightBlock = true;
+        else if (std::strcmp(argv[i], "--float-lit") == 0)
+            floatLit = true;
         else if (std::strcmp(argv[i], "--resize") == 0)
             resize = true;
         else if (std::strcmp(argv[i], "--recreate") == 0)
@@ -498,6 +506,20 @@ int main(int argc, char **argv)
         } else {
             volumes.oneLight = new Shader(quadVs, oneLightFs);
         }
+    }
+    // The lit target: framebuffer 0, or with --float-lit an RGBA16F one.
+    GLuint litTarget = 0, litColor = 0, litDepth = 0;
+    if (floatLit) {
+        glGenFramebuffers(1, &litTarget);
+        glBindFramebuffer(GL_FRAMEBUFFER, litTarget);
+        litColor = makeTexture(WIDTH, HEIGHT, GL_RGBA16F, GL_FLOAT);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, litColor, 0);
+        glGenRenderbuffers(1, &litDepth);
+        glBindRenderbuffer(GL_RENDERBUFFER, litDepth);
+        glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT, WIDTH, HEIGHT);
+        glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, litDepth);
+        CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "the lit target is incomplete");
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
     }
     Accumulation accumulation;
     if (twoPass) {
@@ -620,7 +642,7 @@ int main(int argc, char **argv)
             glClear(GL_COLOR_BUFFER_BIT);
             lighting(e, volumes);
         }
-        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glBindFramebuffer(GL_FRAMEBUFFER, litTarget);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
         if (twoPass)
             compose(accumulation);
@@ -628,7 +650,7 @@ int main(int argc, char **argv)
             lighting(e, volumes);
 #ifdef DMSAA_IN_SOURCE
         GLuint secondTarget = 0;
-        if (twoLayers && ok(dmsaa_begin_second_layer_own_target(msaa, 0, &secondTarget),
+        if (twoLayers && ok(dmsaa_begin_second_layer_own_target(msaa, litTarget, &secondTarget),
                             "dmsaa_begin_second_layer_own_target")) {
             if (twoPass) {
                 glBindFramebuffer(GL_DRAW_FRAMEBUFFER, accumulation.framebuffer);
@@ -644,21 +666,33 @@ int main(int argc, char **argv)
                     glClear(GL_COLOR_BUFFER_BIT);
                 lighting(e, volumes);
             }
-            ok(dmsaa_finish_second_layer(msaa, 0), "dmsaa_finish_second_layer");
-            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+            ok(dmsaa_finish_second_layer(msaa, litTarget), "dmsaa_finish_second_layer");
+            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, litTarget);
         }
 #endif
-        blitDepth(e, 0);
+        blitDepth(e, litTarget);
 #ifdef DMSAA_IN_SOURCE
         GLuint forwardTarget = 0;
-        if (forward && ok(dmsaa_begin_forward(msaa, 0, &forwardTarget), "dmsaa_begin_forward"))
-            glBindFramebuffer(GL_FRAMEBUFFER, forwardTarget);
+        if (forward) {
+            DmsaaStatus status = dmsaa_begin_forward(msaa, litTarget, &forwardTarget);
+            // A float lit target with nothing declared: refused, as inject
+            // is; the cubes stay single-sampled.
+            if (!(floatLit && status == DMSAA_STATUS_LAYER_MIX_UNDECLARED) && ok(status, "dmsaa_begin_forward"))
+                glBindFramebuffer(GL_FRAMEBUFFER, forwardTarget);
+        }
 #endif
         lightCubes(e);
 #ifdef DMSAA_IN_SOURCE
         if (forwardTarget != 0)
-            ok(dmsaa_finish_forward(msaa, 0), "dmsaa_finish_forward");
+            ok(dmsaa_finish_forward(msaa, litTarget), "dmsaa_finish_forward");
 #endif
+        if (floatLit) {
+            // The HDR image onto the screen, as it is.
+            glBindFramebuffer(GL_READ_FRAMEBUFFER, litTarget);
+            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+            glBlitFramebuffer(0, 0, WIDTH, HEIGHT, 0, 0, WIDTH, HEIGHT, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+            glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        }
         checkGlErrors("a frame");
 
         if (frame == FRAMES - 1) {
@@ -687,6 +721,11 @@ int main(int argc, char **argv)
     glDeleteProgram(prePassShader.ID);
     if (volumes.lightBuffer)
         glDeleteBuffers(1, &volumes.lightBuffer);
+    if (litTarget) {
+        glDeleteFramebuffers(1, &litTarget);
+        glDeleteTextures(1, &litColor);
+        glDeleteRenderbuffers(1, &litDepth);
+    }
     if (accumulation.framebuffer) {
         glDeleteFramebuffers(1, &accumulation.framebuffer);
         glDeleteTextures(1, &accumulation.texture);

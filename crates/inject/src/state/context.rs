@@ -137,6 +137,9 @@ pub(crate) struct Context {
     pub(super) recording: Option<Recording>,
     /// After the lighting: the forward target of the frame.
     pub(super) forward: Option<Forward>,
+    /// The library refused the forward target once (a float lit target
+    /// with no `layer_mix` declared): not asked for again.
+    pub(super) forward_refused: bool,
 }
 
 impl Context {
@@ -181,6 +184,7 @@ impl Context {
             last_frame: Vec::new(),
             recording: None,
             forward: None,
+            forward_refused: false,
         }
     }
 

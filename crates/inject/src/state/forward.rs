@@ -10,7 +10,7 @@
 //! swap. A profile turns it off with `forward = false`.
 
 use super::context::{Context, Forward, GL_DRAW_FRAMEBUFFER, GL_READ_FRAMEBUFFER};
-use super::run::settings;
+use super::run::{say_once, settings};
 use deferred_msaa_capi as capi;
 
 const GL_FRAMEBUFFER: u32 = 0x8D40;
@@ -25,7 +25,7 @@ impl Context {
             .and_then(|p| p.retrofit.as_ref())
             .and_then(|r| r.forward)
             .unwrap_or(true);
-        if on && self.retrofit.is_some() && !self.off {
+        if on && self.retrofit.is_some() && !self.off && !self.forward_refused {
             self.forward = Some(Forward { output, fbo: None });
         }
     }
@@ -48,8 +48,23 @@ impl Context {
             capi::dmsaa_begin_forward(handle, f.output, &mut fbo)
         });
         if status != capi::DmsaaStatus::Ok || fbo == 0 {
+            // The forward target is the library's default, not the
+            // program's ask: without it the retrofit goes on, and its
+            // forward draws stay single-sampled, said once.
             self.forward = None;
-            self.fail("dmsaa_begin_forward");
+            self.forward_refused = true;
+            // SAFETY: the C API's message, a C string valid until its next call.
+            let message = unsafe { std::ffi::CStr::from_ptr(capi::dmsaa_last_error()) }
+                .to_string_lossy()
+                .into_owned();
+            say_once(
+                "forward",
+                &format!(
+                    "dmsaa_begin_forward failed ({message}); what the program draws after its lighting stays \
+                     single-sampled for the rest of the run (declare [retrofit] layer_mix in a profile, or \
+                     forward = false)"
+                ),
+            );
             return;
         }
         super::context::real_bind(GL_DRAW_FRAMEBUFFER, fbo);

@@ -8,7 +8,9 @@
 //! read back, a warning where it shows nothing), [`gbuffer`] (finding the G-buffer),
 //! [`framebuffers`] (the binds and attachments followed), [`retrofit`] (the
 //! C API's retrofit made, bound, resolved, its second layer), [`forward`]
-//! (what is drawn forward after the lighting, into the forward target), [`run`]
+//! (what is drawn forward after the lighting, into the forward target),
+//! [`lighting_calls`] (the calls between the lighting's draws kept for its
+//! replay), [`run`]
 //! (the settings and messages of the whole run) and [`learn`] (`--learn`'s
 //! profile).
 
