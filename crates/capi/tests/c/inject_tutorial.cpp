@@ -103,8 +103,7 @@ void main()
 }
 )";
 
-// The geometry pass's and the light cubes' vertex shaders with the camera in
-// a uniform block.
+// The camera as a uniform block, in place of the shaders' two uniforms.
 static const char *cameraBlock = R"(
 layout(std140) uniform Camera
 {
@@ -112,64 +111,31 @@ layout(std140) uniform Camera
     mat4 view;
 };
 )";
-static const char *gBufferBlockVs = R"(
-layout (location = 0) in vec3 aPos;
-layout (location = 1) in vec3 aNormal;
-layout (location = 2) in vec2 aTexCoords;
-out vec3 FragPos;
-out vec2 TexCoords;
-out vec3 Normal;
-uniform mat4 model;
-void main()
-{
-    vec4 worldPos = model * vec4(aPos, 1.0);
-    FragPos = worldPos.xyz;
-    TexCoords = aTexCoords;
-    Normal = mat3(transpose(inverse(model))) * aNormal;
-    gl_Position = projection * view * worldPos;
-}
-)";
-static const char *lightBoxBlockVs = R"(
-layout (location = 0) in vec3 aPos;
-layout (location = 1) in vec3 aNormal;
-layout (location = 2) in vec2 aTexCoords;
-uniform mat4 model;
-void main()
-{
-    gl_Position = projection * view * model * vec4(aPos, 1.0);
-}
-)";
 
-// The same shaders with the camera as one view-projection uniform.
-static const char *gBufferViewProjectionVs = R"(
-layout (location = 0) in vec3 aPos;
-layout (location = 1) in vec3 aNormal;
-layout (location = 2) in vec2 aTexCoords;
-out vec3 FragPos;
-out vec2 TexCoords;
-out vec3 Normal;
-uniform mat4 model;
-uniform mat4 viewProjection;
-void main()
+// `text` with `from` replaced by `to` (a check fails where it is not found).
+static std::string replaced(std::string text, const char *from, const char *to)
 {
-    vec4 worldPos = model * vec4(aPos, 1.0);
-    FragPos = worldPos.xyz;
-    TexCoords = aTexCoords;
-    Normal = mat3(transpose(inverse(model))) * aNormal;
-    gl_Position = viewProjection * worldPos;
+    size_t at = text.find(from);
+    CHECK(at != std::string::npos, "a shader variant's text to replace was not found");
+    if (at != std::string::npos)
+        text.replace(at, std::strlen(from), to);
+    return text;
 }
-)";
-static const char *lightBoxViewProjectionVs = R"(
-layout (location = 0) in vec3 aPos;
-layout (location = 1) in vec3 aNormal;
-layout (location = 2) in vec2 aTexCoords;
-uniform mat4 model;
-uniform mat4 viewProjection;
-void main()
+
+// The tutorial's vertex shaders with the camera's uniforms replaced by
+// `declaration` and its product by `product`.
+static std::string gBufferVariant(const char *declaration, const char *product)
 {
-    gl_Position = viewProjection * model * vec4(aPos, 1.0);
+    return replaced(replaced(gBufferVs, "uniform mat4 view;\nuniform mat4 projection;\n", declaration),
+                    "projection * view * worldPos", product);
 }
-)";
+static std::string lightBoxVariant(const char *declaration, const char *product)
+{
+    return replaced(replaced(lightBoxVs, "uniform mat4 projection;\nuniform mat4 view;\n", declaration),
+                    "projection * view * model", product);
+}
+
+
 
 // The engine's shaders made anew with the view-projection uniform.
 static void useViewProjection(Engine &e)
@@ -178,8 +144,10 @@ static void useViewProjection(Engine &e)
     glDeleteProgram(e.shaderLightBox->ID);
     delete e.shaderGeometryPass;
     delete e.shaderLightBox;
-    e.shaderGeometryPass = new Shader(gBufferViewProjectionVs, gBufferFs);
-    e.shaderLightBox = new Shader(lightBoxViewProjectionVs, lightBoxFs);
+    std::string vs = gBufferVariant("uniform mat4 viewProjection;\n", "viewProjection * worldPos");
+    std::string box = lightBoxVariant("uniform mat4 viewProjection;\n", "viewProjection * model");
+    e.shaderGeometryPass = new Shader(vs.c_str(), gBufferFs);
+    e.shaderLightBox = new Shader(box.c_str(), lightBoxFs);
 }
 
 // The uniform-block functions, loaded by the program itself (the shared
@@ -333,8 +301,8 @@ static void compose(const Accumulation &a)
 // The engine's shaders made anew with the camera block at binding 0.
 static void useCameraBlock(Engine &e)
 {
-    std::string vs = std::string(cameraBlock) + gBufferBlockVs;
-    std::string box = std::string(cameraBlock) + lightBoxBlockVs;
+    std::string vs = gBufferVariant(cameraBlock, "projection * view * worldPos");
+    std::string box = lightBoxVariant(cameraBlock, "projection * view * model");
     glDeleteProgram(e.shaderGeometryPass->ID);
     glDeleteProgram(e.shaderLightBox->ID);
     delete e.shaderGeometryPass;
