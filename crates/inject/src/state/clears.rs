@@ -60,6 +60,33 @@ pub(crate) enum ClearValue {
     DepthStencil(f32, i32),
 }
 
+/// `call`'s clear made on the bound draw framebuffer, a colour one at draw
+/// buffer `i`.
+///
+/// # Safety
+///
+/// A framebuffer of the library's bound for drawing.
+unsafe fn clear_bound(gl: &glow::Context, call: &ClearBuffer, i: u32) {
+    // SAFETY: the caller's.
+    unsafe {
+        match (call.buffer, call.value) {
+            (glow::COLOR, ClearValue::Float(v)) => gl.clear_buffer_f32_slice(glow::COLOR, i, &v),
+            (glow::COLOR, ClearValue::Int(v)) => gl.clear_buffer_i32_slice(glow::COLOR, i, &v),
+            (glow::COLOR, ClearValue::Uint(v)) => gl.clear_buffer_u32_slice(glow::COLOR, i, &v),
+            (glow::DEPTH, ClearValue::Float(v)) => {
+                gl.clear_buffer_f32_slice(glow::DEPTH, 0, &v[..1])
+            }
+            (glow::STENCIL, ClearValue::Int(v)) => {
+                gl.clear_buffer_i32_slice(glow::STENCIL, 0, &v[..1])
+            }
+            (glow::DEPTH_STENCIL, ClearValue::DepthStencil(depth, stencil)) => {
+                gl.clear_buffer_depth_stencil(glow::DEPTH_STENCIL, 0, depth, stencil)
+            }
+            _ => {}
+        }
+    }
+}
+
 impl Context {
     /// After `glClear(mask)` into the bound draw framebuffer: where it is
     /// not the G-buffer but shares attachments with it, the same clear on
@@ -157,30 +184,11 @@ impl Context {
                             gl.get_parameter_i32(glow::DRAW_BUFFER0 + i) as u32 == point
                         });
                         if let Some(i) = slot {
-                            match call.value {
-                                ClearValue::Float(v) => {
-                                    gl.clear_buffer_f32_slice(glow::COLOR, i, &v)
-                                }
-                                ClearValue::Int(v) => gl.clear_buffer_i32_slice(glow::COLOR, i, &v),
-                                ClearValue::Uint(v) => {
-                                    gl.clear_buffer_u32_slice(glow::COLOR, i, &v)
-                                }
-                                ClearValue::DepthStencil(..) => {}
-                            }
+                            clear_bound(gl, &call, i);
                             replayed = true;
                         }
                     } else {
-                        match (call.buffer, call.value) {
-                            (glow::DEPTH, ClearValue::Float(v)) => {
-                                gl.clear_buffer_f32_slice(glow::DEPTH, 0, &v[..1])
-                            }
-                            (glow::STENCIL, ClearValue::Int(v)) => {
-                                gl.clear_buffer_i32_slice(glow::STENCIL, 0, &v[..1])
-                            }
-                            (glow::DEPTH_STENCIL, ClearValue::DepthStencil(depth, stencil)) => gl
-                                .clear_buffer_depth_stencil(glow::DEPTH_STENCIL, 0, depth, stencil),
-                            _ => {}
-                        }
+                        clear_bound(gl, &call, 0);
                         replayed = true;
                     }
                     gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, fbo(d));
@@ -220,30 +228,7 @@ impl Context {
             self.checked("a clear of the G-buffer by name, replayed", |gl| {
                 // SAFETY: the twin bound for drawing; its draw buffers are
                 // the G-buffer's.
-                unsafe {
-                    let i = call.drawbuffer.max(0) as u32;
-                    match (call.buffer, call.value) {
-                        (glow::COLOR, ClearValue::Float(v)) => {
-                            gl.clear_buffer_f32_slice(glow::COLOR, i, &v)
-                        }
-                        (glow::COLOR, ClearValue::Int(v)) => {
-                            gl.clear_buffer_i32_slice(glow::COLOR, i, &v)
-                        }
-                        (glow::COLOR, ClearValue::Uint(v)) => {
-                            gl.clear_buffer_u32_slice(glow::COLOR, i, &v)
-                        }
-                        (glow::DEPTH, ClearValue::Float(v)) => {
-                            gl.clear_buffer_f32_slice(glow::DEPTH, 0, &v[..1])
-                        }
-                        (glow::STENCIL, ClearValue::Int(v)) => {
-                            gl.clear_buffer_i32_slice(glow::STENCIL, 0, &v[..1])
-                        }
-                        (glow::DEPTH_STENCIL, ClearValue::DepthStencil(depth, stencil)) => {
-                            gl.clear_buffer_depth_stencil(glow::DEPTH_STENCIL, 0, depth, stencil)
-                        }
-                        _ => {}
-                    }
-                }
+                unsafe { clear_bound(gl, &call, call.drawbuffer.max(0) as u32) };
                 capi::DmsaaStatus::Ok
             });
             self.twin_drawn = true;
