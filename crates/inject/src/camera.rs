@@ -57,9 +57,25 @@ pub(crate) fn split_view_projection(vp: &[f32; 16]) -> Option<([f32; 16], [f32; 
     Some((projection, view))
 }
 
+/// Whether `m` is a perspective projection times a view other than the
+/// identity (a rotation or a translation in it): a view-projection
+/// product, not a projection alone.
+pub(crate) fn is_view_projection_product(m: &[f32; 16]) -> bool {
+    let Some((_, view)) = split_view_projection(m) else {
+        return false;
+    };
+    // A projection alone has the view's z row (0, 0, 1, 0).
+    let z_row = [view[2], view[6], view[10], view[14]];
+    let identity = [0.0, 0.0, 1.0, 0.0];
+    z_row
+        .iter()
+        .zip(identity)
+        .any(|(a, b)| (a - b).abs() > 1e-4)
+}
+
 #[cfg(test)]
 mod tests {
-    use super::split_view_projection;
+    use super::{is_view_projection_product, split_view_projection};
 
     fn multiply(a: &[f32; 16], b: &[f32; 16]) -> [f32; 16] {
         let mut m = [0f32; 16];
@@ -148,6 +164,20 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_product_is_told_from_a_projection_alone() {
+        let p = perspective(0.8, 1.6, 0.1, 100.0);
+        assert!(!is_view_projection_product(&p));
+        let v = look_at([2.0, 3.5, -4.0], [0.3, -0.2, 0.9]);
+        assert!(is_view_projection_product(&multiply(&p, &v)));
+        let mut identity = [0f32; 16];
+        identity[0] = 1.0;
+        identity[5] = 1.0;
+        identity[10] = 1.0;
+        identity[15] = 1.0;
+        assert!(!is_view_projection_product(&identity));
     }
 
     #[test]

@@ -119,6 +119,31 @@ pub(super) fn run(setup: &Setup<'_>) {
             && lines[1].contains("single-sampled"),
         "the refused forward target, said once:\n{stderr}"
     );
+    // `--learn` on the program with its camera as one `viewProjection`
+    // uniform: no uniform is named `projection`, and the learned profile
+    // names the product, from its value (a perspective projection times a
+    // view), as `view_projection_uniform`.
+    let learned = setup.build.join("learned-view-projection.toml");
+    capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(capi::built("libdeferred_msaa_inject", "so"))
+            .arg("--learn")
+            .arg(&learned)
+            .arg("--")
+            .arg(setup.plain)
+            .arg(setup.out.join("learn-view-projection.rgba"))
+            .arg("--view-projection")
+            .env("DISPLAY", &setup.display),
+        "deferred-msaa inject --learn, view-projection uniform",
+    );
+    let text = std::fs::read_to_string(&learned).expect("--learn wrote no profile");
+    assert!(
+        text.contains("view_projection_uniform = \"viewProjection\"")
+            && !text.contains("\nuniform = ")
+            && !text.contains("\nview_uniform = "),
+        "the learned profile does not name the product:\n{text}"
+    );
     // The same lights in two passes (`--two-pass-lighting`): added into an
     // accumulation target of the program's, then composed into
     // framebuffer 0. With the profile's `[lighting] passes = 2`, the replay

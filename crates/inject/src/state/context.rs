@@ -113,6 +113,8 @@ pub(crate) struct Context {
     /// (program, location) → uniform name, for `--learn`.
     pub(crate) uniform_names: HashMap<(u32, i32), String>,
     pub(crate) matrices_set: Vec<String>,
+    /// `--learn`: each matrix uniform's last value (untransposed), by name.
+    pub(crate) matrix_values: HashMap<String, [f32; 16]>,
     pub(super) projection: Option<[f32; 16]>,
     pub(super) view: Option<[f32; 16]>,
     pub(crate) framebuffers: HashMap<u32, Framebuffer>,
@@ -167,6 +169,7 @@ impl Context {
             matrix_uniforms: HashMap::new(),
             uniform_names: HashMap::new(),
             matrices_set: Vec::new(),
+            matrix_values: HashMap::new(),
             projection,
             view,
             framebuffers: HashMap::new(),

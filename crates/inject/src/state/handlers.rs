@@ -428,6 +428,16 @@ pub(crate) fn glUniformMatrix4fv(
                 }
             }
         }
+        let first: Option<[f32; 16]> = values.get(..16).and_then(|m| m.try_into().ok());
+        with_context(|cx| {
+            // `--learn`: each matrix uniform's last value, by name.
+            let key = (cx.program, location);
+            if let (true, Some(name), Some(m)) = (cx.learning(), cx.uniform_names.get(&key), first)
+            {
+                let name = name.clone();
+                cx.matrix_values.insert(name, m);
+            }
+        });
         record_uniform(location, UniformValue::Matrix4(values));
     }
     with_context(|cx| {

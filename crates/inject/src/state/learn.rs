@@ -176,6 +176,51 @@ pub(super) fn render(cx: &Context, when: &str) -> String {
         }
     }
     let _ = writeln!(out, "[projection]");
+    // No uniform named `projection`, but one whose value is a perspective
+    // projection times a view that is not the identity: a view-projection
+    // product, which the library takes apart.
+    let exact_projection = cx
+        .matrices_set
+        .iter()
+        .any(|n| n.eq_ignore_ascii_case("projection"));
+    let products: Vec<&String> = cx
+        .matrices_set
+        .iter()
+        .filter(|n| {
+            cx.matrix_values
+                .get(*n)
+                .is_some_and(crate::camera::is_view_projection_product)
+        })
+        .collect();
+    match (exact_projection, products.as_slice()) {
+        (false, [name]) => {
+            let _ = writeln!(
+                out,
+                "view_projection_uniform = {}   # its value is a perspective projection times a view",
+                quoted(name)
+            );
+        }
+        (false, [_, _, ..]) => {
+            let names: Vec<String> = products.iter().map(|n| quoted(n)).collect();
+            let _ = writeln!(
+                out,
+                "# view_projection_uniform = ?  several uniforms held a perspective projection times a view \
+                 ({}): a shadow pass's or a reflection's as well as the camera's? name the camera's",
+                names.join(", ")
+            );
+        }
+        _ => projection_keys(&mut out, cx),
+    }
+    let _ = writeln!(
+        out,
+        "\n# [retrofit] ?  not inferred: layers (1 or 2), layer_mix (what the lit values mean:\n\
+         # linear, tonemapped, srgb-encoded), depth_mode; unset, the defaults apply."
+    );
+    out
+}
+
+/// The `uniform` and `view_uniform` keys, from the matrix uniforms' names.
+fn projection_keys(out: &mut String, cx: &Context) {
     for (key, word) in [("uniform", "projection"), ("view_uniform", "view")] {
         let exact = cx
             .matrices_set
@@ -198,12 +243,6 @@ pub(super) fn render(cx: &Context, when: &str) -> String {
             ),
         };
     }
-    let _ = writeln!(
-        out,
-        "\n# [retrofit] ?  not inferred: layers (1 or 2), layer_mix (what the lit values mean:\n\
-         # linear, tonemapped, srgb-encoded), depth_mode; unset, the defaults apply."
-    );
-    out
 }
 
 /// The G-buffer's signature (observed) and one table per colour texture
