@@ -527,58 +527,44 @@ fn clear_buffer(call: ClearBuffer, real: impl FnOnce()) {
     with_context(|cx| cx.after_clear_buffer(call));
 }
 
-pub(crate) fn glClearBufferfv(
-    real: real_type::glClearBufferfv,
-    buffer: u32,
-    drawbuffer: i32,
-    value: *const f32,
-) {
-    // SAFETY: GL reads four values for a colour, one for depth.
-    let values = unsafe { read_values(value, buffer) };
-    clear_buffer(
-        ClearBuffer {
-            buffer,
-            drawbuffer,
-            value: ClearValue::Float(values.map(|v| v.unwrap_or(0.0))),
-        },
-        || unsafe { real(buffer, drawbuffer, value) },
-    );
+/// The `glClearBuffer*v` and `glClearNamedFramebuffer*v` handlers: the
+/// values read as GL reads them, the clear made, then replayed.
+macro_rules! clear_vectors {
+    ($($name:ident: $kind:ident, $ty:ty, $zero:expr;)*) => {$(
+        pub(crate) fn $name(real: real_type::$name, buffer: u32, drawbuffer: i32, value: *const $ty) {
+            // SAFETY: GL reads four values for a colour, one otherwise.
+            let values = unsafe { read_values(value, buffer) };
+            let value_read = ClearValue::$kind(values.map(|v| v.unwrap_or($zero)));
+            clear_buffer(
+                ClearBuffer { buffer, drawbuffer, value: value_read },
+                || unsafe { real(buffer, drawbuffer, value) },
+            );
+        }
+    )*};
+    (named $($name:ident: $kind:ident, $ty:ty, $zero:expr;)*) => {$(
+        pub(crate) fn $name(
+            real: real_type::$name,
+            framebuffer: u32,
+            buffer: u32,
+            drawbuffer: i32,
+            value: *const $ty,
+        ) {
+            // SAFETY: GL reads four values for a colour, one otherwise.
+            let values = unsafe { read_values(value, buffer) };
+            let value_read = ClearValue::$kind(values.map(|v| v.unwrap_or($zero)));
+            clear_named(
+                framebuffer,
+                ClearBuffer { buffer, drawbuffer, value: value_read },
+                || unsafe { real(framebuffer, buffer, drawbuffer, value) },
+            );
+        }
+    )*};
 }
 
-pub(crate) fn glClearBufferiv(
-    real: real_type::glClearBufferiv,
-    buffer: u32,
-    drawbuffer: i32,
-    value: *const i32,
-) {
-    // SAFETY: GL reads four values for a colour, one for stencil.
-    let values = unsafe { read_values(value, buffer) };
-    clear_buffer(
-        ClearBuffer {
-            buffer,
-            drawbuffer,
-            value: ClearValue::Int(values.map(|v| v.unwrap_or(0))),
-        },
-        || unsafe { real(buffer, drawbuffer, value) },
-    );
-}
-
-pub(crate) fn glClearBufferuiv(
-    real: real_type::glClearBufferuiv,
-    buffer: u32,
-    drawbuffer: i32,
-    value: *const u32,
-) {
-    // SAFETY: GL reads four values for a colour.
-    let values = unsafe { read_values(value, buffer) };
-    clear_buffer(
-        ClearBuffer {
-            buffer,
-            drawbuffer,
-            value: ClearValue::Uint(values.map(|v| v.unwrap_or(0))),
-        },
-        || unsafe { real(buffer, drawbuffer, value) },
-    );
+clear_vectors! {
+    glClearBufferfv: Float, f32, 0.0;
+    glClearBufferiv: Int, i32, 0;
+    glClearBufferuiv: Uint, u32, 0;
 }
 
 pub(crate) fn glClearBufferfi(
@@ -606,64 +592,11 @@ fn clear_named(framebuffer: u32, call: ClearBuffer, real: impl FnOnce()) {
     with_context(|cx| cx.after_clear_named(framebuffer, call));
 }
 
-pub(crate) fn glClearNamedFramebufferfv(
-    real: real_type::glClearNamedFramebufferfv,
-    framebuffer: u32,
-    buffer: u32,
-    drawbuffer: i32,
-    value: *const f32,
-) {
-    // SAFETY: GL reads four values for a colour, one for depth.
-    let values = unsafe { read_values(value, buffer) };
-    clear_named(
-        framebuffer,
-        ClearBuffer {
-            buffer,
-            drawbuffer,
-            value: ClearValue::Float(values.map(|v| v.unwrap_or(0.0))),
-        },
-        || unsafe { real(framebuffer, buffer, drawbuffer, value) },
-    );
-}
-
-pub(crate) fn glClearNamedFramebufferiv(
-    real: real_type::glClearNamedFramebufferiv,
-    framebuffer: u32,
-    buffer: u32,
-    drawbuffer: i32,
-    value: *const i32,
-) {
-    // SAFETY: GL reads four values for a colour, one for stencil.
-    let values = unsafe { read_values(value, buffer) };
-    clear_named(
-        framebuffer,
-        ClearBuffer {
-            buffer,
-            drawbuffer,
-            value: ClearValue::Int(values.map(|v| v.unwrap_or(0))),
-        },
-        || unsafe { real(framebuffer, buffer, drawbuffer, value) },
-    );
-}
-
-pub(crate) fn glClearNamedFramebufferuiv(
-    real: real_type::glClearNamedFramebufferuiv,
-    framebuffer: u32,
-    buffer: u32,
-    drawbuffer: i32,
-    value: *const u32,
-) {
-    // SAFETY: GL reads four values for a colour.
-    let values = unsafe { read_values(value, buffer) };
-    clear_named(
-        framebuffer,
-        ClearBuffer {
-            buffer,
-            drawbuffer,
-            value: ClearValue::Uint(values.map(|v| v.unwrap_or(0))),
-        },
-        || unsafe { real(framebuffer, buffer, drawbuffer, value) },
-    );
+clear_vectors! {
+    named
+    glClearNamedFramebufferfv: Float, f32, 0.0;
+    glClearNamedFramebufferiv: Int, i32, 0;
+    glClearNamedFramebufferuiv: Uint, u32, 0;
 }
 
 pub(crate) fn glClearNamedFramebufferfi(
