@@ -91,10 +91,52 @@ pub(crate) fn run(command: &mut Command, what: &str) -> Output {
 }
 
 /// `cc` with the project's warnings as errors.
-fn cc() -> Command {
+pub(crate) fn cc() -> Command {
     let mut c = Command::new("cc");
     c.args(["-std=c99", "-O1", "-Wall", "-Wextra", "-Werror"]);
     c
+}
+
+/// The C engine's (`engine.h`) 16x image and edge mask, as its programs
+/// write them into one folder, for measuring its frames there.
+pub(crate) struct EngineImages {
+    dir: PathBuf,
+    reference: image::RgbaImage,
+    edges: image::GrayImage,
+}
+
+impl EngineImages {
+    /// The engine's frame size.
+    const SIZE: (u32, u32) = (320, 180);
+
+    /// `reference.rgba` and `edges.mask` in `dir`.
+    pub(crate) fn read(dir: &Path) -> Self {
+        let (w, h) = Self::SIZE;
+        let edges = image::GrayImage::from_raw(
+            w,
+            h,
+            std::fs::read(dir.join("edges.mask")).expect("edges.mask"),
+        )
+        .expect("a 320x180 mask");
+        EngineImages {
+            dir: dir.to_path_buf(),
+            reference: image(dir, "reference.rgba", w, h),
+            edges,
+        }
+    }
+
+    /// The frame `name` in the folder: its FLIP mean against the 16x
+    /// image, over every pixel and over the edge pixels.
+    pub(crate) fn measure(&self, name: &str) -> (f32, f64) {
+        let (w, h) = Self::SIZE;
+        let test = image(&self.dir, name, w, h);
+        let by_mask = deferred_msaa_lab::compare::flip_by_mask(&self.reference, &test, &self.edges)
+            .expect("same sizes");
+        (
+            error(&self.reference, &test),
+            by_mask.marked.expect("edge pixels"),
+        )
+    }
 }
 
 /// The raw RGBA8 image `name` the C host wrote.
@@ -488,7 +530,7 @@ fn a_c_engine_with_six_attachments_retrofitted_from_the_docs() {
     let (build, prefix) = install("capi-engine-build");
     let src = build.join("src");
     std::fs::create_dir_all(&src).expect("making the source folder");
-    for f in ["engine_host.c", "egl_gl.h"] {
+    for f in ["engine_host.c", "engine.h", "engine_retrofit.h", "egl_gl.h"] {
         std::fs::copy(sources().join(f), src.join(f)).expect("copying a C source");
     }
     let exe = build.join("engine_host");
@@ -509,24 +551,8 @@ fn a_c_engine_with_six_attachments_retrofitted_from_the_docs() {
     let stdout = String::from_utf8_lossy(&out.stdout).to_string();
     eprint!("{stdout}");
     assert!(stdout.ends_with("ok\n"), "{stdout}");
-    let (w, h) = (320, 180);
-    let img = |name: &str| image(&images, name, w, h);
-    let reference = img("reference.rgba");
-    let edges = image::GrayImage::from_raw(
-        w,
-        h,
-        std::fs::read(images.join("edges.mask")).expect("edges.mask"),
-    )
-    .expect("a 320x180 mask");
-    let measure = |name: &str| {
-        let test = img(name);
-        let by_mask = deferred_msaa_lab::compare::flip_by_mask(&reference, &test, &edges)
-            .expect("same sizes");
-        (
-            error(&reference, &test),
-            by_mask.marked.expect("edge pixels"),
-        )
-    };
+    let engine = EngineImages::read(&images);
+    let measure = |name: &str| engine.measure(name);
     let (none, none_edges) = measure("none.rgba");
     let (one, one_edges) = measure("msaa.rgba");
     let (two, two_edges) = measure("layers.rgba");

@@ -70,6 +70,10 @@
     X(PFNGLGENBUFFERSPROC, glGenBuffers)                                       \
     X(PFNGLBINDBUFFERPROC, glBindBuffer)                                       \
     X(PFNGLBUFFERDATAPROC, glBufferData)                                       \
+    X(PFNGLBUFFERSUBDATAPROC, glBufferSubData)                                 \
+    X(PFNGLBINDBUFFERBASEPROC, glBindBufferBase)                               \
+    X(PFNGLGETUNIFORMBLOCKINDEXPROC, glGetUniformBlockIndex)                   \
+    X(PFNGLUNIFORMBLOCKBINDINGPROC, glUniformBlockBinding)                     \
     X(PFNGLDELETEBUFFERSPROC, glDeleteBuffers)                                 \
     X(PFNGLENABLEVERTEXATTRIBARRAYPROC, glEnableVertexAttribArray)             \
     X(PFNGLVERTEXATTRIBPOINTERPROC, glVertexAttribPointer)                     \
@@ -166,7 +170,7 @@ static void destroy_context(void)
 
 /* What the library's loader callback is: eglGetProcAddress with the
  * user-data argument the C API passes along (unused here). */
-static const void *load_gl(const char *name, void *user_data)
+static inline const void *load_gl(const char *name, void *user_data)
 {
     (void)user_data;
     return (const void *)eglGetProcAddress(name);

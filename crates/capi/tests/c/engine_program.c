@@ -1,0 +1,107 @@
+/*
+ * The C engine of engine.h as a program: its render loop on a surfaceless
+ * EGL context (no window, no swap), FRAMES frames into its screen target,
+ * the last one read back and written to OUT_FILE (raw RGBA8, rows
+ * bottom-up). Built twice from this source:
+ *
+ * - as it is: no line of the retrofit, not linked with the library. This
+ *   is what `deferred-msaa inject` is run on;
+ * - with -DDMSAA_IN_SOURCE: the retrofit in its source, as inject applies
+ *   it with the profile docs/inject.md's engine example gives (the
+ *   options of engine_retrofit.h at two layers): each frame begun after the
+ *   engine's clear, the resolve after the geometry, the lighting drawn again
+ *   into dmsaa_begin_second_layer_own_target's framebuffer and mixed into
+ *   the radiance target before the tonemap.
+ *
+ * Usage: engine_program OUT_FILE [--frames N] [--reference DIR]
+ *   --reference DIR  also writes the engine's 16x image (reference.rgba:
+ *                    4x the width and height, averaged 4x4 in linear light)
+ *                    and its edges (edges.mask) into DIR
+ *
+ * Prints "ok" last, or exits non-zero with a line saying why.
+ */
+#ifdef DMSAA_IN_SOURCE
+#include "engine_retrofit.h"
+#else
+#include "engine.h"
+#endif
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        fprintf(stderr, "usage: %s OUT_FILE [--frames N] [--reference DIR]\n", argv[0]);
+        return 2;
+    }
+    const char *out = argv[1];
+    const char *reference = NULL;
+    int frames = 3;
+    for (int i = 2; i < argc; i++) {
+        if (strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
+            frames = atoi(argv[++i]);
+        } else if (strcmp(argv[i], "--reference") == 0 && i + 1 < argc) {
+            reference = argv[++i];
+        } else {
+            fprintf(stderr, "unknown argument %s\n", argv[i]);
+            return 2;
+        }
+    }
+    if (frames < 1) {
+        fprintf(stderr, "--frames needs 1 or more\n");
+        return 2;
+    }
+    if (!create_context())
+        return 3;
+    GLint major = 0, minor = 0;
+    glGetIntegerv(GL_MAJOR_VERSION, &major);
+    glGetIntegerv(GL_MINOR_VERSION, &minor);
+    if (major * 10 + minor < 33)
+        version_line = "#version 150 core\n#extension GL_ARB_explicit_attrib_location : require\n";
+    printf("GL %s through EGL\n", (const char *)glGetString(GL_VERSION));
+
+    Engine e;
+    engine_init(&e, WIDTH, HEIGHT);
+#ifdef DMSAA_IN_SOURCE
+    DmsaaOptions options = engine_options(2, DMSAA_LAYER_MIX_CURVE);
+    DmsaaRetrofit *msaa = NULL;
+    if (!ok(dmsaa_retrofit_new(load_gl, NULL, e.gbuffer, &options, &msaa), "dmsaa_retrofit_new"))
+        return 1;
+#endif
+    for (int frame = 0; frame < frames; frame++) {
+        clear_gbuffer(&e);
+#ifdef DMSAA_IN_SOURCE
+        GLuint geometry_target = 0;
+        ok(dmsaa_begin_frame(msaa, &geometry_target), "dmsaa_begin_frame");
+        geometry_pass(&e, geometry_target);
+        ok(dmsaa_resolve(msaa, e.projection, NULL), "dmsaa_resolve");
+#else
+        geometry_pass(&e, e.gbuffer);
+#endif
+        lighting_pass(&e);
+#ifdef DMSAA_IN_SOURCE
+        GLuint own = 0;
+        if (ok(dmsaa_begin_second_layer_own_target(msaa, e.hdr_fbo, &own), "dmsaa_begin_second_layer_own_target")) {
+            lighting_into(&e, own);
+            ok(dmsaa_finish_second_layer(msaa, e.hdr_fbo), "dmsaa_finish_second_layer");
+        }
+#endif
+        tonemap_pass(&e);
+        gl_errors("a frame");
+    }
+    write_screen(&e, NULL, out);
+    if (reference) {
+        write_edges(&e, reference);
+        write_reference(reference);
+    }
+#ifdef DMSAA_IN_SOURCE
+    dmsaa_destroy(msaa);
+#endif
+    engine_free(&e);
+    gl_errors("the end");
+    destroy_context();
+    if (failures) {
+        fprintf(stderr, "%d check(s) failed\n", failures);
+        return 1;
+    }
+    printf("ok\n");
+    return 0;
+}
