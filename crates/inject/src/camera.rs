@@ -73,9 +73,112 @@ pub(crate) fn is_view_projection_product(m: &[f32; 16]) -> bool {
         .any(|(a, b)| (a - b).abs() > 1e-4)
 }
 
+/// Whether `m` (column-major) is a GL perspective projection alone: last
+/// row `(0, 0, −1, 0)`, no shear or translation in x and y (an off-centre
+/// frustum's `m[8]`, `m[9]` allowed), positive scales and a depth term
+/// with a near plane (`m[14]` not 0; `m[10]` is 0 for a reversed, infinite
+/// far plane).
+pub(crate) fn is_perspective_projection(m: &[f32; 16]) -> bool {
+    m.iter().all(|v| v.is_finite())
+        && [1, 2, 3, 4, 6, 7, 12, 13, 15].iter().all(|&k| m[k] == 0.0)
+        && m[11] == -1.0
+        && m[0] > 0.0
+        && m[5] > 0.0
+        && m[14] != 0.0
+}
+
+/// Whether `m` (column-major) is a rigid view: a rotation (orthonormal
+/// rows, within float rounding) and a translation, last row `(0, 0, 0, 1)`.
+pub(crate) fn is_rigid_view(m: &[f32; 16]) -> bool {
+    if !m.iter().all(|v| v.is_finite()) || [m[3], m[7], m[11], m[15]] != [0.0, 0.0, 0.0, 1.0] {
+        return false;
+    }
+    let row = |r: usize| [m[r], m[4 + r], m[8 + r]];
+    let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    (0..3).all(|i| {
+        (0..3).all(|j| {
+            let expected = if i == j { 1.0 } else { 0.0 };
+            (dot(row(i), row(j)) - expected).abs() < 1e-3
+        })
+    })
+}
+
+/// The 16 floats at `at` in `bytes` (native order), where they fit.
+fn matrix_at(bytes: &[u8], at: usize) -> Option<[f32; 16]> {
+    let chunk = bytes.get(at..at + 64)?;
+    let mut m = [0f32; 16];
+    for (k, v) in m.iter_mut().enumerate() {
+        *v = f32::from_ne_bytes([
+            chunk[4 * k],
+            chunk[4 * k + 1],
+            chunk[4 * k + 2],
+            chunk[4 * k + 3],
+        ]);
+    }
+    Some(m)
+}
+
+/// What a `mat4` written into a uniform buffer is, for finding a camera.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum BlockMatrix {
+    /// A perspective projection alone.
+    Projection,
+    /// A rigid view.
+    View,
+}
+
+/// Every `mat4` place (std140: a multiple of 16 bytes into the buffer)
+/// that bytes written at byte `base` of a uniform buffer cover whole,
+/// with what they put there (`None`: neither a projection nor a view).
+pub(crate) fn block_matrices(bytes: &[u8], base: usize) -> Vec<(u32, Option<BlockMatrix>)> {
+    let first = base.div_ceil(16) * 16;
+    let end = base + bytes.len();
+    (first..end.saturating_sub(63))
+        .step_by(16)
+        .map(|o| {
+            let kind = matrix_at(bytes, o - base).and_then(|m| {
+                if is_perspective_projection(&m) {
+                    Some(BlockMatrix::Projection)
+                } else if is_rigid_view(&m) {
+                    Some(BlockMatrix::View)
+                } else {
+                    None
+                }
+            });
+            (o as u32, kind)
+        })
+        .collect()
+}
+
+/// The camera in a uniform buffer whose matrices are `kinds` (byte offset
+/// → kind): the offset of its one perspective projection, and of a rigid
+/// view in the 64 bytes after or before it, if one is there. `None` where
+/// no projection is there, or more than one (a shadow or reflection
+/// camera beside the view's: not told apart here).
+pub(crate) fn block_camera(
+    kinds: &std::collections::BTreeMap<u32, BlockMatrix>,
+) -> Option<(u32, Option<u32>)> {
+    let projections: Vec<u32> = kinds
+        .iter()
+        .filter(|(_, k)| **k == BlockMatrix::Projection)
+        .map(|(o, _)| *o)
+        .collect();
+    let [projection] = projections.as_slice() else {
+        return None;
+    };
+    let view_at = |o: u32| kinds.get(&o) == Some(&BlockMatrix::View);
+    let view = Some(projection + 64)
+        .filter(|&o| view_at(o))
+        .or_else(|| projection.checked_sub(64).filter(|&o| view_at(o)));
+    Some((*projection, view))
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{is_view_projection_product, split_view_projection};
+    use super::{
+        block_camera, block_matrices, is_perspective_projection, is_view_projection_product,
+        split_view_projection,
+    };
 
     fn multiply(a: &[f32; 16], b: &[f32; 16]) -> [f32; 16] {
         let mut m = [0f32; 16];
@@ -189,5 +292,59 @@ mod tests {
         ortho[15] = 1.0;
         assert!(split_view_projection(&ortho).is_none());
         assert!(split_view_projection(&[0.0; 16]).is_none());
+    }
+
+    fn bytes(matrices: &[[f32; 16]]) -> Vec<u8> {
+        matrices
+            .iter()
+            .flat_map(|m| m.iter().flat_map(|v| v.to_ne_bytes()))
+            .collect()
+    }
+
+    /// The camera of a buffer written `writes` (bytes, at byte), in order.
+    fn camera_of(writes: &[(Vec<u8>, usize)]) -> Option<(u32, Option<u32>)> {
+        let mut kinds = std::collections::BTreeMap::new();
+        for (bytes, at) in writes {
+            for (o, kind) in block_matrices(bytes, *at) {
+                match kind {
+                    Some(k) => kinds.insert(o, k),
+                    None => kinds.remove(&o),
+                };
+            }
+        }
+        block_camera(&kinds)
+    }
+
+    #[test]
+    fn a_camera_block_is_found_by_its_matrices() {
+        let p = perspective(0.8, 1.6, 0.1, 100.0);
+        let v = look_at([2.0, 3.5, -4.0], [0.3, -0.2, 0.9]);
+        assert!(is_perspective_projection(&p));
+        assert!(!is_perspective_projection(&multiply(&p, &v)));
+        // projection, then view, in one write
+        assert_eq!(camera_of(&[(bytes(&[p, v]), 0)]), Some((0, Some(64))));
+        // in two writes (the C engine's block)
+        assert_eq!(
+            camera_of(&[(bytes(&[p]), 0), (bytes(&[v]), 64)]),
+            Some((0, Some(64)))
+        );
+        // view, then projection, written at byte 128 of the buffer
+        assert_eq!(camera_of(&[(bytes(&[v, p]), 128)]), Some((192, Some(128))));
+        // a projection alone, after a vec4 (16 bytes) of something else
+        let mut alone = vec![0u8; 16];
+        alone.extend(bytes(&[p]));
+        assert_eq!(camera_of(&[(alone, 0)]), Some((16, None)));
+        // two projections (a shadow camera's beside the view's): not told
+        let q = perspective(1.2, 1.0, 0.5, 40.0);
+        assert_eq!(camera_of(&[(bytes(&[p, v, q]), 0)]), None);
+        // a projection overwritten by something else is gone
+        assert_eq!(
+            camera_of(&[(bytes(&[p]), 0), (bytes(&[multiply(&p, &v)]), 0)]),
+            None
+        );
+        // misaligned: no mat4 place
+        let mut shifted = vec![0u8; 4];
+        shifted.extend(bytes(&[p]));
+        assert_eq!(camera_of(&[(shifted, 0)]), None);
     }
 }

@@ -182,9 +182,17 @@ pub struct Retrofit {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub layers: Option<u32>,
     /// What the lit values mean: `"auto"`, `"linear"`, `"tonemapped"`,
-    /// `"srgb-encoded"`.
+    /// `"srgb-encoded"`, or `"curve"` with `layer_mix_curve`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub layer_mix: Option<String>,
+    /// With `layer_mix = "curve"`: GLSL defining `vec3 dmsaa_curve(vec3)`
+    /// (the program's tonemap) and `vec3 dmsaa_curve_inverse(vec3)`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layer_mix_curve: Option<String>,
+    /// `layer_mix_curve` as the C string the options point at, made once:
+    /// the profile outlives every retrofit made from it.
+    #[serde(skip)]
+    curve_c: std::sync::OnceLock<std::ffi::CString>,
     /// `"standard"`, `"zero-to-one"`, `"reversed-z"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depth_mode: Option<String>,
@@ -390,12 +398,34 @@ impl Profile {
                 "linear" => capi::DMSAA_LAYER_MIX_LINEAR,
                 "tonemapped" => capi::DMSAA_LAYER_MIX_TONEMAPPED,
                 "srgb-encoded" => capi::DMSAA_LAYER_MIX_SRGB_ENCODED,
+                "curve" => capi::DMSAA_LAYER_MIX_CURVE,
                 other => {
                     return Err(bad(format!(
-                        "unknown layer_mix {other:?} (auto, linear, tonemapped, srgb-encoded)"
+                        "unknown layer_mix {other:?} (auto, linear, tonemapped, srgb-encoded, curve)"
                     )));
                 }
             };
+        }
+        match (
+            options.layer_mix == capi::DMSAA_LAYER_MIX_CURVE,
+            &r.layer_mix_curve,
+        ) {
+            (true, Some(text)) => {
+                let c = std::ffi::CString::new(text.as_str())
+                    .map_err(|_| bad("layer_mix_curve holds a NUL character".into()))?;
+                options.layer_mix_curve = r.curve_c.get_or_init(|| c).as_ptr();
+            }
+            (true, None) => {
+                return Err(bad(
+                    "layer_mix = \"curve\" needs layer_mix_curve: GLSL defining vec3 dmsaa_curve(vec3) and vec3 dmsaa_curve_inverse(vec3)".into(),
+                ));
+            }
+            (false, Some(_)) => {
+                return Err(bad(
+                    "layer_mix_curve is read only with layer_mix = \"curve\"".into(),
+                ));
+            }
+            (false, None) => {}
         }
         if let Some(mode) = &r.depth_mode {
             options.depth_mode = match mode.as_str() {
@@ -461,6 +491,20 @@ mod tests {
     }
 
     #[test]
+    fn a_curve_is_handed_to_the_library_as_its_text() {
+        let curve = "vec3 dmsaa_curve(vec3 x) { return clamp(x * 0.8, 0.0, 1.0); }\nvec3 dmsaa_curve_inverse(vec3 y) { return y / 0.8; }\n";
+        let text = format!(
+            "[retrofit]\nlayers = 2\nlayer_mix = \"curve\"\nlayer_mix_curve = \"\"\"\n{curve}\"\"\"\n"
+        );
+        let p = Profile::parse(&text, "p.toml").expect("parses");
+        let o = p.options("p.toml").expect("valid");
+        assert_eq!(o.layer_mix, capi::DMSAA_LAYER_MIX_CURVE);
+        // SAFETY: the pointer is the profile's C string, alive with `p`.
+        let handed = unsafe { std::ffi::CStr::from_ptr(o.layer_mix_curve) };
+        assert_eq!(handed.to_str().expect("UTF-8"), curve);
+    }
+
+    #[test]
     fn bad_values_are_one_line_errors() {
         for (text, needle) in [
             ("[retrofit]\nlayers = 3\n", "layers = 3"),
@@ -470,6 +514,14 @@ mod tests {
                 "unknown rule",
             ),
             ("[retrofit]\nlayer_mix = \"gamma\"\n", "unknown layer_mix"),
+            (
+                "[retrofit]\nlayer_mix = \"curve\"\n",
+                "needs layer_mix_curve",
+            ),
+            (
+                "[retrofit]\nlayer_mix_curve = \"vec3 dmsaa_curve(vec3 x) { return x; }\"\n",
+                "only with layer_mix = \"curve\"",
+            ),
             ("[retrofit]\nsampels = 4\n", "not valid"),
             ("[lighting]\npass = 0\n", "counts from 1"),
             ("[projection]\nmatrix = [1.0, 0.0]\n", "16 numbers"),

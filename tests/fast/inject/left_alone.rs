@@ -408,7 +408,8 @@ fn a_program_left_alone_says_why_in_one_line() {
         "# meaning = ?",
         "# rule = ?",
         "# [retrofit] ?",
-        "made and deleted for each image is never retrofitted",
+        "The G-buffer was deleted 3 times",
+        "and deleted for each image is retrofitted only with this signature",
     ] {
         assert!(text.contains(line), "no `{line}` in the learned profile");
     }

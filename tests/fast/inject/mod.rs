@@ -17,6 +17,7 @@
 //! the program built on SDL2 (GLX, EGL) and linked with libGL directly.
 //! A forward bloom program is left untouched without a profile.
 
+mod engine;
 mod habits;
 mod left_alone;
 

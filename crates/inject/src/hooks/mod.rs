@@ -7,7 +7,10 @@
 //! that handle, so a preloaded definition of those names is never
 //! reached; a preloaded `dlsym` is. The real `dlsym` comes from
 //! `dlvsym(RTLD_NEXT, "dlsym", <glibc version>)`, which does not go
-//! through this one, so nothing here recurses.
+//! through this one, so nothing here recurses. A program linked with
+//! libEGL or libGL that calls the get-proc-address by name (a small C
+//! engine's own loader) reaches this library's definitions of those
+//! names instead, which look the real ones up past it.
 //!
 //! Each wrapper fetches the real entry point from its [`Slot`] (filled
 //! when the program asked for the function, so a wrapper is only ever
@@ -22,7 +25,7 @@ mod wrappers;
 
 use crate::real::{
     EGL_GET_CURRENT_CONTEXT, EGL_GET_PROC_ADDRESS, GLX_GET_CURRENT_CONTEXT, GLX_GET_PROC_ADDRESS,
-    GetProcAddress, Slot, real_dlsym,
+    GetProcAddress, Slot, next_definition, real_dlsym,
 };
 use std::ffi::{CStr, c_char, c_void};
 use wrappers::wrapper_for;
@@ -49,6 +52,12 @@ pub unsafe extern "C" fn dlsym(handle: *mut c_void, name: *const c_char) -> *mut
     let bytes = unsafe { CStr::from_ptr(name) }.to_bytes();
     match bytes {
         b"glXGetProcAddress" | b"glXGetProcAddressARB" => {
+            // A global lookup finds this library's own definition first.
+            let found = past_own(
+                found,
+                glXGetProcAddressARB as *mut c_void,
+                c"glXGetProcAddressARB",
+            );
             GLX_GET_PROC_ADDRESS.set(found);
             crate::state::handlers::watch_exit();
             // SAFETY: the same handle, a C string literal.
@@ -56,6 +65,11 @@ pub unsafe extern "C" fn dlsym(handle: *mut c_void, name: *const c_char) -> *mut
             glx_get_proc_address as *mut c_void
         }
         b"eglGetProcAddress" => {
+            let found = past_own(
+                found,
+                eglGetProcAddress as *mut c_void,
+                c"eglGetProcAddress",
+            );
             EGL_GET_PROC_ADDRESS.set(found);
             crate::state::handlers::watch_exit();
             // SAFETY: as above.
@@ -101,4 +115,70 @@ unsafe extern "C" fn glx_get_proc_address(name: *const c_char) -> *mut c_void {
 
 unsafe extern "C" fn egl_get_proc_address(name: *const c_char) -> *mut c_void {
     hooked_lookup(&EGL_GET_PROC_ADDRESS, name)
+}
+
+/// `found`, or where it is this library's `own` definition of `name`, the
+/// definition past this library.
+fn past_own(found: *mut c_void, own: *mut c_void, name: &CStr) -> *mut c_void {
+    if found != own {
+        return found;
+    }
+    next_definition(name.to_bytes_with_nul())
+}
+
+/// The real get-proc-address `name` (past this library) and the
+/// get-current-context beside it, filled at a linked program's first
+/// lookup, and the exit watched as a `dlsym` of them does.
+fn fill_linked(loader: &Slot, name: &CStr, current: &Slot, current_name: &CStr) {
+    if loader.get().is_none() {
+        loader.set(next_definition(name.to_bytes_with_nul()));
+        current.set(next_definition(current_name.to_bytes_with_nul()));
+        crate::state::handlers::watch_exit();
+    }
+}
+
+/// `eglGetProcAddress` for a program linked with libEGL.
+///
+/// # Safety
+///
+/// `eglGetProcAddress`'s contract.
+#[unsafe(no_mangle)]
+#[allow(non_snake_case)]
+pub unsafe extern "C" fn eglGetProcAddress(name: *const c_char) -> *mut c_void {
+    fill_linked(
+        &EGL_GET_PROC_ADDRESS,
+        c"eglGetProcAddress",
+        &EGL_GET_CURRENT_CONTEXT,
+        c"eglGetCurrentContext",
+    );
+    hooked_lookup(&EGL_GET_PROC_ADDRESS, name)
+}
+
+/// `glXGetProcAddressARB` for a program linked with libGL.
+///
+/// # Safety
+///
+/// `glXGetProcAddressARB`'s contract.
+#[unsafe(no_mangle)]
+#[allow(non_snake_case)]
+pub unsafe extern "C" fn glXGetProcAddressARB(name: *const c_char) -> *mut c_void {
+    fill_linked(
+        &GLX_GET_PROC_ADDRESS,
+        c"glXGetProcAddressARB",
+        &GLX_GET_CURRENT_CONTEXT,
+        c"glXGetCurrentContext",
+    );
+    hooked_lookup(&GLX_GET_PROC_ADDRESS, name)
+}
+
+/// `glXGetProcAddress`, the same as `glXGetProcAddressARB`.
+///
+/// # Safety
+///
+/// `glXGetProcAddress`'s contract.
+#[unsafe(no_mangle)]
+#[allow(non_snake_case)]
+pub unsafe extern "C" fn glXGetProcAddress(name: *const c_char) -> *mut c_void {
+    // SAFETY: the same contract.
+    unsafe { glXGetProcAddressARB(name) }
 }

@@ -74,22 +74,21 @@ pub(crate) fn real_dlsym() -> Option<Dlsym> {
 
 /// The definition of `name` (NUL-terminated) after this library's: the
 /// one a program linked with libGL would have called.
-pub(crate) fn next_definition(name: &str) -> *mut c_void {
-    match (real_dlsym(), CStr::from_bytes_with_nul(name.as_bytes())) {
+pub(crate) fn next_definition(name: impl AsRef<[u8]>) -> *mut c_void {
+    match (real_dlsym(), CStr::from_bytes_with_nul(name.as_ref())) {
         // SAFETY: a C string; RTLD_NEXT from this library.
         (Some(real), Ok(name)) => unsafe { real(libc::RTLD_NEXT, name.as_ptr()) },
         _ => std::ptr::null_mut(),
     }
 }
 
-/// Fill `slot` with the global definition of `name` where the program's
-/// loader was not seen (a program linked with libGL looks nothing up).
+/// Fill `slot` with the definition of `name` past this library where the
+/// program's loader was not seen (a program linked with libGL looks
+/// nothing up). Past it, not the global one: this library defines the
+/// get-proc-addresses itself.
 fn fill_from_global(slot: &Slot, name: &CStr) {
-    if slot.get().is_none()
-        && let Some(real) = real_dlsym()
-    {
-        // SAFETY: a C string; the global scope.
-        slot.set(unsafe { real(libc::RTLD_DEFAULT, name.as_ptr()) });
+    if slot.get().is_none() {
+        slot.set(next_definition(name.to_bytes_with_nul()));
     }
 }
 

@@ -96,19 +96,27 @@ impl Context {
     /// twin to replay a clear on (the retrofit made now if it is not yet:
     /// the G-buffer's next bind would make it, after this clear).
     fn sharing_gbuffer(&mut self) -> Option<(u32, u32, u32)> {
-        let g = self.gbuffer?;
         let d = self.draw_fbo;
-        if d == 0 || d == g || self.twin_bound || self.off || self.learning() {
+        if d == 0 || self.twin_bound || self.off || self.learning() {
             return None;
         }
-        // The G-buffer's textures, and the cleared framebuffer's read as
-        // it is now.
+        // The cleared framebuffer read as it is now; with a signature, the
+        // G-buffer may be found by it (the program clears before it binds).
+        let cleared = self.inspect();
+        if self.gbuffer.is_none() {
+            let textures: Vec<u32> = cleared.colour_textures.iter().map(|&(_, t)| t).collect();
+            self.match_signature_at_clear(d, &textures);
+        }
+        let g = self.gbuffer?;
+        if d == g {
+            return None;
+        }
+        // The G-buffer's textures.
         let ours: Vec<u32> = self
             .framebuffers
             .get(&g)
             .map(|f| f.colour_textures.iter().map(|&(_, t)| t).collect())
             .unwrap_or_default();
-        let cleared = self.inspect();
         if !cleared
             .colour_textures
             .iter()

@@ -24,6 +24,8 @@ pub(crate) struct Framebuffer {
     pub(crate) colour_attachments: u32,
     /// Each colour attachment's component type and size (`float16`…).
     pub(crate) formats: Vec<String>,
+    /// Colour attachment number → its channels (1 to 4).
+    pub(crate) channels: Vec<(u32, u32)>,
     pub(crate) depth: bool,
     /// Two or more colour attachments are layers of one texture
     /// (`glFramebufferTextureLayer` on an array texture).
@@ -117,10 +119,22 @@ pub(crate) struct Context {
     pub(crate) matrix_values: HashMap<String, [f32; 16]>,
     pub(super) projection: Option<[f32; 16]>,
     pub(super) view: Option<[f32; 16]>,
+    /// `GL_UNIFORM_BUFFER` binding points: index → (buffer, start, size;
+    /// 0 for the whole buffer).
+    pub(crate) uniform_bindings: HashMap<u32, (u32, i64, i64)>,
+    /// The projections and views written into each uniform buffer: buffer
+    /// → (byte offset → which).
+    pub(crate) block_matrices:
+        HashMap<u32, std::collections::BTreeMap<u32, crate::camera::BlockMatrix>>,
+    /// The camera block the writes showed, where the retrofit reads it.
+    pub(super) found_block: Option<crate::profile::CameraBlock>,
     pub(crate) framebuffers: HashMap<u32, Framebuffer>,
     pub(crate) gbuffer: Option<u32>,
     /// The G-buffer last deleted, as it was seen (for `--learn`).
     pub(crate) last_gbuffer: Option<Framebuffer>,
+    /// How many times a G-buffer was deleted (for `--learn`: one made anew
+    /// each frame, or one deleted at the program's end).
+    pub(crate) gbuffers_deleted: u32,
     pub(super) retrofit: Option<Retrofit>,
     /// The retrofit of a G-buffer found by the profile's signature and
     /// deleted: kept for the next one the program makes
@@ -172,9 +186,13 @@ impl Context {
             matrix_values: HashMap::new(),
             projection,
             view,
+            uniform_bindings: HashMap::new(),
+            block_matrices: HashMap::new(),
+            found_block: None,
             framebuffers: HashMap::new(),
             gbuffer: None,
             last_gbuffer: None,
+            gbuffers_deleted: 0,
             retrofit: None,
             orphan: None,
             needs_refresh: false,

@@ -67,26 +67,29 @@ impl Context {
         }
     }
 
+    /// The profile whose signature finds the G-buffer, where there is one
+    /// and the camera is known (a G-buffer found without it could not be
+    /// resolved).
+    fn signature_to_match(&self) -> Option<&'static crate::profile::Profile> {
+        if self.off || self.learning() {
+            return None;
+        }
+        let profile = settings()
+            .profile
+            .as_ref()
+            .filter(|p| p.framebuffer.is_some())?;
+        (self.projection.is_some() || self.camera_block().is_some()).then_some(profile)
+    }
+
     /// With a profile's signature and the camera known: a framebuffer bound
     /// for drawing that has the signature is the G-buffer from this bind on
     /// (so a G-buffer made anew each frame, or a program that renders one
     /// frame, is retrofitted in the frame that makes it). `real` binds it
     /// first, for its attachments to be read.
     fn match_signature_at_bind(&mut self, target: u32, name: u32, real: &dyn Fn(u32, u32)) {
-        if self.off || self.learning() {
-            return;
-        }
-        let Some(profile) = settings()
-            .profile
-            .as_ref()
-            .filter(|p| p.framebuffer.is_some())
-        else {
+        let Some(profile) = self.signature_to_match() else {
             return;
         };
-        let camera = self.projection.is_some() || profile.camera_block().is_some();
-        if !camera {
-            return;
-        }
         let fresh = self.framebuffers.get(&name).is_none_or(|f| f.stale);
         if fresh {
             real(target, name);
@@ -103,11 +106,57 @@ impl Context {
         }
     }
 
+    /// With a profile's signature and the camera known: at a clear through
+    /// the bound draw framebuffer `cleared` (not the G-buffer, its colour
+    /// textures `textures`), a framebuffer seen before that shares one of
+    /// them and has the signature is the G-buffer from now on, so that a
+    /// program clearing its G-buffer through another framebuffer before it
+    /// binds it has that clear replayed in its first frame too. One whose
+    /// attachments changed since it was seen is read again (bound for
+    /// drawing for the query, `cleared` bound back after).
+    pub(super) fn match_signature_at_clear(&mut self, cleared: u32, textures: &[u32]) {
+        if self.gbuffer.is_some() {
+            return;
+        }
+        let Some(profile) = self.signature_to_match() else {
+            return;
+        };
+        let mut candidates: Vec<u32> = self
+            .framebuffers
+            .keys()
+            .copied()
+            .filter(|&f| f != cleared && f != 0)
+            .collect();
+        candidates.sort_unstable();
+        for f in candidates {
+            if self.framebuffers.get(&f).is_some_and(|info| info.stale) {
+                real_bind(GL_DRAW_FRAMEBUFFER, f);
+                let info = self.inspect();
+                real_bind(GL_DRAW_FRAMEBUFFER, cleared);
+                self.framebuffers.insert(f, info);
+            }
+            let Some(info) = self.framebuffers.get(&f) else {
+                continue;
+            };
+            if info
+                .colour_textures
+                .iter()
+                .any(|(_, t)| textures.contains(t))
+                && Self::matches_profile(profile, info)
+            {
+                self.gbuffer = Some(f);
+                seen(|s| s.found = Some(f));
+                return;
+            }
+        }
+    }
+
     pub(super) fn delete_framebuffers(&mut self, names: &[u32]) {
         for name in names {
             let seen_as = self.framebuffers.remove(name);
             if self.gbuffer == Some(*name) {
                 self.last_gbuffer = seen_as;
+                self.gbuffers_deleted += 1;
                 if self.retrofit.is_none() && !self.off && !self.learning() {
                     // Found, and deleted before it was bound again.
                     seen(|s| {

@@ -129,6 +129,16 @@ impl Context {
                 };
                 let bits = param(glow::FRAMEBUFFER_ATTACHMENT_RED_SIZE);
                 f.formats.push(format!("{component}{bits}"));
+                let channels = [
+                    glow::FRAMEBUFFER_ATTACHMENT_RED_SIZE,
+                    glow::FRAMEBUFFER_ATTACHMENT_GREEN_SIZE,
+                    glow::FRAMEBUFFER_ATTACHMENT_BLUE_SIZE,
+                    glow::FRAMEBUFFER_ATTACHMENT_ALPHA_SIZE,
+                ]
+                .into_iter()
+                .filter(|&p| param(p) > 0)
+                .count() as u32;
+                f.channels.push((k, channels));
                 if kind == glow::TEXTURE {
                     let texture = param(glow::FRAMEBUFFER_ATTACHMENT_OBJECT_NAME) as u32;
                     f.colour_textures.push((k, texture));

@@ -159,11 +159,20 @@ pub(super) fn render(cx: &Context, when: &str) -> String {
         .and_then(|g| cx.framebuffers.get(&g))
         .or(cx.last_gbuffer.as_ref());
     if cx.gbuffer.is_none() && gbuffer.is_some() {
-        let _ = writeln!(
-            out,
-            "# The G-buffer was deleted before the end: its signature is the last one seen. A G-buffer\n\
-             # made and deleted for each image is never retrofitted (docs/inject.md).\n"
-        );
+        let _ = if cx.gbuffers_deleted > 1 {
+            writeln!(
+                out,
+                "# The G-buffer was deleted {} times: its signature is the last one seen. A G-buffer made\n\
+                 # and deleted for each image is retrofitted only with this signature (docs/inject.md).\n",
+                cx.gbuffers_deleted
+            )
+        } else {
+            writeln!(
+                out,
+                "# The G-buffer was deleted before this was written (at the program's end?): its\n\
+                 # signature is the one it had.\n"
+            )
+        };
     }
     match gbuffer {
         Some(f) => gbuffer_tables(&mut out, f),
@@ -209,12 +218,42 @@ pub(super) fn render(cx: &Context, when: &str) -> String {
                 names.join(", ")
             );
         }
-        _ => projection_keys(&mut out, cx),
+        _ => match (
+            exact_projection || !products.is_empty(),
+            cx.seen_camera_blocks().as_slice(),
+        ) {
+            (false, [block]) => {
+                let _ = writeln!(
+                    out,
+                    "block_binding = {}   # the uniform buffer bound there was written a perspective projection\n\
+                     offset = {}",
+                    block.binding, block.offset
+                );
+                if let Some(v) = block.view_offset {
+                    let _ = writeln!(out, "view_offset = {v}   # and a rigid view beside it");
+                }
+            }
+            (false, [_, _, ..]) => {
+                let bindings: Vec<String> = cx
+                    .seen_camera_blocks()
+                    .iter()
+                    .map(|b| format!("{} (byte {})", b.binding, b.offset))
+                    .collect();
+                let _ = writeln!(
+                    out,
+                    "# block_binding = ?  uniform blocks at bindings {} each hold a perspective projection: \
+                     a shadow or reflection camera beside the view's? name the camera's, with its offset",
+                    bindings.join(", ")
+                );
+            }
+            _ => projection_keys(&mut out, cx),
+        },
     }
     let _ = writeln!(
         out,
         "\n# [retrofit] ?  not inferred: layers (1 or 2), layer_mix (what the lit values mean:\n\
-         # linear, tonemapped, srgb-encoded), depth_mode; unset, the defaults apply."
+         # linear, tonemapped, srgb-encoded, or curve with layer_mix_curve), depth_mode; unset, the\n\
+         # defaults apply."
     );
     out
 }

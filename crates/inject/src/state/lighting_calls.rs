@@ -37,6 +37,7 @@ impl Context {
     /// A `GL_UNIFORM_BUFFER` binding point bound (`size` 0: the whole
     /// buffer).
     pub(super) fn record_binding(&mut self, index: u32, buffer: u32, offset: isize, size: isize) {
+        self.uniform_buffer_bound(index, buffer, offset, size);
         if let Some(r) = self.recording.as_mut() {
             r.buffers.push(BufferChange::Bind {
                 index,
@@ -48,7 +49,8 @@ impl Context {
     }
 
     /// `size` bytes at `data` written at `offset` into the buffer bound at
-    /// `GL_UNIFORM_BUFFER`.
+    /// `GL_UNIFORM_BUFFER`: kept for the replay, and looked at for a camera
+    /// until a retrofit is made.
     ///
     /// # Safety
     ///
@@ -59,14 +61,18 @@ impl Context {
         size: isize,
         data: *const c_void,
     ) {
-        if self.recording.is_none() || data.is_null() || size <= 0 {
+        let looking = self.retrofit.is_none() || self.learning();
+        if (self.recording.is_none() && !looking) || data.is_null() || size <= 0 {
             return;
         }
         // SAFETY: a query of the current context.
         let buffer = unsafe { self.gl().get_parameter_i32(glow::UNIFORM_BUFFER_BINDING) } as u32;
         // SAFETY: the caller's.
-        let bytes =
-            unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size as usize) }.to_vec();
+        let bytes = unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size as usize) };
+        if looking {
+            self.uniform_buffer_written(buffer, offset, bytes);
+        }
+        let bytes = bytes.to_vec();
         if let Some(r) = self.recording.as_mut() {
             r.buffers.push(BufferChange::Data {
                 buffer,

@@ -3,7 +3,8 @@
 //! when the program leaves it.
 //!
 //! The calls come in through [`handlers`]; the state they work on is
-//! [`context`]'s, and its parts are [`clears`] (a clear through
+//! [`context`]'s, and its parts are [`camera_block`] (the camera read
+//! from a uniform block, named or found by its values), [`clears`] (a clear through
 //! another framebuffer sharing the G-buffer's attachments, replayed), [`content`] (the first resolve's G-buffer
 //! read back, a warning where it shows nothing), [`gbuffer`] (finding the G-buffer),
 //! [`framebuffers`] (the binds and attachments followed), [`retrofit`] (the
@@ -14,6 +15,7 @@
 //! (the settings and messages of the whole run) and [`learn`] (`--learn`'s
 //! profile).
 
+mod camera_block;
 mod clears;
 mod content;
 mod context;

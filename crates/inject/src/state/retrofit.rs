@@ -55,6 +55,9 @@ impl Context {
                 }),
             )
         } else {
+            // A new frame on the twins: the last one's forward draws are
+            // over (a program with no swap shows its frames only here).
+            self.forward_frame_ends();
             // SAFETY: as above, this context current.
             (
                 "dmsaa_begin_frame",
@@ -116,12 +119,44 @@ impl Context {
     /// Make a new retrofit of framebuffer `g`.
     fn make_new(&mut self, g: u32) -> Option<()> {
         let profile = settings().profile.as_ref();
-        let options = match profile {
+        let mut options = match profile {
             Some(p) => p.options("the profile").ok()?,
             None => capi::dmsaa_options_default(),
         };
+        // A two-channel attachment holds an encoded normal (octahedral,
+        // spheremap) or a motion vector far more often than a colour, and
+        // an encoding's samples do not blend into a value of it: where no
+        // profile states its rule, one sample's value is taken.
+        let stated: Vec<u32> = profile
+            .map(|p| {
+                p.attachments
+                    .iter()
+                    .filter(|a| a.rule.is_some())
+                    .map(|a| a.index)
+                    .collect()
+            })
+            .unwrap_or_default();
+        let two_channels: Vec<u32> = self
+            .framebuffers
+            .get(&g)
+            .map(|f| {
+                f.channels
+                    .iter()
+                    .filter(|&&(k, n)| {
+                        n == 2 && (k as usize) < capi::DMSAA_MAX_RULES && !stated.contains(&k)
+                    })
+                    .map(|&(k, _)| k)
+                    .collect()
+            })
+            .unwrap_or_default();
+        for &k in &two_channels {
+            options.rules[k as usize] = capi::DMSAA_RULE_SELECT;
+        }
         let world_space = options.world_space_position == 1;
-        let block = profile.and_then(|p| p.camera_block());
+        let mut block = self.camera_block();
+        if self.projection.is_none() && block.is_none() {
+            block = self.find_camera_block(g);
+        }
         if self.projection.is_none() && block.is_none() {
             say_once(
                 "projection",
@@ -169,12 +204,31 @@ impl Context {
         say_once(
             "made",
             &format!(
-                "retrofitting framebuffer {g} ({shape}) with {samples}x MSAA, {} layer(s), {}",
+                "retrofitting framebuffer {g} ({shape}) with {samples}x MSAA, {} layer(s), {}{}{}",
                 options.layers,
                 if profile.is_some() {
                     "options from the profile"
                 } else {
                     "default options"
+                },
+                if two_channels.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        "; two-channel attachment(s) {two_channels:?} taken from one sample, not blended (an encoded \
+                         normal or a motion vector; a profile's `rule` says otherwise)"
+                    )
+                },
+                match self.found_block {
+                    Some(b) => format!(
+                        "; the camera from the uniform block at binding {} (projection at byte {}{}), found by its values",
+                        b.binding,
+                        b.offset,
+                        b.view_offset
+                            .map(|v| format!(", view at byte {v}"))
+                            .unwrap_or_default()
+                    ),
+                    None => String::new(),
                 }
             ),
         );
@@ -202,7 +256,7 @@ impl Context {
         }
         let r = &*r;
         let (handle, world_space) = (r.handle, r.world_space);
-        if let Some(block) = settings().profile.as_ref().and_then(|p| p.camera_block()) {
+        if let Some(block) = self.camera_block() {
             self.read_camera_block(block);
         }
         let (Some(projection), view) = (self.projection, self.view) else {
@@ -240,71 +294,6 @@ impl Context {
             });
         } else {
             self.fail("dmsaa_resolve");
-        }
-    }
-
-    /// The camera as the program's uniform block holds it now (the buffer
-    /// bound at the profile's binding point, read back at the profile's
-    /// offsets), in place of a uniform's.
-    fn read_camera_block(&mut self, block: crate::profile::CameraBlock) {
-        let mut read: (Option<[f32; 16]>, Option<[f32; 16]>) = (None, None);
-        self.checked("the camera read from its uniform block", |gl| {
-            // SAFETY: queries and a buffer read of the current context;
-            // the copy-read binding is put back.
-            unsafe {
-                let buffer = gl
-                    .get_parameter_indexed_i32(glow::UNIFORM_BUFFER_BINDING, block.binding)
-                    as u32;
-                let Some(name) = std::num::NonZeroU32::new(buffer) else {
-                    return capi::DmsaaStatus::Ok;
-                };
-                let start = gl
-                    .get_parameter_indexed_i32(glow::UNIFORM_BUFFER_START, block.binding)
-                    .max(0);
-                let saved = gl.get_parameter_i32(glow::COPY_READ_BUFFER_BINDING) as u32;
-                gl.bind_buffer(glow::COPY_READ_BUFFER, Some(glow::NativeBuffer(name)));
-                let size = gl.get_buffer_parameter_i32(glow::COPY_READ_BUFFER, glow::BUFFER_SIZE);
-                let matrix = |offset: u32| -> Option<[f32; 16]> {
-                    let at = start + offset as i32;
-                    if at + 64 > size {
-                        return None;
-                    }
-                    let mut bytes = [0u8; 64];
-                    gl.get_buffer_sub_data(glow::COPY_READ_BUFFER, at, &mut bytes);
-                    let mut m = [0f32; 16];
-                    for (k, v) in m.iter_mut().enumerate() {
-                        *v = f32::from_ne_bytes([
-                            bytes[4 * k],
-                            bytes[4 * k + 1],
-                            bytes[4 * k + 2],
-                            bytes[4 * k + 3],
-                        ]);
-                    }
-                    Some(m)
-                };
-                read = (matrix(block.offset), block.view_offset.and_then(matrix));
-                gl.bind_buffer(
-                    glow::COPY_READ_BUFFER,
-                    std::num::NonZeroU32::new(saved).map(glow::NativeBuffer),
-                );
-            }
-            capi::DmsaaStatus::Ok
-        });
-        match read {
-            (Some(projection), view) => {
-                self.projection = Some(projection);
-                if view.is_some() {
-                    self.view = view;
-                }
-            }
-            (None, _) => say_once(
-                "camera-block",
-                &format!(
-                    "the profile's camera block (uniform-buffer binding {}, projection at byte {}) holds no \
-                     matrix there: no buffer bound, or one too small; the frame is not resolved",
-                    block.binding, block.offset
-                ),
-            ),
         }
     }
 

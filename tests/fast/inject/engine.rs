@@ -1,0 +1,277 @@
+//! The C engine of `engine.h` (six colour attachments, the camera in a
+//! std140 uniform block written each frame, the G-buffer cleared through
+//! another framebuffer with `glClearBufferfv` before it is bound, an
+//! `RGBA16F` radiance target tonemapped into an 8-bit screen), run as an
+//! unmodified C program (`engine_program.c`) on a surfaceless EGL context
+//! with no swap, linked with libEGL and loading GL through
+//! `eglGetProcAddress` by name, under `inject`:
+//!
+//! - with no profile, retrofitted with one layer from its second frame on:
+//!   the camera found in its uniform block by the matrices written there,
+//!   the clears replayed, its two-channel (octahedral) normals taken from
+//!   one sample; no worse than none against its 16x image; `--check`
+//!   clean;
+//! - `--learn` writes the block's binding and offsets, the signature;
+//! - that profile as a user completes it (the attachments' meanings and
+//!   rules, two layers, the tonemap as a curve): the frame of the same
+//!   program built with the retrofit in its source, bit for bit, and at
+//!   most 0.7x its no-MSAA FLIP against its own 16x image (0.6x over the
+//!   edge pixels of its frame).
+
+use super::{capi, cli, frame};
+use crate::common;
+use deferred_msaa_lab::context::Backend;
+use std::path::Path;
+use std::process::Command;
+
+/// The lines of `deferred-msaa inject` (each starts with it).
+fn said(stderr: &str) -> Vec<&str> {
+    stderr
+        .lines()
+        .filter(|l| l.starts_with("deferred-msaa inject: ") && !l.contains(" check: "))
+        .collect()
+}
+
+/// The check's summary line; asserts it is clean with `resolves` frames
+/// resolved.
+fn clean_check<'a>(stderr: &'a str, what: &str, resolves: u32) -> &'a str {
+    let check = stderr
+        .lines()
+        .find(|l| l.starts_with("deferred-msaa inject: check: "))
+        .unwrap_or_else(|| panic!("{what}: no check summary:\n{stderr}"));
+    assert!(
+        check.contains(&format!(
+            " 0 changed, 0 GL errors left by the library, 0 left pending by the program; {resolves} frames resolved"
+        )),
+        "{what}: {check}"
+    );
+    check
+}
+
+/// The learned profile as a user completes it from docs/hosts.md's row for
+/// this style: the octahedral normals named and selected, the packed byte
+/// selected, two layers, the radiance's tonemap (exposure 0.8, then clamp)
+/// as the curve. Every key the file holds is kept.
+fn completed(learned: &str) -> String {
+    let mut text = String::new();
+    for line in learned.lines() {
+        text.push_str(line);
+        text.push('\n');
+        match line {
+            "index = 1" => text.push_str(
+                "meaning = \"normal\"\nencoding = \"octahedral-unorm\"\nrule = \"select\"\n",
+            ),
+            "index = 2" | "index = 3" => text.push_str("rule = \"select\"\n"),
+            _ => {}
+        }
+    }
+    text.push_str(
+        "\n[retrofit]\nlayers = 2\nlayer_mix = \"curve\"\nlayer_mix_curve = \"\"\"\n\
+         vec3 dmsaa_curve(vec3 x) { return clamp(x * 0.8, 0.0, 1.0); }\n\
+         vec3 dmsaa_curve_inverse(vec3 y) { return y / 0.8; }\n\"\"\"\n",
+    );
+    text
+}
+
+#[test]
+fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
+    if Command::new("cc").arg("--version").output().is_err() {
+        common::skip("no C compiler: `cc` is not on PATH (scripts/setup installs gcc)");
+        return;
+    }
+    if let Err(e) = Backend::Egl.check_library() {
+        common::skip(&e.to_string());
+        return;
+    }
+    let (build, prefix) = capi::install("inject-engine-build");
+    let src = build.join("src");
+    std::fs::create_dir_all(&src).expect("making the source folder");
+    for f in [
+        "engine_program.c",
+        "engine.h",
+        "engine_retrofit.h",
+        "egl_gl.h",
+    ] {
+        std::fs::copy(capi::sources().join(f), src.join(f)).expect("copying a C source");
+    }
+    let in_source = build.join("engine-in-source");
+    capi::run(
+        capi::cc()
+            .arg("-DDMSAA_IN_SOURCE")
+            .arg("-I")
+            .arg(prefix.join("include"))
+            .arg(src.join("engine_program.c"))
+            .arg("-o")
+            .arg(&in_source)
+            .arg(prefix.join("lib/libdeferred_msaa_capi.a"))
+            .arg("-lEGL")
+            .args(capi::NATIVE_LIBS),
+        "compiling engine_program.c with the retrofit in its source",
+    );
+    // No include path or library of the retrofit's: nothing of it.
+    let plain = build.join("engine");
+    capi::run(
+        capi::cc()
+            .arg(src.join("engine_program.c"))
+            .arg("-o")
+            .arg(&plain)
+            .args(["-lEGL", "-lm"]),
+        "compiling engine_program.c as it is",
+    );
+    let out = build.join("out");
+    std::fs::create_dir_all(&out).expect("making the output folder");
+    let program_ok = |output: &std::process::Output, what: &str| {
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        assert!(stdout.ends_with("ok\n"), "{what}: {stdout}");
+    };
+    // The program's own frame, its 16x image and its edges.
+    let own = out.join("own.rgba");
+    program_ok(
+        &capi::run(
+            Command::new(&plain).arg(&own).arg("--reference").arg(&out),
+            "the engine as it is",
+        ),
+        "the engine as it is",
+    );
+    let expected = out.join("in-source.rgba");
+    program_ok(
+        &capi::run(
+            Command::new(&in_source).arg(&expected),
+            "the engine retrofitted in its source",
+        ),
+        "the engine retrofitted in its source",
+    );
+    let library = capi::built("libdeferred_msaa_inject", "so");
+    let inject = |profile: Option<&Path>, file: &str, what: &str| {
+        let mut command = cli();
+        command
+            .args(["inject", "--check", "--library"])
+            .arg(&library);
+        if let Some(p) = profile {
+            command.arg("--profile").arg(p);
+        }
+        let output = capi::run(
+            command.arg("--").arg(&plain).arg(out.join(file)),
+            &format!("deferred-msaa inject, {what}"),
+        );
+        program_ok(&output, what);
+        let stderr = String::from_utf8_lossy(&output.stderr).to_string();
+        eprint!("{what}:\n{stderr}");
+        stderr
+    };
+
+    // No profile: the camera found in its block, one layer, every frame.
+    let stderr = inject(None, "no-profile.rgba", "the engine, no profile");
+    let lines = said(&stderr);
+    assert!(
+        lines.len() == 1
+            && lines[0].contains("retrofitting framebuffer ")
+            && lines[0].contains("1 layer(s), default options")
+            && lines[0].contains("two-channel attachment(s) [1, 2] taken from one sample")
+            && lines[0].contains(
+                "the camera from the uniform block at binding 0 (projection at byte 0, view at byte 64), found by its values"
+            ),
+        "no profile: not the one line of a retrofit with the block's camera:\n{stderr}"
+    );
+    // The first frame's clear, made through the other framebuffer before
+    // the G-buffer's first bind, is not seen in time: its first frame is
+    // the program's own, the next two are resolved.
+    let check = clean_check(&stderr, "no profile", 2);
+    assert!(
+        check.contains("a clear through a framebuffer sharing the G-buffer's, replayed"),
+        "{check}"
+    );
+    let no_profile = frame(&out.join("no-profile.rgba"));
+    assert!(
+        no_profile != frame(&own),
+        "no profile: the frame is the program's own"
+    );
+
+    // --learn: the signature and the camera block, as keys.
+    let learned = out.join("learned.toml");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(&library)
+            .arg("--learn")
+            .arg(&learned)
+            .arg("--")
+            .arg(&plain)
+            .arg(out.join("learn.rgba")),
+        "deferred-msaa inject --learn, the engine",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        said(&stderr)
+            .iter()
+            .any(|l| l.contains("wrote a first profile to ")),
+        "{stderr}"
+    );
+    let text = std::fs::read_to_string(&learned).expect("--learn wrote no profile");
+    for line in [
+        "colour_textures = 6",
+        "formats = [\"unorm8\", \"unorm16\", \"unorm16\", \"unorm8\", \"float16\", \"float16\"]",
+        "block_binding = 0",
+        "offset = 0",
+        "view_offset = 64",
+        "deleted before this was written",
+    ] {
+        assert!(
+            text.contains(line),
+            "no `{line}` in the learned profile:\n{text}"
+        );
+    }
+
+    // That profile completed: two layers, the in-source frame bit for bit.
+    let profile = out.join("engine.toml");
+    std::fs::write(&profile, completed(&text)).expect("writing the completed profile");
+    let stderr = inject(Some(&profile), "two-layers.rgba", "the engine, two layers");
+    let lines = said(&stderr);
+    assert!(
+        lines.len() == 1 && lines[0].contains("2 layer(s), options from the profile"),
+        "two layers: not the one line of the retrofit:\n{stderr}"
+    );
+    // With the profile's signature the G-buffer is found at the first
+    // clear through the framebuffer sharing its textures: all three frames.
+    let check = clean_check(&stderr, "two layers", 3);
+    assert!(
+        check.contains("the second layer (begin, the replayed lighting, finish) 3"),
+        "{check}"
+    );
+    let injected = frame(&out.join("two-layers.rgba"));
+    assert!(
+        injected == frame(&expected),
+        "the injected frame differs from the in-source frame with the same options"
+    );
+
+    // Against the engine's 16x image.
+    let engine = capi::EngineImages::read(&out);
+    let measure = |name: &str| engine.measure(name);
+    let (none, none_edges) = measure("own.rgba");
+    let (one, one_edges) = measure("no-profile.rgba");
+    let (two, two_edges) = measure("two-layers.rgba");
+    eprintln!(
+        "C engine under inject, FLIP against its 16x image (over its edge pixels): own {none:.4} ({none_edges:.4}), \
+         no profile (one layer) {one:.4} ({one_edges:.4}): {:.2}x ({:.2}x), completed learned profile (two layers) \
+         {two:.4} ({two_edges:.4}): {:.2}x ({:.2}x)",
+        one / none,
+        one_edges / none_edges,
+        two / none,
+        two_edges / none_edges
+    );
+    // One layer with nothing declared: no worse than none. (Blending the
+    // octahedral normals, as the library's default for a unorm attachment
+    // would, measured 1.06x none here, 1.09x over edges.)
+    assert!(
+        one <= none && one_edges <= none_edges,
+        "no profile, one layer {one:.4} ({one_edges:.4} over edges) above none {none:.4} ({none_edges:.4})"
+    );
+    assert!(
+        two <= 0.7 * none,
+        "two layers {two:.4} above 0.7x none {none:.4}"
+    );
+    assert!(
+        two_edges <= 0.6 * none_edges,
+        "two layers over edges {two_edges:.4} above 0.6x none {none_edges:.4}"
+    );
+}
