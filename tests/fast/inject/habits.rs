@@ -6,6 +6,7 @@
 
 use super::{Run, capi, cli, frame, own_frame};
 use std::path::Path;
+use std::process::Command;
 
 /// What the habits' runs share with the test that built the programs.
 pub(super) struct Setup<'a> {
@@ -312,4 +313,67 @@ pub(super) fn run(setup: &Setup<'_>) {
         calls: &["dmsaa_resolve 3"],
     }
     .compare_within(setup.in_source, setup.plain, &own, "GLX", 0.01, 8);
+    // A G-buffer made through direct state access (`--dsa`, GL 4.5:
+    // glCreateFramebuffers, glTextureStorage2D, glNamedFramebufferTexture,
+    // glNamedFramebufferDrawBuffers; the depth copied with
+    // glBlitNamedFramebuffer): found and retrofitted as one made the old
+    // way, the in-source frame bit for bit. With `--resize` the program
+    // makes a new G-buffer of the new size under a new name before the last
+    // frame and deletes the old one: with the tutorial profile's signature
+    // the retrofit is kept and given the new one (`dmsaa_refresh_with`, as
+    // the in-source build calls it) and the frame of the resize is resolved
+    // too (the first is the program's own: its projection uniform is set
+    // after the G-buffer's first bind).
+    let dsa: &[&str] = &["--dsa"];
+    let probe = Command::new(setup.plain)
+        .arg(setup.out.join("dsa-probe.rgba"))
+        .args(dsa)
+        .env("DISPLAY", &setup.display)
+        .output()
+        .expect("running the tutorial program with --dsa");
+    match probe.status.code() {
+        Some(0) => {}
+        Some(4) => {
+            // A context below 4.5 (the floor's): not a missing package.
+            eprintln!(
+                "not run: the G-buffer made by name: {}",
+                String::from_utf8_lossy(&probe.stderr).trim()
+            );
+            return;
+        }
+        _ => panic!("the tutorial program with --dsa failed: {probe:?}"),
+    }
+    let own = own_frame(setup.plain, setup.out, "GLX-dsa", dsa, &setup.display);
+    Run {
+        what: "GLFW GLX, G-buffer made by name, default options".into(),
+        out: setup.out,
+        display: setup.display.clone(),
+        args: dsa,
+        in_source_args: &[],
+        profile: None,
+        resolves: 2,
+        calls: &["dmsaa_retrofit_new 1"],
+    }
+    .compare(setup.in_source, setup.plain, &own, "GLX");
+    let tutorial = setup.build.join("tutorial-dsa.toml");
+    std::fs::write(&tutorial, setup.text).expect("writing the tutorial profile");
+    let resized: &[&str] = &["--dsa", "--resize"];
+    let own = own_frame(
+        setup.plain,
+        setup.out,
+        "GLX-dsa-resize",
+        resized,
+        &setup.display,
+    );
+    Run {
+        what: "GLFW GLX, G-buffer made by name anew at a resize, tutorial options".into(),
+        out: setup.out,
+        display: setup.display.clone(),
+        args: resized,
+        in_source_args: &["--tutorial-options"],
+        profile: Some(&tutorial),
+        resolves: 2,
+        calls: &["dmsaa_retrofit_new 1", "dmsaa_refresh_with 1"],
+    }
+    .compare(setup.in_source, setup.plain, &own, "GLX");
 }

@@ -77,6 +77,15 @@
 //   --recreate          before the second frame, the G-buffer deleted and
 //                       made again (the in-source build destroys its
 //                       retrofit and makes a new one)
+//   --dsa               the G-buffer made through direct state access, as
+//                       GL 4.5 engines make it (glCreateFramebuffers,
+//                       glCreateTextures and glTextureStorage2D,
+//                       glNamedFramebufferTexture, glNamedFramebufferRenderbuffer,
+//                       glNamedFramebufferDrawBuffers), the depth copied with
+//                       glBlitNamedFramebuffer; with --resize, a new G-buffer
+//                       of the new size made under a new name and the old one
+//                       deleted (the in-source build calls
+//                       dmsaa_refresh_with); exits 4 on a context older than 4.5
 #include "tutorial_program.hpp"
 
 #ifdef DMSAA_IN_SOURCE
@@ -156,6 +165,78 @@ static PFNGLBINDBUFFERBASEPROC cbBindBufferBase;
 static PFNGLBUFFERSUBDATAPROC cbBufferSubData;
 static PFNGLGETUNIFORMBLOCKINDEXPROC cbGetUniformBlockIndex;
 static PFNGLUNIFORMBLOCKBINDINGPROC cbUniformBlockBinding;
+
+// The direct-state-access functions of --dsa (GL 4.5), loaded by name.
+static PFNGLCREATEFRAMEBUFFERSPROC dsaCreateFramebuffers;
+static PFNGLCREATETEXTURESPROC dsaCreateTextures;
+static PFNGLTEXTURESTORAGE2DPROC dsaTextureStorage2D;
+static PFNGLTEXTUREPARAMETERIPROC dsaTextureParameteri;
+static PFNGLCREATERENDERBUFFERSPROC dsaCreateRenderbuffers;
+static PFNGLNAMEDRENDERBUFFERSTORAGEPROC dsaNamedRenderbufferStorage;
+static PFNGLNAMEDFRAMEBUFFERTEXTUREPROC dsaNamedFramebufferTexture;
+static PFNGLNAMEDFRAMEBUFFERRENDERBUFFERPROC dsaNamedFramebufferRenderbuffer;
+static PFNGLNAMEDFRAMEBUFFERDRAWBUFFERSPROC dsaNamedFramebufferDrawBuffers;
+static PFNGLCHECKNAMEDFRAMEBUFFERSTATUSPROC dsaCheckNamedFramebufferStatus;
+static PFNGLBLITNAMEDFRAMEBUFFERPROC dsaBlitNamedFramebuffer;
+
+// Whether every --dsa function was found.
+static bool loadDsa()
+{
+#define DSA_LOAD(var, type, name)                                                                  \
+    var = reinterpret_cast<type>(TUTORIAL_GET_PROC_ADDRESS(name));                                \
+    if (!var)                                                                                      \
+        return false;
+    DSA_LOAD(dsaCreateFramebuffers, PFNGLCREATEFRAMEBUFFERSPROC, "glCreateFramebuffers")
+    DSA_LOAD(dsaCreateTextures, PFNGLCREATETEXTURESPROC, "glCreateTextures")
+    DSA_LOAD(dsaTextureStorage2D, PFNGLTEXTURESTORAGE2DPROC, "glTextureStorage2D")
+    DSA_LOAD(dsaTextureParameteri, PFNGLTEXTUREPARAMETERIPROC, "glTextureParameteri")
+    DSA_LOAD(dsaCreateRenderbuffers, PFNGLCREATERENDERBUFFERSPROC, "glCreateRenderbuffers")
+    DSA_LOAD(dsaNamedRenderbufferStorage, PFNGLNAMEDRENDERBUFFERSTORAGEPROC, "glNamedRenderbufferStorage")
+    DSA_LOAD(dsaNamedFramebufferTexture, PFNGLNAMEDFRAMEBUFFERTEXTUREPROC, "glNamedFramebufferTexture")
+    DSA_LOAD(dsaNamedFramebufferRenderbuffer, PFNGLNAMEDFRAMEBUFFERRENDERBUFFERPROC,
+             "glNamedFramebufferRenderbuffer")
+    DSA_LOAD(dsaNamedFramebufferDrawBuffers, PFNGLNAMEDFRAMEBUFFERDRAWBUFFERSPROC, "glNamedFramebufferDrawBuffers")
+    DSA_LOAD(dsaCheckNamedFramebufferStatus, PFNGLCHECKNAMEDFRAMEBUFFERSTATUSPROC, "glCheckNamedFramebufferStatus")
+    DSA_LOAD(dsaBlitNamedFramebuffer, PFNGLBLITNAMEDFRAMEBUFFERPROC, "glBlitNamedFramebuffer")
+#undef DSA_LOAD
+    return true;
+}
+
+// The G-buffer made through direct state access at `width` x `height`,
+// under a new name: made before the old one (whatever made it) is
+// deleted, as an engine swaps in its new render targets.
+static void makeDsaGBuffer(Engine &e, int width, int height)
+{
+    GLuint textures[3], depth = 0, framebuffer = 0;
+    dsaCreateTextures(GL_TEXTURE_2D, 3, textures);
+    const GLenum formats[3] = {GL_RGBA16F, GL_RGBA16F, GL_RGBA8};
+    dsaCreateRenderbuffers(1, &depth);
+    dsaNamedRenderbufferStorage(depth, GL_DEPTH_COMPONENT24, width, height);
+    dsaCreateFramebuffers(1, &framebuffer);
+    for (int i = 0; i < 3; i++) {
+        dsaTextureStorage2D(textures[i], 1, formats[i], width, height);
+        dsaTextureParameteri(textures[i], GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        dsaTextureParameteri(textures[i], GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        dsaNamedFramebufferTexture(framebuffer, GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(i), textures[i], 0);
+    }
+    dsaNamedFramebufferRenderbuffer(framebuffer, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth);
+    const GLenum attachments[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    dsaNamedFramebufferDrawBuffers(framebuffer, 3, attachments);
+    CHECK(dsaCheckNamedFramebufferStatus(framebuffer, GL_DRAW_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE,
+          "the G-buffer made by name is incomplete");
+    glDeleteFramebuffers(1, &e.gBuffer);
+    GLuint old[3] = {e.gPosition, e.gNormal, e.gAlbedoSpec};
+    glDeleteTextures(3, old);
+    glDeleteRenderbuffers(1, &e.rboDepth);
+    e.gBuffer = framebuffer;
+    e.gPosition = textures[0];
+    e.gNormal = textures[1];
+    e.gAlbedoSpec = textures[2];
+    e.rboDepth = depth;
+    e.width = width;
+    e.height = height;
+    glViewport(0, 0, width, height);
+}
 
 // The lighting as light volumes: an ambient pass, then one light a draw.
 static const char *ambientFs = R"(
@@ -358,12 +439,12 @@ static bool ok(DmsaaStatus status, const char *call)
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options] [--two-layers] [--forward] [--resize | --recreate] [--pre-pass]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s OUT_FILE [--egl] [--tutorial-options] [--two-layers] [--forward] [--resize | --recreate] [--pre-pass] [--dsa]\n", argv[0]);
         return 2;
     }
     bool egl = false, tutorialOptions = false, twoLayers = false, forward = false, resize = false, recreate = false,
          prePass = false, cameraBlockOn = false, viewProjectionOn = false, lightVolumes = false,
-         twoPass = false, lightBlock = false, floatLit = false;
+         twoPass = false, lightBlock = false, floatLit = false, dsa = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -391,6 +472,8 @@ int main(int argc, char **argv)
             recreate = true;
         else if (std::strcmp(argv[i], "--pre-pass") == 0)
             prePass = true;
+        else if (std::strcmp(argv[i], "--dsa") == 0)
+            dsa = true;
         else {
             std::fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;
@@ -457,6 +540,14 @@ int main(int argc, char **argv)
         reinterpret_cast<PFNGLUNIFORMBLOCKBINDINGPROC>(TUTORIAL_GET_PROC_ADDRESS("glUniformBlockBinding"));
     Engine e;
     engineInit(e, WIDTH, HEIGHT, false);
+    if (dsa) {
+        if (major * 10 + minor < 45 || !loadDsa()) {
+            std::fprintf(stderr, "--dsa needs OpenGL 4.5 (direct state access); this context is %d.%d\n", major,
+                         minor);
+            return 4;
+        }
+        makeDsaGBuffer(e, WIDTH, HEIGHT);
+    }
     Volumes volumes;
     if (lightVolumes) {
         volumes.ambient = new Shader(quadVs, ambientFs);
@@ -541,7 +632,12 @@ int main(int argc, char **argv)
     std::vector<unsigned char> pixels(static_cast<size_t>(WIDTH) * HEIGHT * 4);
     glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
     for (int frame = 0; frame < FRAMES; frame++) {
-        if (frame == FRAMES - 1 && resize) {
+        if (frame == FRAMES - 1 && resize && dsa) {
+            makeDsaGBuffer(e, RESIZED_WIDTH, RESIZED_HEIGHT);
+#ifdef DMSAA_IN_SOURCE
+            ok(dmsaa_refresh_with(msaa, e.gBuffer), "dmsaa_refresh_with");
+#endif
+        } else if (frame == FRAMES - 1 && resize) {
             resizeGBuffer(e, RESIZED_WIDTH, RESIZED_HEIGHT);
 #ifdef DMSAA_IN_SOURCE
             ok(dmsaa_refresh(msaa), "dmsaa_refresh");
@@ -555,6 +651,8 @@ int main(int argc, char **argv)
             engineFree(e);
             e = Engine();
             engineInit(e, WIDTH, HEIGHT, false);
+            if (dsa)
+                makeDsaGBuffer(e, WIDTH, HEIGHT);
             if (cameraBlockOn)
                 useCameraBlock(e);
             if (viewProjectionOn)
@@ -638,7 +736,13 @@ int main(int argc, char **argv)
             glBindFramebuffer(GL_DRAW_FRAMEBUFFER, litTarget);
         }
 #endif
-        blitDepth(e, litTarget);
+        if (dsa) {
+            dsaBlitNamedFramebuffer(e.gBuffer, litTarget, 0, 0, e.width, e.height, 0, 0, e.width, e.height,
+                                    GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+            glBindFramebuffer(GL_FRAMEBUFFER, litTarget);
+        } else {
+            blitDepth(e, litTarget);
+        }
 #ifdef DMSAA_IN_SOURCE
         GLuint forwardTarget = 0;
         if (forward) {
