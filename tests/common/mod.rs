@@ -1,11 +1,13 @@
 //! What both tiers (`tests/fast`, `tests/slow`) share beside the
 //! `deferred-msaa-testkit` crate (the toy host, the generator, projections):
-//! contexts and the skip rule, a test run alone (`alone`), goldens (`golden`),
+//! contexts and the skip rule, a test run alone (`alone`), the examples
+//! built and found (`examples`), goldens (`golden`),
 //! the GL state snapshot (`gl_state`), the property test over random host
 //! G-buffers (`property`), the C API's misuse fuzzer (`misuse`), the sRGB
 //! transfer function in f64 (`srgb`).
 #![allow(dead_code)]
 
+pub mod examples;
 pub mod gl_state;
 pub mod golden;
 pub mod misuse;

@@ -97,16 +97,17 @@ pub(crate) fn cc() -> Command {
     c
 }
 
-/// The C engine's (`engine.h`) 16x image and edge mask, as its programs
+/// A test program's 16x image and edge mask at 320x180 (`reference.rgba`,
+/// `edges.mask`), as the C engine's programs and the Rust engine example
 /// write them into one folder, for measuring its frames there.
-pub(crate) struct EngineImages {
+pub(crate) struct ReferenceImages {
     dir: PathBuf,
     reference: image::RgbaImage,
     edges: image::GrayImage,
 }
 
-impl EngineImages {
-    /// The engine's frame size.
+impl ReferenceImages {
+    /// The programs' frame size.
     const SIZE: (u32, u32) = (320, 180);
 
     /// `reference.rgba` and `edges.mask` in `dir`.
@@ -118,7 +119,7 @@ impl EngineImages {
             std::fs::read(dir.join("edges.mask")).expect("edges.mask"),
         )
         .expect("a 320x180 mask");
-        EngineImages {
+        ReferenceImages {
             dir: dir.to_path_buf(),
             reference: image(dir, "reference.rgba", w, h),
             edges,
@@ -551,7 +552,7 @@ fn a_c_engine_with_six_attachments_retrofitted_from_the_docs() {
     let stdout = String::from_utf8_lossy(&out.stdout).to_string();
     eprint!("{stdout}");
     assert!(stdout.ends_with("ok\n"), "{stdout}");
-    let engine = EngineImages::read(&images);
+    let engine = ReferenceImages::read(&images);
     let measure = |name: &str| engine.measure(name);
     let (none, none_edges) = measure("none.rgba");
     let (one, one_edges) = measure("msaa.rgba");

@@ -155,8 +155,9 @@ pub(crate) struct RecordedDraw {
     pub(crate) call: DrawCall,
     pub(crate) program: u32,
     pub(crate) vertex_array: u32,
-    /// (unit, texture) for every unit with a 2D texture bound.
-    pub(crate) textures: Vec<(u32, u32)>,
+    /// (unit, target, texture) for every unit with a 2D or 2D-array texture
+    /// bound (a G-buffer of one array's layers is read through the array).
+    pub(crate) textures: Vec<(u32, u32, u32)>,
     /// The uniform calls made since the recording's last draw.
     pub(crate) uniforms: Vec<UniformCall>,
     /// The uniform buffers' changes since the recording's last draw.
@@ -229,14 +230,16 @@ pub(crate) struct Saved {
     vertex_array: u32,
     active: u32,
     draw_framebuffer: u32,
-    textures: Vec<(u32, u32)>,
+    /// (unit, target, texture) bound before, for every unit and target the
+    /// replay binds.
+    textures: Vec<(u32, u32, u32)>,
 }
 
 /// Read what a replay of `draws` will change.
 pub(crate) fn save(gl: &glow::Context, draws: &[RecordedDraw]) -> Saved {
-    let mut units: Vec<u32> = draws
+    let mut units: Vec<(u32, u32)> = draws
         .iter()
-        .flat_map(|d| d.textures.iter().map(|&(u, _)| u))
+        .flat_map(|d| d.textures.iter().map(|&(u, target, _)| (u, target)))
         .collect();
     units.sort_unstable();
     units.dedup();
@@ -245,9 +248,14 @@ pub(crate) fn save(gl: &glow::Context, draws: &[RecordedDraw]) -> Saved {
         let active = gl.get_parameter_i32(glow::ACTIVE_TEXTURE) as u32;
         let textures = units
             .iter()
-            .map(|&u| {
+            .map(|&(u, target)| {
                 gl.active_texture(glow::TEXTURE0 + u);
-                (u, gl.get_parameter_i32(glow::TEXTURE_BINDING_2D) as u32)
+                let binding = if target == glow::TEXTURE_2D_ARRAY {
+                    glow::TEXTURE_BINDING_2D_ARRAY
+                } else {
+                    glow::TEXTURE_BINDING_2D
+                };
+                (u, target, gl.get_parameter_i32(binding) as u32)
             })
             .collect();
         gl.active_texture(active);
@@ -336,9 +344,9 @@ pub(crate) fn draw(
             d.state.apply(gl);
             gl.use_program(program(d.program));
             gl.bind_vertex_array(vertex_array(d.vertex_array));
-            for &(unit, name) in &d.textures {
+            for &(unit, target, name) in &d.textures {
                 gl.active_texture(glow::TEXTURE0 + unit);
-                gl.bind_texture(glow::TEXTURE_2D, texture(name));
+                gl.bind_texture(target, texture(name));
             }
             match d.call {
                 DrawCall::Arrays { mode, first, count } => gl.draw_arrays(mode, first, count),
@@ -448,9 +456,9 @@ pub(crate) fn restore(gl: &glow::Context, saved: &Saved) {
         }
         gl.bind_buffer(glow::UNIFORM_BUFFER, buffer(saved.uniform_buffer));
         gl.bind_buffer(glow::COPY_WRITE_BUFFER, buffer(saved.copy_write_buffer));
-        for &(unit, name) in &saved.textures {
+        for &(unit, target, name) in &saved.textures {
             gl.active_texture(glow::TEXTURE0 + unit);
-            gl.bind_texture(glow::TEXTURE_2D, texture(name));
+            gl.bind_texture(target, texture(name));
         }
         gl.active_texture(saved.active);
         gl.bind_vertex_array(vertex_array(saved.vertex_array));

@@ -245,7 +245,7 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
     );
 
     // Against the engine's 16x image.
-    let engine = capi::EngineImages::read(&out);
+    let engine = capi::ReferenceImages::read(&out);
     let measure = |name: &str| engine.measure(name);
     let (none, none_edges) = measure("own.rgba");
     let (one, one_edges) = measure("no-profile.rgba");

@@ -20,6 +20,7 @@
 mod engine;
 mod habits;
 mod left_alone;
+mod rust_engine;
 
 use super::capi;
 use crate::common;

@@ -37,11 +37,16 @@ impl Context {
             // SAFETY: a query of the current context.
             let vertex_array =
                 unsafe { self.gl().get_parameter_i32(glow::VERTEX_ARRAY_BINDING) } as u32;
-            let mut textures: Vec<(u32, u32)> = self
+            let mut textures: Vec<(u32, u32, u32)> = self
                 .unit_textures
                 .iter()
-                .filter(|(_, t)| **t != 0)
-                .map(|(u, t)| (*u, *t))
+                .map(|(u, t)| (*u, glow::TEXTURE_2D, *t))
+                .chain(
+                    self.unit_arrays
+                        .iter()
+                        .map(|(u, t)| (*u, glow::TEXTURE_2D_ARRAY, *t)),
+                )
+                .filter(|&(_, _, t)| t != 0)
                 .collect();
             textures.sort_unstable();
             let program = self.program;

@@ -133,7 +133,8 @@ pub(crate) fn left_alone(seen: &Seen, frames: u64, ended: bool) -> String {
             "framebuffer {g}, found as the G-buffer, was deleted before it was bound for drawing again \
              ({times} time(s)): a G-buffer made and deleted within a frame, as a one-call render does, is never \
              retrofitted (the retrofit takes the G-buffer from its next bind); {frames_said}; leaving the program \
-             untouched (keep the G-buffer alive across frames)"
+             untouched (keep the G-buffer alive across frames, or give a profile its signature: [framebuffer], which \
+             --learn writes)"
         );
     }
     if let Some(g) = seen.found.filter(|_| !seen.retrofitted) {

@@ -1,0 +1,177 @@
+//! A Rust engine (`examples/inject_rust_engine.rs`, on glow 0.17: a
+//! surfaceless EGL context through `khronos-egl` with libEGL loaded at run
+//! time, a one-call render that makes its G-buffer of one
+//! `GL_TEXTURE_2D_ARRAY`'s layers and deletes it each call, the camera as
+//! one `viewProjection` uniform, the sRGB curve written by its lighting
+//! shader, thin bars against the sky) under `inject`:
+//!
+//! - with no profile it is left alone, saying why in one line (a G-buffer
+//!   made and deleted within each call) and naming the way out;
+//! - `--learn` writes the G-buffer's signature and `view_projection_uniform`;
+//! - that profile completed as a user would (the normal layer named and
+//!   selected, two layers, the lit values declared display values): each
+//!   call's new G-buffer retrofitted (`dmsaa_refresh_with`), the lighting
+//!   replayed with the G-buffer's array bound, the frame of the same program
+//!   with the retrofit in its source (`--in-source`) bit for bit, and at most
+//!   0.7x its own frame's FLIP against its 16x image (0.6x over edges).
+
+use super::{capi, cli, frame};
+use crate::common;
+use deferred_msaa_lab::context::Backend;
+use std::process::Command;
+
+#[test]
+fn a_rust_engine_under_inject_draws_its_in_source_two_layers() {
+    if let Err(e) = Backend::Egl.check_library() {
+        common::skip(&e.to_string());
+        return;
+    }
+    let engine = common::examples::example("inject_rust_engine");
+    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("inject-rust-engine");
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::create_dir_all(&out).expect("making the output folder");
+    let ok = |output: &std::process::Output, what: &str| {
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        assert!(stdout.ends_with("ok\n"), "{what}: {stdout}");
+    };
+    let own = out.join("own.rgba");
+    ok(
+        &capi::run(
+            Command::new(&engine).arg(&own).arg("--reference").arg(&out),
+            "the Rust engine as it is",
+        ),
+        "the Rust engine as it is",
+    );
+    let expected = out.join("in-source.rgba");
+    ok(
+        &capi::run(
+            Command::new(&engine).arg(&expected).arg("--in-source"),
+            "the Rust engine retrofitted in its source",
+        ),
+        "the Rust engine retrofitted in its source",
+    );
+    let library = capi::built("libdeferred_msaa_inject", "so");
+    let said = |stderr: &str| -> Vec<String> {
+        stderr
+            .lines()
+            .filter(|l| l.starts_with("deferred-msaa inject: ") && !l.contains(" check: "))
+            .map(String::from)
+            .collect()
+    };
+
+    // No profile: left alone, one line, its own frame.
+    let left = out.join("no-profile.rgba");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(&library)
+            .arg("--")
+            .arg(&engine)
+            .arg(&left),
+        "deferred-msaa inject, the Rust engine, no profile",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let lines = said(&stderr);
+    assert!(
+        lines.len() == 1
+            && lines[0].contains("was deleted before it was bound for drawing again (3 time(s))")
+            && lines[0].contains("give a profile its signature"),
+        "no profile: not the one line of a one-call render:\n{stderr}"
+    );
+    assert!(
+        frame(&left) == frame(&own),
+        "left alone, yet not the program's own frame"
+    );
+
+    // --learn, then the profile completed.
+    let learned = out.join("learned.toml");
+    capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(&library)
+            .arg("--learn")
+            .arg(&learned)
+            .arg("--")
+            .arg(&engine)
+            .arg(out.join("learn.rgba")),
+        "deferred-msaa inject --learn, the Rust engine",
+    );
+    let text = std::fs::read_to_string(&learned).expect("--learn wrote no profile");
+    for line in [
+        "colour_textures = 2",
+        "formats = [\"float16\", \"float16\"]",
+        "view_projection_uniform = \"viewProjection\"",
+    ] {
+        assert!(
+            text.contains(line),
+            "no `{line}` in the learned profile:\n{text}"
+        );
+    }
+    let mut completed = String::new();
+    for line in text.lines() {
+        completed.push_str(line);
+        completed.push('\n');
+        if line == "index = 1" {
+            completed.push_str("meaning = \"normal\"\nencoding = \"xyz\"\nrule = \"select\"\n");
+        }
+    }
+    completed.push_str("\n[retrofit]\nlayers = 2\nlayer_mix = \"srgb-encoded\"\n");
+    let profile = out.join("engine.toml");
+    std::fs::write(&profile, completed).expect("writing the completed profile");
+    let injected = out.join("two-layers.rgba");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--check", "--library"])
+            .arg(&library)
+            .arg("--profile")
+            .arg(&profile)
+            .arg("--")
+            .arg(&engine)
+            .arg(&injected),
+        "deferred-msaa inject, the Rust engine, two layers",
+    );
+    ok(&output, "the Rust engine under inject");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    eprint!("the Rust engine, two layers:\n{stderr}");
+    let lines = said(&stderr);
+    assert!(
+        lines.len() == 1 && lines[0].contains("2 layer(s), options from the profile"),
+        "two layers: not the one line of the retrofit:\n{stderr}"
+    );
+    // The first call's G-buffer is bound before its camera is set: the
+    // retrofit begins at the second call's, and the third call's new one
+    // is given to it.
+    let check = stderr
+        .lines()
+        .find(|l| l.starts_with("deferred-msaa inject: check: "))
+        .unwrap_or_else(|| panic!("no check summary:\n{stderr}"));
+    for needle in [
+        " 0 changed, 0 GL errors left by the library, 0 left pending by the program; 2 frames resolved",
+        "dmsaa_refresh_with 1",
+        "the second layer (begin, the replayed lighting, finish) 2",
+    ] {
+        assert!(check.contains(needle), "no `{needle}` in {check}");
+    }
+    assert!(
+        frame(&injected) == frame(&expected),
+        "the injected frame differs from the in-source frame with the same options"
+    );
+
+    let images = capi::ReferenceImages::read(&out);
+    let (none, none_edges) = images.measure("own.rgba");
+    let (two, two_edges) = images.measure("two-layers.rgba");
+    eprintln!(
+        "Rust engine under inject, FLIP against its 16x image (over its edge pixels): own {none:.4} \
+         ({none_edges:.4}), completed learned profile (two layers) {two:.4} ({two_edges:.4}): {:.2}x ({:.2}x)",
+        two / none,
+        two_edges / none_edges
+    );
+    assert!(
+        two <= 0.7 * none,
+        "two layers {two:.4} above 0.7x none {none:.4}"
+    );
+    assert!(
+        two_edges <= 0.6 * none_edges,
+        "two layers over edges {two_edges:.4} above 0.6x none {none_edges:.4}"
+    );
+}
