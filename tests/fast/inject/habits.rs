@@ -313,6 +313,7 @@ pub(super) fn run(setup: &Setup<'_>) {
         calls: &["dmsaa_resolve 3"],
     }
     .compare_within(setup.in_source, setup.plain, &own, "GLX", 0.01, 8);
+    // What needs GL 4.5 (direct state access), after one probe of it.
     // A G-buffer made through direct state access (`--dsa`, GL 4.5:
     // glCreateFramebuffers, glTextureStorage2D, glNamedFramebufferTexture,
     // glNamedFramebufferDrawBuffers; the depth copied with
@@ -374,6 +375,29 @@ pub(super) fn run(setup: &Setup<'_>) {
         profile: Some(&tutorial),
         resolves: 2,
         calls: &["dmsaa_retrofit_new 1", "dmsaa_refresh_with 1"],
+    }
+    .compare(setup.in_source, setup.plain, &own, "GLX");
+    // The light volumes' block written by name (`--named-writes`:
+    // glNamedBufferSubData, the buffer never bound for the write, GL 4.5):
+    // the replay writes each light's bytes again before its draw, the
+    // in-source frame bit for bit.
+    let named: &[&str] = &["--light-volumes", "--light-block", "--named-writes"];
+    let own = own_frame(
+        setup.plain,
+        setup.out,
+        "GLX-named-writes",
+        named,
+        &setup.display,
+    );
+    Run {
+        what: "GLFW GLX, light volumes from a block written by name, tutorial two layers".into(),
+        out: setup.out,
+        display: setup.display.clone(),
+        args: named,
+        in_source_args: &["--tutorial-options", "--two-layers"],
+        profile: Some(setup.two_layers),
+        resolves: 2,
+        calls: &["the second layer (begin, the replayed lighting, finish) 2"],
     }
     .compare(setup.in_source, setup.plain, &own, "GLX");
 }

@@ -50,6 +50,10 @@
 //                       uniform block (`LightBlock`, std140, binding 1),
 //                       written with glBufferSubData before its draw, as
 //                       engines keep per-light data, not as uniforms
+//   --named-writes      (with --light-block) those writes made with
+//                       glNamedBufferSubData, as GL 4.5 engines make them,
+//                       the buffer never bound for them; exits 4 on a
+//                       context older than 4.5
 //   --two-pass-lighting the lighting in two passes, as engines with an
 //                       accumulation target light: into an RGBA16F target of
 //                       its own (cleared first), then a compose quad copying
@@ -283,6 +287,9 @@ struct Volumes {
     Shader *ambient = nullptr, *oneLight = nullptr;
     // With --light-block: the lights' block and its buffer.
     GLuint lightBuffer = 0;
+    // With --named-writes: glNamedBufferSubData (GL 4.5), the buffer never
+    // bound to GL_UNIFORM_BUFFER for the write.
+    PFNGLNAMEDBUFFERSUBDATAPROC namedBufferSubData = nullptr;
 };
 
 // The one-light shader's light in a uniform block instead.
@@ -344,15 +351,20 @@ static void lighting(Engine &e, const Volumes &volumes)
     volumes.oneLight->setInt("gNormal", 1);
     volumes.oneLight->setInt("gAlbedoSpec", 2);
     volumes.oneLight->setVec3("viewPos", cameraPosition);
+    const bool named = volumes.namedBufferSubData != nullptr;
     if (volumes.lightBuffer) {
         cbBindBufferBase(GL_UNIFORM_BUFFER, 1, volumes.lightBuffer);
-        glBindBuffer(GL_UNIFORM_BUFFER, volumes.lightBuffer);
+        if (!named)
+            glBindBuffer(GL_UNIFORM_BUFFER, volumes.lightBuffer);
     }
     for (size_t i = 0; i < e.lightPositions.size(); i++) {
         if (volumes.lightBuffer) {
             const Vec3 p = e.lightPositions[i], c = e.lightColors[i];
             const float light[12] = {p.x, p.y, p.z, 1.0f, c.x, c.y, c.z, 1.0f, 0.7f, 1.8f, 0.0f, 0.0f};
-            cbBufferSubData(GL_UNIFORM_BUFFER, 0, sizeof light, light);
+            if (named)
+                volumes.namedBufferSubData(volumes.lightBuffer, 0, sizeof light, light);
+            else
+                cbBufferSubData(GL_UNIFORM_BUFFER, 0, sizeof light, light);
         } else {
             volumes.oneLight->setVec3("lightPosition", e.lightPositions[i]);
             volumes.oneLight->setVec3("lightColor", e.lightColors[i]);
@@ -361,7 +373,7 @@ static void lighting(Engine &e, const Volumes &volumes)
         }
         renderQuad();
     }
-    if (volumes.lightBuffer)
+    if (volumes.lightBuffer && !named)
         glBindBuffer(GL_UNIFORM_BUFFER, 0);
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
@@ -444,7 +456,7 @@ int main(int argc, char **argv)
     }
     bool egl = false, tutorialOptions = false, twoLayers = false, forward = false, resize = false, recreate = false,
          prePass = false, cameraBlockOn = false, viewProjectionOn = false, lightVolumes = false,
-         twoPass = false, lightBlock = false, floatLit = false, dsa = false;
+         twoPass = false, lightBlock = false, floatLit = false, dsa = false, namedWrites = false;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -464,6 +476,8 @@ int main(int argc, char **argv)
             twoPass = true;
         else if (std::strcmp(argv[i], "--light-block") == 0)
             lightBlock = true;
+        else if (std::strcmp(argv[i], "--named-writes") == 0)
+            namedWrites = true;
         else if (std::strcmp(argv[i], "--float-lit") == 0)
             floatLit = true;
         else if (std::strcmp(argv[i], "--resize") == 0)
@@ -562,6 +576,15 @@ int main(int argc, char **argv)
             glBindBuffer(GL_UNIFORM_BUFFER, volumes.lightBuffer);
             glBufferData(GL_UNIFORM_BUFFER, 48, nullptr, GL_DYNAMIC_DRAW);
             glBindBuffer(GL_UNIFORM_BUFFER, 0);
+            if (namedWrites) {
+                volumes.namedBufferSubData = reinterpret_cast<PFNGLNAMEDBUFFERSUBDATAPROC>(
+                    TUTORIAL_GET_PROC_ADDRESS("glNamedBufferSubData"));
+                if (major * 10 + minor < 45 || !volumes.namedBufferSubData) {
+                    std::fprintf(stderr, "--named-writes needs OpenGL 4.5 (direct state access); this context is %d.%d\n",
+                                 major, minor);
+                    return 4;
+                }
+            }
         } else {
             volumes.oneLight = new Shader(quadVs, oneLightFs);
         }

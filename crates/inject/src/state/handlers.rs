@@ -353,7 +353,23 @@ pub(crate) fn glBufferSubData(
     unsafe { real(target, offset, size, data) };
     if target == glow::UNIFORM_BUFFER {
         // SAFETY: GL read `size` bytes at `data`.
-        with_context(|cx| unsafe { cx.record_buffer_data(offset, size, data) });
+        with_context(|cx| unsafe { cx.record_buffer_data(None, offset, size, data) });
+    }
+}
+
+/// A write by name (GL 4.5 direct state access): any buffer, which a
+/// uniform block may read (a light's values written before its draw).
+pub(crate) fn glNamedBufferSubData(
+    real: real_type::glNamedBufferSubData,
+    buffer: u32,
+    offset: isize,
+    size: isize,
+    data: *const c_void,
+) {
+    unsafe { real(buffer, offset, size, data) };
+    if buffer != 0 {
+        // SAFETY: GL read `size` bytes at `data`.
+        with_context(|cx| unsafe { cx.record_buffer_data(Some(buffer), offset, size, data) });
     }
 }
 

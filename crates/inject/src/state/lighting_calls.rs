@@ -48,15 +48,17 @@ impl Context {
         }
     }
 
-    /// `size` bytes at `data` written at `offset` into the buffer bound at
-    /// `GL_UNIFORM_BUFFER`: kept for the replay, and looked at for a camera
-    /// until a retrofit is made.
+    /// `size` bytes at `data` written at `offset` into buffer `named`
+    /// (`glNamedBufferSubData`), or with `None` into the buffer bound at
+    /// `GL_UNIFORM_BUFFER` (`glBufferSubData`): kept for the replay, and
+    /// looked at for a camera until a retrofit is made.
     ///
     /// # Safety
     ///
     /// `data` is null or holds `size` bytes.
     pub(super) unsafe fn record_buffer_data(
         &mut self,
+        named: Option<u32>,
         offset: isize,
         size: isize,
         data: *const c_void,
@@ -65,8 +67,11 @@ impl Context {
         if (self.recording.is_none() && !looking) || data.is_null() || size <= 0 {
             return;
         }
-        // SAFETY: a query of the current context.
-        let buffer = unsafe { self.gl().get_parameter_i32(glow::UNIFORM_BUFFER_BINDING) } as u32;
+        let buffer = match named {
+            Some(b) => b,
+            // SAFETY: a query of the current context.
+            None => (unsafe { self.gl().get_parameter_i32(glow::UNIFORM_BUFFER_BINDING) }) as u32,
+        };
         // SAFETY: the caller's.
         let bytes = unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size as usize) };
         if looking {
