@@ -11,6 +11,8 @@
 //!   the clears replayed, its two-channel (octahedral) normals taken from
 //!   one sample; no worse than none against its 16x image; `--check`
 //!   clean;
+//! - with a second camera block (a spot light's, `--shadow-block`) nothing
+//!   is guessed: one line names both, `--learn` a `?` line;
 //! - `--learn` writes the block's binding and offsets, the signature;
 //! - that profile as a user completes it (the attachments' meanings and
 //!   rules, two layers, the tonemap as a curve): the frame of the same
@@ -185,6 +187,60 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
     assert!(
         no_profile != frame(&own),
         "no profile: the frame is the program's own"
+    );
+
+    // A second camera block (`--shadow-block`: a spot light's projection
+    // and view at binding 1): no block is guessed; one line names both and
+    // the way out, and the frame is the program's own.
+    let shadow = out.join("shadow-block.rgba");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(&library)
+            .arg("--")
+            .arg(&plain)
+            .arg(&shadow)
+            .arg("--shadow-block"),
+        "deferred-msaa inject, the engine with a shadow camera block",
+    );
+    program_ok(&output, "the engine with a shadow camera block");
+    let own_shadow = out.join("own-shadow-block.rgba");
+    capi::run(
+        Command::new(&plain).arg(&own_shadow).arg("--shadow-block"),
+        "the engine with a shadow camera block, as it is",
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let lines = said(&stderr);
+    assert!(
+        lines.len() == 1
+            && lines[0]
+                .contains("uniform blocks at bindings [0, 1] each hold a perspective projection")
+            && lines[0].contains("leaving the program untouched")
+            && lines[0].contains("block_binding"),
+        "two camera blocks: not one line naming both:\n{stderr}"
+    );
+    assert!(
+        frame(&shadow) == frame(&own_shadow),
+        "two camera blocks: left alone, yet not the program's own frame"
+    );
+    let learned_shadow = out.join("learned-shadow.toml");
+    capi::run(
+        cli()
+            .args(["inject", "--library"])
+            .arg(&library)
+            .arg("--learn")
+            .arg(&learned_shadow)
+            .arg("--")
+            .arg(&plain)
+            .arg(out.join("learn-shadow.rgba"))
+            .arg("--shadow-block"),
+        "deferred-msaa inject --learn, the engine with a shadow camera block",
+    );
+    let text = std::fs::read_to_string(&learned_shadow).expect("--learn wrote no profile");
+    assert!(
+        text.contains("# block_binding = ?  uniform blocks at bindings 0 (byte 0), 1 (byte 0)")
+            && !text.lines().any(|l| l.starts_with("block_binding")),
+        "two camera blocks: the learned profile guesses or says nothing:\n{text}"
     );
 
     // --learn: the signature and the camera block, as keys.

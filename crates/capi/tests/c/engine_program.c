@@ -13,10 +13,13 @@
  *   into dmsaa_begin_second_layer_own_target's framebuffer and mixed into
  *   the radiance target before the tonemap.
  *
- * Usage: engine_program OUT_FILE [--frames N] [--reference DIR]
+ * Usage: engine_program OUT_FILE [--frames N] [--reference DIR] [--shadow-block]
  *   --reference DIR  also writes the engine's 16x image (reference.rgba:
  *                    4x the width and height, averaged 4x4 in linear light)
  *                    and its edges (edges.mask) into DIR
+ *   --shadow-block   a second camera block (binding 1), a spot light's
+ *                    projection and view written into it each frame, as an
+ *                    engine keeps its shadow cameras (no pass reads it here)
  *
  * Prints "ok" last, or exits non-zero with a line saying why.
  */
@@ -35,11 +38,14 @@ int main(int argc, char **argv)
     const char *out = argv[1];
     const char *reference = NULL;
     int frames = 3;
+    int shadow_block = 0;
     for (int i = 2; i < argc; i++) {
         if (strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
             frames = atoi(argv[++i]);
         } else if (strcmp(argv[i], "--reference") == 0 && i + 1 < argc) {
             reference = argv[++i];
+        } else if (strcmp(argv[i], "--shadow-block") == 0) {
+            shadow_block = 1;
         } else {
             fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;
@@ -66,7 +72,30 @@ int main(int argc, char **argv)
     if (!ok(dmsaa_retrofit_new(load_gl, NULL, e.gbuffer, &options, &msaa), "dmsaa_retrofit_new"))
         return 1;
 #endif
+    GLuint shadow_ubo = 0;
+    float shadow[32];
+    if (shadow_block) {
+        /* a spot light's camera: 60 degrees, square, looking down at the grid */
+        float f = 1.0f / tanf(0.5236f), near = 0.5f, far = 40.0f;
+        memset(shadow, 0, sizeof shadow);
+        shadow[0] = f, shadow[5] = f;
+        shadow[10] = (far + near) / (near - far), shadow[11] = -1.0f;
+        shadow[14] = 2.0f * far * near / (near - far);
+        identity(shadow + 16);
+        shadow[16 + 5] = 0.0f, shadow[16 + 6] = -1.0f, shadow[16 + 9] = 1.0f, shadow[16 + 10] = 0.0f;
+        shadow[16 + 14] = -12.0f;
+        glGenBuffers(1, &shadow_ubo);
+        glBindBuffer(GL_UNIFORM_BUFFER, shadow_ubo);
+        glBufferData(GL_UNIFORM_BUFFER, sizeof shadow, NULL, GL_DYNAMIC_DRAW);
+        glBindBuffer(GL_UNIFORM_BUFFER, 0);
+        glBindBufferBase(GL_UNIFORM_BUFFER, 1, shadow_ubo);
+    }
     for (int frame = 0; frame < frames; frame++) {
+        if (shadow_block) {
+            glBindBuffer(GL_UNIFORM_BUFFER, shadow_ubo);
+            glBufferSubData(GL_UNIFORM_BUFFER, 0, sizeof shadow, shadow);
+            glBindBuffer(GL_UNIFORM_BUFFER, 0);
+        }
         clear_gbuffer(&e);
 #ifdef DMSAA_IN_SOURCE
         GLuint geometry_target = 0;
@@ -95,6 +124,8 @@ int main(int argc, char **argv)
 #ifdef DMSAA_IN_SOURCE
     dmsaa_destroy(msaa);
 #endif
+    if (shadow_ubo)
+        glDeleteBuffers(1, &shadow_ubo);
     engine_free(&e);
     gl_errors("the end");
     destroy_context();

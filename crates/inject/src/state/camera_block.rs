@@ -77,28 +77,29 @@ impl Context {
     }
 
     /// With no projection uniform and no block named: the camera block the
-    /// writes showed, where exactly one binding point holds one (said once
-    /// where several do).
-    pub(super) fn find_camera_block(&mut self, g: u32) -> Option<CameraBlock> {
+    /// writes showed, where exactly one binding point holds one (`Ok(None)`
+    /// where none does). Where several do, one line says so and names the
+    /// way out, and `Err(())`: the program is left alone.
+    pub(super) fn find_camera_block(&mut self, g: u32) -> Result<Option<CameraBlock>, ()> {
         let found = self.seen_camera_blocks();
         match found.as_slice() {
             [one] => {
                 self.found_block = Some(*one);
-                Some(*one)
+                Ok(Some(*one))
             }
-            [] => None,
+            [] => Ok(None),
             several => {
                 let bindings: Vec<String> = several.iter().map(|b| b.binding.to_string()).collect();
                 say_once(
                     "camera-blocks",
                     &format!(
                         "found the G-buffer (framebuffer {g}); uniform blocks at bindings [{}] each hold a \
-                         perspective projection (a shadow or reflection camera beside the view's?): a profile names \
-                         the camera's ([projection] block_binding, offset)",
+                         perspective projection (a shadow or reflection camera beside the view's?): leaving the \
+                         program untouched (a profile names the camera's: [projection] block_binding, offset)",
                         bindings.join(", ")
                     ),
                 );
-                None
+                Err(())
             }
         }
     }

@@ -155,7 +155,13 @@ impl Context {
         let world_space = options.world_space_position == 1;
         let mut block = self.camera_block();
         if self.projection.is_none() && block.is_none() {
-            block = self.find_camera_block(g);
+            match self.find_camera_block(g) {
+                Ok(found) => block = found,
+                Err(()) => {
+                    self.off = true;
+                    return None;
+                }
+            }
         }
         if self.projection.is_none() && block.is_none() {
             say_once(
