@@ -243,6 +243,45 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
         "two camera blocks: the learned profile guesses or says nothing:\n{text}"
     );
 
+    // A profile naming a binding point no buffer is bound to: one line, the
+    // retrofit off after the first frame (whose geometry is lost), the
+    // last frame the program's own, never frames left unresolved.
+    let wrong = out.join("wrong-block.toml");
+    std::fs::write(
+        &wrong,
+        "[framebuffer]\ncolour_textures = 6\ndepth = true\n\n[projection]\nblock_binding = 3\noffset = 0\n",
+    )
+    .expect("writing the wrong-block profile");
+    let stale = out.join("wrong-block.rgba");
+    let output = capi::run(
+        cli()
+            .args(["inject", "--check", "--library"])
+            .arg(&library)
+            .arg("--profile")
+            .arg(&wrong)
+            .arg("--")
+            .arg(&plain)
+            .arg(&stale),
+        "deferred-msaa inject, a profile naming an empty camera block",
+    );
+    program_ok(&output, "the engine with an empty camera block named");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let lines = said(&stderr);
+    assert!(
+        lines.len() == 2
+            && lines[0].contains("retrofitting framebuffer")
+            && lines[1].contains(
+                "the camera block (uniform-buffer binding 3, projection at byte 0) holds no matrix"
+            )
+            && lines[1].contains("the retrofit is off for the rest of the run"),
+        "an empty camera block: not said once:\n{stderr}"
+    );
+    clean_check(&stderr, "an empty camera block", 0);
+    assert!(
+        frame(&stale) == frame(&own),
+        "an empty camera block: the last frame is not the program's own"
+    );
+
     // --learn: the signature and the camera block, as keys.
     let learned = out.join("learned.toml");
     let output = capi::run(

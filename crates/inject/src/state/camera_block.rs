@@ -104,10 +104,13 @@ impl Context {
         }
     }
 
-    /// The camera as the program's uniform block holds it now (the buffer
-    /// bound at the profile's binding point, read back at the profile's
-    /// offsets), in place of a uniform's.
-    pub(super) fn read_camera_block(&mut self, block: CameraBlock) {
+    /// The matrices block `block` holds now (projection, view): the buffer
+    /// bound at its binding point read back at its offsets, inside the
+    /// check's brackets; `None` where no buffer is bound or it is too small.
+    fn camera_block_matrices(
+        &mut self,
+        block: CameraBlock,
+    ) -> (Option<[f32; 16]>, Option<[f32; 16]>) {
         let mut read: (Option<[f32; 16]>, Option<[f32; 16]>) = (None, None);
         self.checked("the camera read from its uniform block", |gl| {
             // SAFETY: queries and a buffer read of the current context;
@@ -151,21 +154,45 @@ impl Context {
             }
             capi::DmsaaStatus::Ok
         });
-        match read {
+        read
+    }
+
+    /// The camera as the program's uniform block holds it at a resolve, in
+    /// place of a uniform's. Where the block holds none now, the last camera
+    /// read is kept, said once; where none was ever read, the retrofit is
+    /// off from now on, said once (this frame's geometry, drawn into the
+    /// retrofit's framebuffer, is lost; the next frames are the program's
+    /// own, not frames never resolved). Whether there is a camera.
+    pub(super) fn read_camera_block(&mut self, block: CameraBlock) -> bool {
+        match self.camera_block_matrices(block) {
             (Some(projection), view) => {
                 self.projection = Some(projection);
                 if view.is_some() {
                     self.view = view;
                 }
+                true
             }
-            (None, _) => say_once(
-                "camera-block",
-                &format!(
-                    "the profile's camera block (uniform-buffer binding {}, projection at byte {}) holds no \
-                     matrix there: no buffer bound, or one too small; the frame is not resolved",
-                    block.binding, block.offset
-                ),
-            ),
+            (None, _) => {
+                let known = self.projection.is_some();
+                say_once(
+                    "camera-block",
+                    &format!(
+                        "the camera block (uniform-buffer binding {}, projection at byte {}) holds no matrix there: \
+                         no buffer bound, or one too small; {}",
+                        block.binding,
+                        block.offset,
+                        if known {
+                            "the frame is resolved with the last camera read"
+                        } else {
+                            "the retrofit is off for the rest of the run (check [projection] block_binding and offset)"
+                        }
+                    ),
+                );
+                if !known {
+                    self.give_up();
+                }
+                known
+            }
         }
     }
 }

@@ -262,8 +262,10 @@ impl Context {
         }
         let r = &*r;
         let (handle, world_space) = (r.handle, r.world_space);
-        if let Some(block) = self.camera_block() {
-            self.read_camera_block(block);
+        if let Some(block) = self.camera_block()
+            && !self.read_camera_block(block)
+        {
+            return;
         }
         let (Some(projection), view) = (self.projection, self.view) else {
             return;
