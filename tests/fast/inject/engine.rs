@@ -170,6 +170,7 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
             && lines[0].contains("retrofitting framebuffer ")
             && lines[0].contains("1 layer(s), default options")
             && lines[0].contains("two-channel attachment(s) [1, 2] taken from one sample")
+            && lines[0].contains("the frame(s) before this one are the program's own")
             && lines[0].contains(
                 "the camera from the uniform block at binding 0 (projection at byte 0, view at byte 64), found by its values"
             ),
@@ -323,7 +324,9 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
     let stderr = inject(Some(&profile), "two-layers.rgba", "the engine, two layers");
     let lines = said(&stderr);
     assert!(
-        lines.len() == 1 && lines[0].contains("2 layer(s), options from the profile"),
+        lines.len() == 1
+            && lines[0].contains("2 layer(s), options from the profile")
+            && lines[0].contains("from the program's first frame"),
         "two layers: not the one line of the retrofit:\n{stderr}"
     );
     // With the profile's signature the G-buffer is found at the first

@@ -135,7 +135,9 @@ fn a_rust_engine_under_inject_draws_its_in_source_two_layers() {
     eprint!("the Rust engine, two layers:\n{stderr}");
     let lines = said(&stderr);
     assert!(
-        lines.len() == 1 && lines[0].contains("2 layer(s), options from the profile"),
+        lines.len() == 1
+            && lines[0].contains("2 layer(s), options from the profile")
+            && lines[0].contains("the frame(s) before this one are the program's own"),
         "two layers: not the one line of the retrofit:\n{stderr}"
     );
     // The first call's G-buffer is bound before its camera is set: the

@@ -207,37 +207,21 @@ impl Context {
             .get(&g)
             .map(Framebuffer::describe)
             .unwrap_or_default();
-        say_once(
-            "made",
-            &format!(
-                "retrofitting framebuffer {g} ({shape}) with {samples}x MSAA, {} layer(s), {}{}{}",
-                options.layers,
-                if profile.is_some() {
-                    "options from the profile"
-                } else {
-                    "default options"
-                },
-                if two_channels.is_empty() {
-                    String::new()
-                } else {
-                    format!(
-                        "; two-channel attachment(s) {two_channels:?} taken from one sample, not blended (an encoded \
-                         normal or a motion vector; a profile's `rule` says otherwise)"
-                    )
-                },
-                match self.found_block {
-                    Some(b) => format!(
-                        "; the camera from the uniform block at binding {} (projection at byte {}{}), found by its values",
-                        b.binding,
-                        b.offset,
-                        b.view_offset
-                            .map(|v| format!(", view at byte {v}"))
-                            .unwrap_or_default()
-                    ),
-                    None => String::new(),
-                }
-            ),
+        // Frames before this one were the program's own where it drew into
+        // this G-buffer (or one it deleted) before the retrofit was made.
+        let drawn_before =
+            self.framebuffers.get(&g).is_some_and(|f| f.drawn) || self.gbuffers_deleted > 0;
+        let line = made_line(
+            g,
+            &shape,
+            samples,
+            options.layers,
+            profile.is_some(),
+            &two_channels,
+            self.found_block,
+            drawn_before,
         );
+        say_once("made", &line);
         seen(|s| s.retrofitted = true);
         self.retrofit = Some(Retrofit {
             handle,
@@ -356,4 +340,51 @@ impl Context {
         }
         self.lighting_ended(output);
     }
+}
+
+/// The line that says a retrofit was made, and what of it the program did
+/// not choose.
+#[allow(clippy::too_many_arguments)]
+fn made_line(
+    g: u32,
+    shape: &str,
+    samples: u32,
+    layers: u32,
+    from_profile: bool,
+    two_channels: &[u32],
+    found_block: Option<crate::profile::CameraBlock>,
+    drawn_before: bool,
+) -> String {
+    let mut line = format!(
+        "retrofitting framebuffer {g} ({shape}) with {samples}x MSAA, {layers} layer(s), {}",
+        if from_profile {
+            "options from the profile"
+        } else {
+            "default options"
+        }
+    );
+    if !two_channels.is_empty() {
+        line += &format!(
+            "; two-channel attachment(s) {two_channels:?} taken from one sample, not blended (an encoded normal \
+             or a motion vector; a profile's `rule` says otherwise)"
+        );
+    }
+    if let Some(b) = found_block {
+        line += &format!(
+            "; the camera from the uniform block at binding {} (projection at byte {}{}), found by its values",
+            b.binding,
+            b.offset,
+            b.view_offset
+                .map(|v| format!(", view at byte {v}"))
+                .unwrap_or_default()
+        );
+    }
+    line += if drawn_before {
+        "; the frame(s) before this one are the program's own (the G-buffer is found in a frame that reads it, \
+         or once its camera is known; a profile's [framebuffer] signature with a camera set before the G-buffer \
+         is bound retrofits the first)"
+    } else {
+        "; from the program's first frame"
+    };
+    line
 }
