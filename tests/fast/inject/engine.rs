@@ -144,7 +144,7 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
         "the engine retrofitted in its source",
     );
     let library = capi::built("libdeferred_msaa_inject", "so");
-    let inject = |profile: Option<&Path>, file: &str, what: &str| {
+    let inject = |profile: Option<&Path>, file: &str, what: &str, args: &[&str]| {
         let mut command = cli();
         command
             .args(["inject", "--check", "--library"])
@@ -153,7 +153,7 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
             command.arg("--profile").arg(p);
         }
         let output = capi::run(
-            command.arg("--").arg(&plain).arg(out.join(file)),
+            command.arg("--").arg(&plain).arg(out.join(file)).args(args),
             &format!("deferred-msaa inject, {what}"),
         );
         program_ok(&output, what);
@@ -163,7 +163,7 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
     };
 
     // No profile: the camera found in its block, one layer, every frame.
-    let stderr = inject(None, "no-profile.rgba", "the engine, no profile");
+    let stderr = inject(None, "no-profile.rgba", "the engine, no profile", &[]);
     let lines = said(&stderr);
     assert!(
         lines.len() == 1
@@ -188,6 +188,27 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
     assert!(
         no_profile != frame(&own),
         "no profile: the frame is the program's own"
+    );
+
+    // The camera block given new storage with its values each frame
+    // (`--orphan-camera`: glBufferData, as engines orphan a buffer): found
+    // the same way, the same frame.
+    let orphaned = inject(
+        None,
+        "orphan-camera.rgba",
+        "the engine, camera orphaned",
+        &["--orphan-camera"],
+    );
+    assert!(
+        said(&orphaned).len() == 1
+            && orphaned.contains(
+                "the camera from the uniform block at binding 0 (projection at byte 0, view at byte 64)"
+            ),
+        "the orphaned camera block was not found:\n{orphaned}"
+    );
+    assert!(
+        frame(&out.join("orphan-camera.rgba")) == no_profile,
+        "the orphaned camera block gave another frame than the one written in place"
     );
 
     // A second camera block (`--shadow-block`: a spot light's projection
@@ -321,7 +342,12 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
     // That profile completed: two layers, the in-source frame bit for bit.
     let profile = out.join("engine.toml");
     std::fs::write(&profile, completed(&text)).expect("writing the completed profile");
-    let stderr = inject(Some(&profile), "two-layers.rgba", "the engine, two layers");
+    let stderr = inject(
+        Some(&profile),
+        "two-layers.rgba",
+        "the engine, two layers",
+        &[],
+    );
     let lines = said(&stderr);
     assert!(
         lines.len() == 1

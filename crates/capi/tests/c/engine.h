@@ -37,6 +37,9 @@
 #define FAR_DEPTH 65504.0f
 
 static const char *version_line = "#version 330 core\n";
+/* engine_program.c's --orphan-camera: the camera block written with
+ * glBufferData each frame rather than glBufferSubData */
+static int camera_orphaned = 0;
 static int failures = 0;
 
 #define CHECK(cond, ...)                                                                           \
@@ -388,10 +391,19 @@ static void geometry_pass(const Engine *e, GLuint target)
     glStencilFunc(GL_ALWAYS, 1, 0xFF);
     glStencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
     glUseProgram(e->model_program);
-    /* the frame's camera written into its block */
+    /* the frame's camera written into its block: in place, or (with
+     * camera_orphaned) the whole block given new storage each frame, as
+     * engines orphan a buffer the GPU may still read */
     glBindBuffer(GL_UNIFORM_BUFFER, e->camera_ubo);
-    glBufferSubData(GL_UNIFORM_BUFFER, 0, 16 * sizeof(float), e->projection);
-    glBufferSubData(GL_UNIFORM_BUFFER, 16 * sizeof(float), 16 * sizeof(float), e->view);
+    if (camera_orphaned) {
+        float camera[32];
+        memcpy(camera, e->projection, sizeof e->projection);
+        memcpy(camera + 16, e->view, sizeof e->view);
+        glBufferData(GL_UNIFORM_BUFFER, sizeof camera, camera, GL_STREAM_DRAW);
+    } else {
+        glBufferSubData(GL_UNIFORM_BUFFER, 0, 16 * sizeof(float), e->projection);
+        glBufferSubData(GL_UNIFORM_BUFFER, 16 * sizeof(float), 16 * sizeof(float), e->view);
+    }
     glBindBuffer(GL_UNIFORM_BUFFER, 0);
     glBindBufferBase(GL_UNIFORM_BUFFER, 0, e->camera_ubo);
     glBindVertexArray(e->cube_vao);

@@ -13,13 +13,15 @@
  *   into dmsaa_begin_second_layer_own_target's framebuffer and mixed into
  *   the radiance target before the tonemap.
  *
- * Usage: engine_program OUT_FILE [--frames N] [--reference DIR] [--shadow-block]
+ * Usage: engine_program OUT_FILE [--frames N] [--reference DIR] [--shadow-block] [--orphan-camera]
  *   --reference DIR  also writes the engine's 16x image (reference.rgba:
  *                    4x the width and height, averaged 4x4 in linear light)
  *                    and its edges (edges.mask) into DIR
  *   --shadow-block   a second camera block (binding 1), a spot light's
  *                    projection and view written into it each frame, as an
  *                    engine keeps its shadow cameras (no pass reads it here)
+ *   --orphan-camera  the camera block given new storage with its values each
+ *                    frame (glBufferData), as engines orphan a buffer
  *
  * Prints "ok" last, or exits non-zero with a line saying why.
  */
@@ -46,6 +48,8 @@ int main(int argc, char **argv)
             reference = argv[++i];
         } else if (strcmp(argv[i], "--shadow-block") == 0) {
             shadow_block = 1;
+        } else if (strcmp(argv[i], "--orphan-camera") == 0) {
+            camera_orphaned = 1;
         } else {
             fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;

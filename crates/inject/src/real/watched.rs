@@ -27,6 +27,7 @@ macro_rules! watched_functions {
             glBindBufferBase(target: u32, index: u32, buffer: u32);
             glBindBufferRange(target: u32, index: u32, buffer: u32, offset: isize, size: isize);
             glBufferSubData(target: u32, offset: isize, size: isize, data: *const c_void);
+            glBufferData(target: u32, size: isize, data: *const c_void, usage: u32);
             glNamedBufferSubData(buffer: u32, offset: isize, size: isize, data: *const c_void);
             glUniform1f(location: i32, v0: f32);
             glUniform2f(location: i32, v0: f32, v1: f32);

@@ -357,6 +357,22 @@ pub(crate) fn glBufferSubData(
     }
 }
 
+/// New storage for the bound uniform buffer, with its values (a block
+/// orphaned each frame): the values as a write of the whole buffer.
+pub(crate) fn glBufferData(
+    real: real_type::glBufferData,
+    target: u32,
+    size: isize,
+    data: *const c_void,
+    usage: u32,
+) {
+    unsafe { real(target, size, data, usage) };
+    if target == glow::UNIFORM_BUFFER && !data.is_null() {
+        // SAFETY: GL read `size` bytes at `data`.
+        with_context(|cx| unsafe { cx.record_buffer_data(None, 0, size, data) });
+    }
+}
+
 /// A write by name (GL 4.5 direct state access): any buffer, which a
 /// uniform block may read (a light's values written before its draw).
 pub(crate) fn glNamedBufferSubData(
