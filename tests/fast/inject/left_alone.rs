@@ -180,9 +180,11 @@ fn a_program_left_alone_says_why_in_one_line() {
     type Case<'a> = (&'a [&'a str], Option<(&'a str, u32)>);
     let mut cases: Vec<Case> = vec![
         (&["--keep", "--calls", "3"], None),
+        // glClear's calls, one per attachment (three colours and the
+        // depth), two frames: as the glClearBufferfv case below.
         (
             &["--keep", "--clear-fbo", "--calls", "3"],
-            Some((SHARED, 2)),
+            Some((SHARED, 8)),
         ),
         (
             &["--keep", "--clear-fbo", "--clear-buffers", "--calls", "3"],

@@ -272,87 +272,60 @@ impl Context {
         }
     }
 
+    /// After `glClear(mask)` into the bound draw framebuffer: the calls it
+    /// made, one per attachment (each draw buffer's colour with the clear
+    /// colour, the depth and stencil with their clear values), each
+    /// replayed as a `glClearBuffer*` call through that framebuffer is.
     pub(super) fn after_clear(&mut self, mask: u32) {
-        let Some((g, d, twin)) = self.sharing_gbuffer() else {
+        if self.draw_fbo == 0 || self.twin_bound || self.off || self.learning() {
             return;
-        };
-        let mut replayed = false;
-        self.checked(
-            "a clear through a framebuffer sharing the G-buffer's, replayed",
-            |gl| {
-                // SAFETY: queries of the current context; the library's own
-                // framebuffer bound for the replay, the program's put back.
-                unsafe {
-                    let read_fbo = gl.get_parameter_i32(glow::READ_FRAMEBUFFER_BINDING) as u32;
-                    let max = gl.get_parameter_i32(glow::MAX_DRAW_BUFFERS).clamp(0, 8) as u32;
-                    // The objects the cleared framebuffer's draw buffers reach.
-                    let mut colour: Vec<(u32, u32)> = Vec::new();
-                    if mask & glow::COLOR_BUFFER_BIT != 0 {
-                        for i in 0..max {
-                            let b = gl.get_parameter_i32(glow::DRAW_BUFFER0 + i) as u32;
-                            if (glow::COLOR_ATTACHMENT0..glow::COLOR_ATTACHMENT0 + 8).contains(&b) {
-                                colour.push(attached(gl, glow::DRAW_FRAMEBUFFER, b));
-                            }
-                        }
+        }
+        let mut calls: Vec<ClearBuffer> = Vec::new();
+        // SAFETY: queries of the current context.
+        unsafe {
+            let gl = self.gl();
+            if mask & glow::COLOR_BUFFER_BIT != 0 {
+                let mut colour = [0f32; 4];
+                gl.get_parameter_f32_slice(glow::COLOR_CLEAR_VALUE, &mut colour);
+                let max = gl.get_parameter_i32(glow::MAX_DRAW_BUFFERS).clamp(0, 8) as u32;
+                for i in 0..max {
+                    let b = gl.get_parameter_i32(glow::DRAW_BUFFER0 + i) as u32;
+                    if (glow::COLOR_ATTACHMENT0..glow::COLOR_ATTACHMENT0 + 8).contains(&b) {
+                        calls.push(ClearBuffer {
+                            buffer: glow::COLOR,
+                            drawbuffer: i as i32,
+                            value: ClearValue::Float(colour),
+                        });
                     }
-                    let depth = attached(gl, glow::DRAW_FRAMEBUFFER, glow::DEPTH_ATTACHMENT);
-                    let stencil = attached(gl, glow::DRAW_FRAMEBUFFER, glow::STENCIL_ATTACHMENT);
-                    // The G-buffer's attachments, as objects.
-                    let fbo = |n: u32| NonZeroU32::new(n).map(glow::NativeFramebuffer);
-                    gl.bind_framebuffer(glow::READ_FRAMEBUFFER, fbo(g));
-                    let mut targets: Vec<u32> = Vec::new();
-                    for k in 0..8 {
-                        let a = glow::COLOR_ATTACHMENT0 + k;
-                        let object = attached(gl, glow::READ_FRAMEBUFFER, a);
-                        if object.0 != glow::NONE && colour.contains(&object) {
-                            targets.push(a);
-                        }
-                    }
-                    let shares = |a: u32, cleared: (u32, u32)| {
-                        cleared.0 != glow::NONE
-                            && attached(gl, glow::READ_FRAMEBUFFER, a) == cleared
-                    };
-                    let clear_depth =
-                        mask & glow::DEPTH_BUFFER_BIT != 0 && shares(glow::DEPTH_ATTACHMENT, depth);
-                    let clear_stencil = mask & glow::STENCIL_BUFFER_BIT != 0
-                        && shares(glow::STENCIL_ATTACHMENT, stencil);
-                    gl.bind_framebuffer(glow::READ_FRAMEBUFFER, fbo(read_fbo));
-                    if targets.is_empty() && !clear_depth && !clear_stencil {
-                        return capi::DmsaaStatus::Ok;
-                    }
-                    let mut colour_value = [0f32; 4];
-                    gl.get_parameter_f32_slice(glow::COLOR_CLEAR_VALUE, &mut colour_value);
-                    let mut depth_value = [0f32; 1];
-                    gl.get_parameter_f32_slice(glow::DEPTH_CLEAR_VALUE, &mut depth_value);
-                    let stencil_value = gl.get_parameter_i32(glow::STENCIL_CLEAR_VALUE);
-                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, fbo(twin));
-                    // The twin's draw buffer slot of each attachment cleared.
-                    for i in 0..max {
-                        let b = gl.get_parameter_i32(glow::DRAW_BUFFER0 + i) as u32;
-                        if targets.contains(&b) {
-                            gl.clear_buffer_f32_slice(glow::COLOR, i, &colour_value);
-                        }
-                    }
-                    if clear_depth && clear_stencil {
-                        gl.clear_buffer_depth_stencil(
-                            glow::DEPTH_STENCIL,
-                            0,
-                            depth_value[0],
-                            stencil_value,
-                        );
-                    } else if clear_depth {
-                        gl.clear_buffer_f32_slice(glow::DEPTH, 0, &depth_value);
-                    } else if clear_stencil {
-                        gl.clear_buffer_i32_slice(glow::STENCIL, 0, &[stencil_value]);
-                    }
-                    gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, fbo(d));
-                    replayed = true;
                 }
-                capi::DmsaaStatus::Ok
-            },
-        );
-        if replayed {
-            self.twin_drawn = true;
+            }
+            let mut depth = [0f32; 1];
+            gl.get_parameter_f32_slice(glow::DEPTH_CLEAR_VALUE, &mut depth);
+            let stencil = gl.get_parameter_i32(glow::STENCIL_CLEAR_VALUE);
+            match (
+                mask & glow::DEPTH_BUFFER_BIT != 0,
+                mask & glow::STENCIL_BUFFER_BIT != 0,
+            ) {
+                (true, true) => calls.push(ClearBuffer {
+                    buffer: glow::DEPTH_STENCIL,
+                    drawbuffer: 0,
+                    value: ClearValue::DepthStencil(depth[0], stencil),
+                }),
+                (true, false) => calls.push(ClearBuffer {
+                    buffer: glow::DEPTH,
+                    drawbuffer: 0,
+                    value: ClearValue::Float([depth[0], 0.0, 0.0, 0.0]),
+                }),
+                (false, true) => calls.push(ClearBuffer {
+                    buffer: glow::STENCIL,
+                    drawbuffer: 0,
+                    value: ClearValue::Int([stencil, 0, 0, 0]),
+                }),
+                (false, false) => {}
+            }
+        }
+        for call in calls {
+            self.after_clear_buffer(call);
         }
     }
 }
