@@ -20,35 +20,13 @@
 //!   most 0.7x its no-MSAA FLIP against its own 16x image (0.6x over the
 //!   edge pixels of its frame).
 
-use super::{capi, cli, frame};
+use super::runs::{clean_check, inject, run_ok, said};
+use super::{capi, frame};
 use crate::common;
 use deferred_msaa_lab::context::Backend;
+use std::ffi::{OsStr, OsString};
 use std::path::Path;
 use std::process::Command;
-
-/// The lines of `deferred-msaa inject` (each starts with it).
-fn said(stderr: &str) -> Vec<&str> {
-    stderr
-        .lines()
-        .filter(|l| l.starts_with("deferred-msaa inject: ") && !l.contains(" check: "))
-        .collect()
-}
-
-/// The check's summary line; asserts it is clean with `resolves` frames
-/// resolved.
-fn clean_check<'a>(stderr: &'a str, what: &str, resolves: u32) -> &'a str {
-    let check = stderr
-        .lines()
-        .find(|l| l.starts_with("deferred-msaa inject: check: "))
-        .unwrap_or_else(|| panic!("{what}: no check summary:\n{stderr}"));
-    assert!(
-        check.contains(&format!(
-            " 0 changed, 0 GL errors left by the library, 0 left pending by the program; {resolves} frames resolved"
-        )),
-        "{what}: {check}"
-    );
-    check
-}
 
 /// The learned profile as a user completes it from docs/hosts.md's row for
 /// this style: the octahedral normals named and selected, the packed byte
@@ -122,48 +100,31 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
     );
     let out = build.join("out");
     std::fs::create_dir_all(&out).expect("making the output folder");
-    let program_ok = |output: &std::process::Output, what: &str| {
-        let stdout = String::from_utf8_lossy(&output.stdout);
-        assert!(stdout.ends_with("ok\n"), "{what}: {stdout}");
-    };
     // The program's own frame, its 16x image and its edges.
     let own = out.join("own.rgba");
-    program_ok(
-        &capi::run(
-            Command::new(&plain).arg(&own).arg("--reference").arg(&out),
-            "the engine as it is",
-        ),
+    run_ok(
+        Command::new(&plain).arg(&own).arg("--reference").arg(&out),
         "the engine as it is",
     );
     let expected = out.join("in-source.rgba");
-    program_ok(
-        &capi::run(
-            Command::new(&in_source).arg(&expected),
-            "the engine retrofitted in its source",
-        ),
+    run_ok(
+        Command::new(&in_source).arg(&expected),
         "the engine retrofitted in its source",
     );
     let library = capi::built("libdeferred_msaa_inject", "so");
-    let inject = |profile: Option<&Path>, file: &str, what: &str, args: &[&str]| {
-        let mut command = cli();
-        command
-            .args(["inject", "--check", "--library"])
-            .arg(&library);
+    // The engine under `inject --check` (and a profile), its frame `file`.
+    let checked = |profile: Option<&Path>, file: &str, what: &str, args: &[&str]| {
+        let mut flags = vec![OsString::from("--check")];
         if let Some(p) = profile {
-            command.arg("--profile").arg(p);
+            flags.extend([OsString::from("--profile"), p.into()]);
         }
-        let output = capi::run(
-            command.arg("--").arg(&plain).arg(out.join(file)).args(args),
-            &format!("deferred-msaa inject, {what}"),
-        );
-        program_ok(&output, what);
-        let stderr = String::from_utf8_lossy(&output.stderr).to_string();
-        eprint!("{what}:\n{stderr}");
-        stderr
+        let mut all = vec![OsString::from(out.join(file))];
+        all.extend(args.iter().map(OsString::from));
+        inject(&library, flags, &plain, all, what)
     };
 
     // No profile: the camera found in its block, one layer, every frame.
-    let stderr = inject(None, "no-profile.rgba", "the engine, no profile", &[]);
+    let stderr = checked(None, "no-profile.rgba", "the engine, no profile", &[]);
     let lines = said(&stderr);
     assert!(
         lines.len() == 1
@@ -193,7 +154,7 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
     // The camera block given new storage with its values each frame
     // (`--orphan-camera`: glBufferData, as engines orphan a buffer): found
     // the same way, the same frame.
-    let orphaned = inject(
+    let orphaned = checked(
         None,
         "orphan-camera.rgba",
         "the engine, camera orphaned",
@@ -215,23 +176,18 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
     // and view at binding 1): no block is guessed; one line names both and
     // the way out, and the frame is the program's own.
     let shadow = out.join("shadow-block.rgba");
-    let output = capi::run(
-        cli()
-            .args(["inject", "--library"])
-            .arg(&library)
-            .arg("--")
-            .arg(&plain)
-            .arg(&shadow)
-            .arg("--shadow-block"),
-        "deferred-msaa inject, the engine with a shadow camera block",
+    let stderr = inject(
+        &library,
+        [] as [&str; 0],
+        &plain,
+        [shadow.as_os_str(), OsStr::new("--shadow-block")],
+        "the engine with a shadow camera block",
     );
-    program_ok(&output, "the engine with a shadow camera block");
     let own_shadow = out.join("own-shadow-block.rgba");
-    capi::run(
+    run_ok(
         Command::new(&plain).arg(&own_shadow).arg("--shadow-block"),
         "the engine with a shadow camera block, as it is",
     );
-    let stderr = String::from_utf8_lossy(&output.stderr);
     let lines = said(&stderr);
     assert!(
         lines.len() == 1
@@ -246,17 +202,15 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
         "two camera blocks: left alone, yet not the program's own frame"
     );
     let learned_shadow = out.join("learned-shadow.toml");
-    capi::run(
-        cli()
-            .args(["inject", "--library"])
-            .arg(&library)
-            .arg("--learn")
-            .arg(&learned_shadow)
-            .arg("--")
-            .arg(&plain)
-            .arg(out.join("learn-shadow.rgba"))
-            .arg("--shadow-block"),
-        "deferred-msaa inject --learn, the engine with a shadow camera block",
+    inject(
+        &library,
+        [OsStr::new("--learn"), learned_shadow.as_os_str()],
+        &plain,
+        [
+            out.join("learn-shadow.rgba").as_os_str(),
+            OsStr::new("--shadow-block"),
+        ],
+        "--learn, the engine with a shadow camera block",
     );
     let text = std::fs::read_to_string(&learned_shadow).expect("--learn wrote no profile");
     assert!(
@@ -274,20 +228,13 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
         "[framebuffer]\ncolour_textures = 6\ndepth = true\n\n[projection]\nblock_binding = 3\noffset = 0\n",
     )
     .expect("writing the wrong-block profile");
-    let stale = out.join("wrong-block.rgba");
-    let output = capi::run(
-        cli()
-            .args(["inject", "--check", "--library"])
-            .arg(&library)
-            .arg("--profile")
-            .arg(&wrong)
-            .arg("--")
-            .arg(&plain)
-            .arg(&stale),
-        "deferred-msaa inject, a profile naming an empty camera block",
+    let stderr = checked(
+        Some(&wrong),
+        "wrong-block.rgba",
+        "a profile naming an empty camera block",
+        &[],
     );
-    program_ok(&output, "the engine with an empty camera block named");
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stale = out.join("wrong-block.rgba");
     let lines = said(&stderr);
     assert!(
         lines.len() == 2
@@ -306,18 +253,13 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
 
     // --learn: the signature and the camera block, as keys.
     let learned = out.join("learned.toml");
-    let output = capi::run(
-        cli()
-            .args(["inject", "--library"])
-            .arg(&library)
-            .arg("--learn")
-            .arg(&learned)
-            .arg("--")
-            .arg(&plain)
-            .arg(out.join("learn.rgba")),
-        "deferred-msaa inject --learn, the engine",
+    let stderr = inject(
+        &library,
+        [OsStr::new("--learn"), learned.as_os_str()],
+        &plain,
+        [out.join("learn.rgba")],
+        "--learn, the engine",
     );
-    let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(
         said(&stderr)
             .iter()
@@ -342,7 +284,7 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
     // That profile completed: two layers, the in-source frame bit for bit.
     let profile = out.join("engine.toml");
     std::fs::write(&profile, completed(&text)).expect("writing the completed profile");
-    let stderr = inject(
+    let stderr = checked(
         Some(&profile),
         "two-layers.rgba",
         "the engine, two layers",

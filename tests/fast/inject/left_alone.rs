@@ -2,18 +2,11 @@
 //! each run's one line, read (docs/inject.md, "Never silent").
 
 use super::capi;
+use super::runs::said;
 use super::{can_run_glfw, cli, cxx, frame};
 use crate::common;
 use std::path::Path;
 use std::process::Command;
-
-/// The lines the library said, but `--check`'s.
-fn said(stderr: &str) -> Vec<&str> {
-    stderr
-        .lines()
-        .filter(|l| l.starts_with("deferred-msaa inject: ") && !l.contains("inject: check: "))
-        .collect()
-}
 
 /// Programs the library leaves alone, each written as such programs are
 /// (`inject_oneshot.cpp`: a render call that makes the G-buffer, draws,

@@ -20,6 +20,7 @@
 mod engine;
 mod habits;
 mod left_alone;
+mod runs;
 mod rust_engine;
 
 use super::capi;

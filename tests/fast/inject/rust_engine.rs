@@ -15,9 +15,11 @@
 //!   with the retrofit in its source (`--in-source`) bit for bit, and at most
 //!   0.7x its own frame's FLIP against its 16x image (0.6x over edges).
 
-use super::{capi, cli, frame};
+use super::runs::{clean_check, inject, run_ok, said};
+use super::{capi, frame};
 use crate::common;
 use deferred_msaa_lab::context::Backend;
+use std::ffi::OsStr;
 use std::process::Command;
 
 #[test]
@@ -30,47 +32,28 @@ fn a_rust_engine_under_inject_draws_its_in_source_two_layers() {
     let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("inject-rust-engine");
     let _ = std::fs::remove_dir_all(&out);
     std::fs::create_dir_all(&out).expect("making the output folder");
-    let ok = |output: &std::process::Output, what: &str| {
-        let stdout = String::from_utf8_lossy(&output.stdout);
-        assert!(stdout.ends_with("ok\n"), "{what}: {stdout}");
-    };
     let own = out.join("own.rgba");
-    ok(
-        &capi::run(
-            Command::new(&engine).arg(&own).arg("--reference").arg(&out),
-            "the Rust engine as it is",
-        ),
+    run_ok(
+        Command::new(&engine).arg(&own).arg("--reference").arg(&out),
         "the Rust engine as it is",
     );
     let expected = out.join("in-source.rgba");
-    ok(
-        &capi::run(
-            Command::new(&engine).arg(&expected).arg("--in-source"),
-            "the Rust engine retrofitted in its source",
-        ),
+    run_ok(
+        Command::new(&engine).arg(&expected).arg("--in-source"),
         "the Rust engine retrofitted in its source",
     );
     let library = capi::built("libdeferred_msaa_inject", "so");
-    let said = |stderr: &str| -> Vec<String> {
-        stderr
-            .lines()
-            .filter(|l| l.starts_with("deferred-msaa inject: ") && !l.contains(" check: "))
-            .map(String::from)
-            .collect()
-    };
+    let none: [&str; 0] = [];
 
     // No profile: left alone, one line, its own frame.
     let left = out.join("no-profile.rgba");
-    let output = capi::run(
-        cli()
-            .args(["inject", "--library"])
-            .arg(&library)
-            .arg("--")
-            .arg(&engine)
-            .arg(&left),
-        "deferred-msaa inject, the Rust engine, no profile",
+    let stderr = inject(
+        &library,
+        none,
+        &engine,
+        [&left],
+        "the Rust engine, no profile",
     );
-    let stderr = String::from_utf8_lossy(&output.stderr);
     let lines = said(&stderr);
     assert!(
         lines.len() == 1
@@ -85,16 +68,12 @@ fn a_rust_engine_under_inject_draws_its_in_source_two_layers() {
 
     // --learn, then the profile completed.
     let learned = out.join("learned.toml");
-    capi::run(
-        cli()
-            .args(["inject", "--library"])
-            .arg(&library)
-            .arg("--learn")
-            .arg(&learned)
-            .arg("--")
-            .arg(&engine)
-            .arg(out.join("learn.rgba")),
-        "deferred-msaa inject --learn, the Rust engine",
+    inject(
+        &library,
+        [OsStr::new("--learn"), learned.as_os_str()],
+        &engine,
+        [out.join("learn.rgba")],
+        "--learn, the Rust engine",
     );
     let text = std::fs::read_to_string(&learned).expect("--learn wrote no profile");
     for line in [
@@ -119,20 +98,17 @@ fn a_rust_engine_under_inject_draws_its_in_source_two_layers() {
     let profile = out.join("engine.toml");
     std::fs::write(&profile, completed).expect("writing the completed profile");
     let injected = out.join("two-layers.rgba");
-    let output = capi::run(
-        cli()
-            .args(["inject", "--check", "--library"])
-            .arg(&library)
-            .arg("--profile")
-            .arg(&profile)
-            .arg("--")
-            .arg(&engine)
-            .arg(&injected),
-        "deferred-msaa inject, the Rust engine, two layers",
+    let stderr = inject(
+        &library,
+        [
+            OsStr::new("--check"),
+            OsStr::new("--profile"),
+            profile.as_os_str(),
+        ],
+        &engine,
+        [&injected],
+        "the Rust engine, two layers",
     );
-    ok(&output, "the Rust engine under inject");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    eprint!("the Rust engine, two layers:\n{stderr}");
     let lines = said(&stderr);
     assert!(
         lines.len() == 1
@@ -143,12 +119,8 @@ fn a_rust_engine_under_inject_draws_its_in_source_two_layers() {
     // The first call's G-buffer is bound before its camera is set: the
     // retrofit begins at the second call's, and the third call's new one
     // is given to it.
-    let check = stderr
-        .lines()
-        .find(|l| l.starts_with("deferred-msaa inject: check: "))
-        .unwrap_or_else(|| panic!("no check summary:\n{stderr}"));
+    let check = clean_check(&stderr, "the Rust engine, two layers", 2);
     for needle in [
-        " 0 changed, 0 GL errors left by the library, 0 left pending by the program; 2 frames resolved",
         "dmsaa_refresh_with 1",
         "the second layer (begin, the replayed lighting, finish) 2",
     ] {
