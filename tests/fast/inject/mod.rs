@@ -314,6 +314,39 @@ fn before_and_after(before: &[u8], after: &[u8], path: &Path) {
     }
 }
 
+/// The program's own frame and its frame under inject with two layers (the
+/// tutorial profile at two layers, the light cubes in the forward target)
+/// against the program's 16x image (`--reference`): two layers at most
+/// 0.7x the own frame's FLIP.
+fn against_16x(plain: &Path, out: &Path, display: &str, own: &[u8], two_layers: &[u8]) {
+    let reference = out.join("reference.rgba");
+    capi::run(
+        Command::new(plain)
+            .arg(out.join("reference-run.rgba"))
+            .arg("--reference")
+            .arg(&reference)
+            .env("DISPLAY", display),
+        "the program as it is, with its 16x image",
+    );
+    let (w, h) = FRAME;
+    let image = |bytes: Vec<u8>| image::RgbaImage::from_raw(w, h, bytes).expect("a 160x120 frame");
+    let reference = image(frame(&reference));
+    let error = |bytes: &[u8]| {
+        deferred_msaa_lab::compare::flip(&reference, &image(bytes.to_vec()))
+            .expect("same sizes")
+            .mean
+    };
+    let (none, two) = (error(own), error(two_layers));
+    eprintln!(
+        "the tutorial program under inject, FLIP against its 16x image: own {none:.4}, two layers {two:.4}: {:.2}x",
+        two / none
+    );
+    assert!(
+        two <= 0.7 * none,
+        "two layers under inject {two:.4} above 0.7x the program's own frame {none:.4}"
+    );
+}
+
 /// The program's own frame, without MSAA.
 fn own_frame(plain: &Path, out: &Path, name: &str, args: &[&str], display: &str) -> Vec<u8> {
     let own = out.join(format!("{name}-own.rgba"));
@@ -393,6 +426,7 @@ fn an_unmodified_glfw_program_under_inject_draws_the_in_source_frame() {
                     );
                     if api == "GLX" {
                         before_and_after(&own, &injected, &build.join("before-after.png"));
+                        against_16x(&plain, &out, &xvfb.display(), &own, &injected);
                     }
                 }
                 _ => {}

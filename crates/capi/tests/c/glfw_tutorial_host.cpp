@@ -184,96 +184,6 @@ static void writeImage(const std::string &dir, const char *name, const std::vect
     }
 }
 
-// A framebuffer of the host's with one colour texture and a depth
-// renderbuffer, for the lighting (or for the supersampled frame).
-struct Screen {
-    GLuint fbo = 0, color = 0, depth = 0;
-};
-
-static Screen makeScreen(int w, int h, GLint internal)
-{
-    Screen s;
-    glGenFramebuffers(1, &s.fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, s.fbo);
-    s.color = makeTexture(w, h, internal, GL_UNSIGNED_BYTE);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, s.color, 0);
-    glGenRenderbuffers(1, &s.depth);
-    glBindRenderbuffer(GL_RENDERBUFFER, s.depth);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, s.depth);
-    CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "screen FBO incomplete");
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    return s;
-}
-
-static void freeScreen(Screen &s)
-{
-    glDeleteFramebuffers(1, &s.fbo);
-    glDeleteTextures(1, &s.color);
-    glDeleteRenderbuffers(1, &s.depth);
-}
-
-static double decode(unsigned char v)
-{
-    double c = v / 255.0;
-    return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
-}
-
-static unsigned char encode(double l)
-{
-    double c = l <= 0.0031308 ? l * 12.92 : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
-    return static_cast<unsigned char>(std::lround(std::fmin(std::fmax(c, 0.0), 1.0) * 255.0));
-}
-
-// The variant's own 16x image: every pass at 4x the width and height into
-// a framebuffer of its own (as the lit target and the screen), averaged
-// 4x4 in the light a screen emits.
-static std::vector<unsigned char> supersampled(bool gammaCorrect)
-{
-    Engine big;
-    int w = SCR_WIDTH * SUPERSAMPLE, h = SCR_HEIGHT * SUPERSAMPLE;
-    engineInit(big, w, h, gammaCorrect);
-    Screen screen = makeScreen(w, h, gammaCorrect ? GL_SRGB8_ALPHA8 : GL_RGBA8);
-    glViewport(0, 0, w, h);
-    glBindFramebuffer(GL_FRAMEBUFFER, screen.fbo);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    if (gammaCorrect)
-        glEnable(GL_FRAMEBUFFER_SRGB);
-    geometryPass(big, big.gBuffer);
-    glBindFramebuffer(GL_FRAMEBUFFER, screen.fbo);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    lightingQuad(big);
-    blitDepth(big, screen.fbo);
-    lightCubes(big);
-    glDisable(GL_FRAMEBUFFER_SRGB);
-    std::vector<unsigned char> pixels(static_cast<size_t>(w) * static_cast<size_t>(h) * 4);
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, screen.fbo);
-    glReadBuffer(GL_COLOR_ATTACHMENT0);
-    glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
-    glPixelStorei(GL_PACK_ALIGNMENT, 4);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glViewport(0, 0, SCR_WIDTH, SCR_HEIGHT);
-    freeScreen(screen);
-    engineFree(big);
-    std::vector<unsigned char> small(static_cast<size_t>(SCR_WIDTH) * SCR_HEIGHT * 4);
-    for (int y = 0; y < SCR_HEIGHT; y++)
-        for (int x = 0; x < SCR_WIDTH; x++)
-            for (int c = 0; c < 4; c++) {
-                double sum = 0.0;
-                for (int dy = 0; dy < SUPERSAMPLE; dy++)
-                    for (int dx = 0; dx < SUPERSAMPLE; dx++) {
-                        size_t i = ((static_cast<size_t>(y * SUPERSAMPLE + dy) * static_cast<size_t>(w)) +
-                                    static_cast<size_t>(x * SUPERSAMPLE + dx)) * 4 + static_cast<size_t>(c);
-                        sum += c == 3 ? pixels[i] / 255.0 : decode(pixels[i]);
-                    }
-                double mean = sum / (SUPERSAMPLE * SUPERSAMPLE);
-                small[(static_cast<size_t>(y) * SCR_WIDTH + static_cast<size_t>(x)) * 4 + static_cast<size_t>(c)] =
-                    c == 3 ? static_cast<unsigned char>(std::lround(mean * 255.0)) : encode(mean);
-            }
-    return small;
-}
-
 // Render one variant into framebuffer 0 and read it back.
 static std::vector<unsigned char> render(Engine &e, const Variant &v, const char *name)
 {
@@ -413,8 +323,8 @@ int main(int argc, char **argv)
         freeScreen(srgb);
         engineFree(e);
     }
-    writeImage(dir, "reference.rgba", supersampled(false));
-    writeImage(dir, "srgb-reference.rgba", supersampled(true));
+    writeImage(dir, "reference.rgba", supersampled(SCR_WIDTH, SCR_HEIGHT, false));
+    writeImage(dir, "srgb-reference.rgba", supersampled(SCR_WIDTH, SCR_HEIGHT, true));
     checkGlErrors("the supersampled frames");
     glfwSwapBuffers(window);
     glfwTerminate();

@@ -50,6 +50,9 @@
 //                       uniform block (`LightBlock`, std140, binding 1),
 //                       written with glBufferSubData before its draw, as
 //                       engines keep per-light data, not as uniforms
+//   --reference FILE    also write the program's 16x image (every pass at 4x
+//                       the width and height, averaged 4x4 in the light a
+//                       screen emits) to FILE, raw RGBA8, rows bottom-up
 //   --named-writes      (with --light-block) those writes made with
 //                       glNamedBufferSubData, as GL 4.5 engines make them,
 //                       the buffer never bound for them; exits 4 on a
@@ -457,6 +460,7 @@ int main(int argc, char **argv)
     bool egl = false, tutorialOptions = false, twoLayers = false, forward = false, resize = false, recreate = false,
          prePass = false, cameraBlockOn = false, viewProjectionOn = false, lightVolumes = false,
          twoPass = false, lightBlock = false, floatLit = false, dsa = false, namedWrites = false;
+    const char *referenceFile = nullptr;
     for (int i = 2; i < argc; i++) {
         if (std::strcmp(argv[i], "--egl") == 0)
             egl = true;
@@ -478,6 +482,8 @@ int main(int argc, char **argv)
             lightBlock = true;
         else if (std::strcmp(argv[i], "--named-writes") == 0)
             namedWrites = true;
+        else if (std::strcmp(argv[i], "--reference") == 0 && i + 1 < argc)
+            referenceFile = argv[++i];
         else if (std::strcmp(argv[i], "--float-lit") == 0)
             floatLit = true;
         else if (std::strcmp(argv[i], "--resize") == 0)
@@ -832,6 +838,15 @@ int main(int argc, char **argv)
         }
     }
     engineFree(e);
+    if (referenceFile) {
+        std::vector<unsigned char> reference = supersampled(WIDTH, HEIGHT, false);
+        FILE *r = std::fopen(referenceFile, "wb");
+        CHECK(r != nullptr, "cannot write %s", referenceFile);
+        if (r) {
+            std::fwrite(reference.data(), 1, reference.size(), r);
+            std::fclose(r);
+        }
+    }
     checkGlErrors("the end");
 
     FILE *f = std::fopen(argv[1], "wb");

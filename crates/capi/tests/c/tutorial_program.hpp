@@ -647,5 +647,96 @@ static inline void lightCubes(Engine &e)
     }
 }
 
+// A framebuffer of the host's with one colour texture and a depth
+// renderbuffer, for the lighting (or for the supersampled frame).
+struct Screen {
+    GLuint fbo = 0, color = 0, depth = 0;
+};
+
+static inline Screen makeScreen(int w, int h, GLint internal)
+{
+    Screen s;
+    glGenFramebuffers(1, &s.fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, s.fbo);
+    s.color = makeTexture(w, h, internal, GL_UNSIGNED_BYTE);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, s.color, 0);
+    glGenRenderbuffers(1, &s.depth);
+    glBindRenderbuffer(GL_RENDERBUFFER, s.depth);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, s.depth);
+    CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "screen FBO incomplete");
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    return s;
+}
+
+static inline void freeScreen(Screen &s)
+{
+    glDeleteFramebuffers(1, &s.fbo);
+    glDeleteTextures(1, &s.color);
+    glDeleteRenderbuffers(1, &s.depth);
+}
+
+static inline double decode(unsigned char v)
+{
+    double c = v / 255.0;
+    return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+}
+
+static inline unsigned char encode(double l)
+{
+    double c = l <= 0.0031308 ? l * 12.92 : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
+    return static_cast<unsigned char>(std::lround(std::fmin(std::fmax(c, 0.0), 1.0) * 255.0));
+}
+
+// The program's own 16x image at `width` x `height`: every pass at 4x the
+// width and height into a framebuffer of its own (as the lit target and
+// the screen), averaged 4x4 in the light a screen emits; rows bottom-up.
+// The viewport is left at `width` x `height`.
+static inline std::vector<unsigned char> supersampled(int width, int height, bool gammaCorrect)
+{
+    Engine big;
+    int w = width * SUPERSAMPLE, h = height * SUPERSAMPLE;
+    engineInit(big, w, h, gammaCorrect);
+    Screen screen = makeScreen(w, h, gammaCorrect ? GL_SRGB8_ALPHA8 : GL_RGBA8);
+    glViewport(0, 0, w, h);
+    glBindFramebuffer(GL_FRAMEBUFFER, screen.fbo);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    if (gammaCorrect)
+        glEnable(GL_FRAMEBUFFER_SRGB);
+    geometryPass(big, big.gBuffer);
+    glBindFramebuffer(GL_FRAMEBUFFER, screen.fbo);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    lightingQuad(big);
+    blitDepth(big, screen.fbo);
+    lightCubes(big);
+    glDisable(GL_FRAMEBUFFER_SRGB);
+    std::vector<unsigned char> pixels(static_cast<size_t>(w) * static_cast<size_t>(h) * 4);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, screen.fbo);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, width, height);
+    freeScreen(screen);
+    engineFree(big);
+    std::vector<unsigned char> small(static_cast<size_t>(width) * static_cast<size_t>(height) * 4);
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++)
+            for (int c = 0; c < 4; c++) {
+                double sum = 0.0;
+                for (int dy = 0; dy < SUPERSAMPLE; dy++)
+                    for (int dx = 0; dx < SUPERSAMPLE; dx++) {
+                        size_t i = ((static_cast<size_t>(y * SUPERSAMPLE + dy) * static_cast<size_t>(w)) +
+                                    static_cast<size_t>(x * SUPERSAMPLE + dx)) * 4 + static_cast<size_t>(c);
+                        sum += c == 3 ? pixels[i] / 255.0 : decode(pixels[i]);
+                    }
+                double mean = sum / (SUPERSAMPLE * SUPERSAMPLE);
+                small[(static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)) * 4 +
+                      static_cast<size_t>(c)] =
+                    c == 3 ? static_cast<unsigned char>(std::lround(mean * 255.0)) : encode(mean);
+            }
+    return small;
+}
 
 #endif
