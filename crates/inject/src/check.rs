@@ -126,6 +126,13 @@ pub(crate) fn snapshot(gl: &glow::Context) -> Vec<Value> {
     // SAFETY: queries of the current context with enums it knows (the
     // unit switch is put back before returning).
     unsafe {
+        // GL clamps the stencil reference it reports to the stencil bits of
+        // the draw framebuffer, which a driver may learn only when it next
+        // validates the framebuffer (Mesa: at a draw or a read): asked
+        // first, so that a bind of a framebuffer with stencil before the
+        // call does not read as the call changing the reference.
+        gl.check_framebuffer_status(glow::DRAW_FRAMEBUFFER);
+        gl.check_framebuffer_status(glow::READ_FRAMEBUFFER);
         for &(name, pname) in INTEGERS {
             out.push((
                 name.to_string(),

@@ -18,7 +18,8 @@
 //!   rules, two layers, the tonemap as a curve): the frame of the same
 //!   program built with the retrofit in its source, bit for bit, and at
 //!   most 0.7x its no-MSAA FLIP against its own 16x image (0.6x over the
-//!   edge pixels of its frame).
+//!   edge pixels of its frame); the same bit for bit with its lighting
+//!   tested against the G-buffer's depth (`--depth-tested-lighting`).
 
 use super::runs::{clean_check, inject, run_ok, said};
 use super::{capi, frame};
@@ -308,6 +309,35 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
     assert!(
         injected == frame(&expected),
         "the injected frame differs from the in-source frame with the same options"
+    );
+
+    // The lighting tested against the G-buffer's depth, which the radiance
+    // framebuffer shares (`--depth-tested-lighting`: a quad at the far
+    // plane tested GL_GREATER where geometry is, again GL_LEQUAL where the
+    // sky is): the replay draws both into the own target, whose depth is
+    // the second layer's, each with its depth state: the in-source frame,
+    // bit for bit (the same frame as the one-draw lighting's).
+    let expected_tested = out.join("in-source-depth-tested.rgba");
+    run_ok(
+        Command::new(&in_source)
+            .arg(&expected_tested)
+            .arg("--depth-tested-lighting"),
+        "the engine retrofitted in its source, depth-tested lighting",
+    );
+    let stderr = checked(
+        Some(&profile),
+        "depth-tested.rgba",
+        "the engine, two layers, depth-tested lighting",
+        &["--depth-tested-lighting"],
+    );
+    let check = clean_check(&stderr, "two layers, depth-tested lighting", 3);
+    assert!(
+        check.contains("the second layer (begin, the replayed lighting, finish) 3"),
+        "{check}"
+    );
+    assert!(
+        frame(&out.join("depth-tested.rgba")) == frame(&expected_tested),
+        "depth-tested lighting: the injected frame differs from the in-source frame"
     );
 
     // Against the engine's 16x image.

@@ -39,6 +39,7 @@
     X(PFNGLCLEARCOLORPROC, glClearColor)                                       \
     X(PFNGLCLEARPROC, glClear)                                                 \
     X(PFNGLDEPTHFUNCPROC, glDepthFunc)                                         \
+    X(PFNGLDEPTHMASKPROC, glDepthMask)                                         \
     X(PFNGLBLENDFUNCPROC, glBlendFunc)                                         \
     X(PFNGLSTENCILFUNCPROC, glStencilFunc)                                     \
     X(PFNGLSTENCILMASKPROC, glStencilMask)                                     \

@@ -40,6 +40,11 @@ static const char *version_line = "#version 330 core\n";
 /* engine_program.c's --orphan-camera: the camera block written with
  * glBufferData each frame rather than glBufferSubData */
 static int camera_orphaned = 0;
+/* engine_program.c's --depth-tested-lighting: the radiance framebuffer
+ * shares the G-buffer's depth and stencil, and the lighting is two draws of
+ * a quad at the far plane tested against it, as engines light: GL_GREATER
+ * passes where geometry is, GL_LEQUAL where the sky is; depth writes off */
+static int depth_tested_lighting = 0;
 static int failures = 0;
 
 #define CHECK(cond, ...)                                                                           \
@@ -109,8 +114,9 @@ static const char *model_fs =
 
 static const char *quad_vs =
     "layout (location = 0) in vec2 in_position;\n"
+    "uniform float u_quad_depth;\n"
     "out vec2 v_uv;\n"
-    "void main() { v_uv = in_position * 0.5 + 0.5; gl_Position = vec4(in_position, 0.0, 1.0); }\n";
+    "void main() { v_uv = in_position * 0.5 + 0.5; gl_Position = vec4(in_position, u_quad_depth, 1.0); }\n";
 
 static const char *lighting_fs =
     "in vec2 v_uv;\n"
@@ -282,6 +288,8 @@ static void engine_init(Engine *e, int w, int h)
     CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE, "clear target incomplete");
     glGenFramebuffers(1, &e->hdr_fbo);
     glBindFramebuffer(GL_FRAMEBUFFER, e->hdr_fbo);
+    if (depth_tested_lighting)
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_TEXTURE_2D, e->depth_stencil, 0);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, e->radiance, 0);
     glGenFramebuffers(1, &e->screen_fbo);
     glBindFramebuffer(GL_FRAMEBUFFER, e->screen_fbo);
@@ -456,7 +464,22 @@ static void lighting_into(const Engine *e, GLuint target)
         glUniform3f(glGetUniformLocation(e->lighting_program, name), colours[i][0], colours[i][1], colours[i][2]);
     }
     glBindVertexArray(e->quad_vao);
-    glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    if (depth_tested_lighting) {
+        GLint quad_depth = glGetUniformLocation(e->lighting_program, "u_quad_depth");
+        glUniform1f(quad_depth, 1.0f);
+        glEnable(GL_DEPTH_TEST);
+        glDepthMask(GL_FALSE);
+        glDepthFunc(GL_GREATER); /* where geometry is */
+        glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+        glDepthFunc(GL_LEQUAL); /* where the sky is */
+        glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+        glDepthFunc(GL_LESS);
+        glDepthMask(GL_TRUE);
+        glDisable(GL_DEPTH_TEST);
+        glUniform1f(quad_depth, 0.0f);
+    } else {
+        glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+    }
     glBindVertexArray(0);
 }
 

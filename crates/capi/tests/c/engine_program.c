@@ -14,6 +14,7 @@
  *   the radiance target before the tonemap.
  *
  * Usage: engine_program OUT_FILE [--frames N] [--reference DIR] [--shadow-block] [--orphan-camera]
+ *                       [--depth-tested-lighting]
  *   --reference DIR  also writes the engine's 16x image (reference.rgba:
  *                    4x the width and height, averaged 4x4 in linear light)
  *                    and its edges (edges.mask) into DIR
@@ -22,6 +23,10 @@
  *                    engine keeps its shadow cameras (no pass reads it here)
  *   --orphan-camera  the camera block given new storage with its values each
  *                    frame (glBufferData), as engines orphan a buffer
+ *   --depth-tested-lighting  the radiance framebuffer shares the G-buffer's
+ *                    depth, and the lighting is two quads at the far plane
+ *                    tested against it (GL_GREATER: geometry; GL_LEQUAL:
+ *                    sky), as engines light
  *
  * Prints "ok" last, or exits non-zero with a line saying why.
  */
@@ -50,6 +55,8 @@ int main(int argc, char **argv)
             shadow_block = 1;
         } else if (strcmp(argv[i], "--orphan-camera") == 0) {
             camera_orphaned = 1;
+        } else if (strcmp(argv[i], "--depth-tested-lighting") == 0) {
+            depth_tested_lighting = 1;
         } else {
             fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;
