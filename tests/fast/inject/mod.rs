@@ -92,7 +92,11 @@ impl Flavour {
 fn build_tutorial(build: &Path, prefix: &Path, flavour: Flavour) -> (PathBuf, PathBuf) {
     let src = build.join("src");
     std::fs::create_dir_all(&src).expect("making the source folder");
-    for f in ["inject_tutorial.cpp", "tutorial_program.hpp"] {
+    for f in [
+        "inject_tutorial.cpp",
+        "tutorial_program.hpp",
+        "tutorial_dsa.hpp",
+    ] {
         std::fs::copy(capi::sources().join(f), src.join(f)).expect("copying the C++ sources");
     }
     let name = flavour.name();
@@ -693,7 +697,11 @@ fn a_library_error_leaves_the_program_as_it_is() {
     std::fs::create_dir_all(&build).expect("making the build folder");
     let src = build.join("src");
     std::fs::create_dir_all(&src).expect("making the source folder");
-    for f in ["inject_tutorial.cpp", "tutorial_program.hpp"] {
+    for f in [
+        "inject_tutorial.cpp",
+        "tutorial_program.hpp",
+        "tutorial_dsa.hpp",
+    ] {
         std::fs::copy(capi::sources().join(f), src.join(f)).expect("copying the C++ sources");
     }
     let plain = build.join("tutorial");
