@@ -275,6 +275,7 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
         "offset = 0",
         "view_offset = 64",
         "deleted before this was written",
+        "# two channels: an encoded normal",
     ] {
         assert!(
             text.contains(line),

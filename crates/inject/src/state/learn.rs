@@ -296,11 +296,18 @@ fn gbuffer_tables(out: &mut String, f: &Framebuffer) {
         formats.join(", ")
     );
     for &(index, _) in &f.colour_textures {
+        let two_channels = f.channels.iter().any(|&(k, n)| k == index && n == 2);
         let _ = writeln!(
             out,
             "[[attachment]]\nindex = {index}\n\
              # meaning = ?  \"position\" (with world_space), \"normal\" (with encoding), or \"albedo\"/\"other\"\n\
-             # rule = ?     \"default\", \"blend\", \"blend-normal\", \"blend-hdr\", \"select\"\n"
+             # rule = ?     \"default\", \"blend\", \"blend-normal\", \"blend-hdr\", \"select\"{}\n",
+            if two_channels {
+                "\n# two channels: an encoded normal (encoding = \"octahedral-unorm\"?) or a motion vector; with\n\
+                 # no rule stated it is taken from one sample (\"select\")"
+            } else {
+                ""
+            }
         );
     }
 }
