@@ -12,7 +12,10 @@
 //!   one sample; no worse than none against its 16x image; `--check`
 //!   clean;
 //! - with a second camera block (a spot light's, `--shadow-block`) nothing
-//!   is guessed: one line names both, `--learn` a `?` line;
+//!   is guessed: one line names both, `--learn` a `?` line; so too, one
+//!   line each and the program's own frame, with its camera written by
+//!   mapping, as a forward renderer, with a second G-buffer read alike (a
+//!   mirror's view), and on Mesa's off-screen renderer;
 //! - `--learn` writes the block's binding and offsets, the signature;
 //! - that profile as a user completes it (the attachments' meanings and
 //!   rules, two layers, the tonemap as a curve): the frame of the same
@@ -172,6 +175,59 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
         frame(&out.join("orphan-camera.rgba")) == no_profile,
         "the orphaned camera block gave another frame than the one written in place"
     );
+
+    // Ways of being left alone, each one line, the frame the program's
+    // own: the camera written by mapping (a path not followed), no
+    // G-buffer (a forward renderer), two G-buffers read alike (a mirror's
+    // view beside the camera's: which to retrofit is the profile's to say),
+    // GL reached through Mesa's off-screen renderer.
+    for (flag, needles) in [
+        (
+            "--mapped-camera",
+            &["found the G-buffer (framebuffer 1) but no projection matrix"][..],
+        ),
+        ("--forward-renderer", &["no G-buffer found (looked for"][..]),
+        (
+            "--two-gbuffers",
+            &["framebuffers [1, 5] all look like G-buffers"][..],
+        ),
+        (
+            "--osmesa",
+            &[
+                "no draw call reached the library",
+                "the program looked up OSMesaGetProcAddress",
+            ][..],
+        ),
+    ] {
+        if flag == "--osmesa"
+            && let Err(e) = Backend::OsMesa.check_library()
+        {
+            common::skip(&e.to_string());
+            continue;
+        }
+        let file = format!("left-alone{flag}.rgba");
+        let own_file = out.join(format!("own{flag}.rgba"));
+        run_ok(
+            Command::new(&plain).arg(&own_file).arg(flag),
+            &format!("the engine as it is, {flag}"),
+        );
+        let stderr = checked(None, &file, &format!("the engine, {flag}"), &[flag]);
+        let lines = said(&stderr);
+        assert!(
+            lines.len() == 1
+                && lines[0].contains("leaving the program untouched")
+                && needles.iter().all(|n| lines[0].contains(n)),
+            "{flag}: not the one line of a program left alone ({needles:?}):\n{stderr}"
+        );
+        assert!(
+            stderr.contains("check: 0 calls into the library"),
+            "{flag}: the library was called:\n{stderr}"
+        );
+        assert!(
+            frame(&out.join(&file)) == frame(&own_file),
+            "{flag}: left alone, yet not the program's own frame"
+        );
+    }
 
     // A second camera block (`--shadow-block`: a spot light's projection
     // and view at binding 1): no block is guessed; one line names both and

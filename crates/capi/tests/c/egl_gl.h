@@ -11,6 +11,7 @@
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 #include <GL/glcorearb.h>
+#include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -72,6 +73,8 @@
     X(PFNGLBINDBUFFERPROC, glBindBuffer)                                       \
     X(PFNGLBUFFERDATAPROC, glBufferData)                                       \
     X(PFNGLBUFFERSUBDATAPROC, glBufferSubData)                                 \
+    X(PFNGLMAPBUFFERRANGEPROC, glMapBufferRange)                               \
+    X(PFNGLUNMAPBUFFERPROC, glUnmapBuffer)                                     \
     X(PFNGLBINDBUFFERBASEPROC, glBindBufferBase)                               \
     X(PFNGLGETUNIFORMBLOCKINDEXPROC, glGetUniformBlockIndex)                   \
     X(PFNGLUNIFORMBLOCKBINDINGPROC, glUniformBlockBinding)                     \
@@ -162,8 +165,58 @@ static int create_context(void)
     return 1;
 }
 
+/* The same context through Mesa's off-screen renderer instead (a C program
+ * with no window system at all): libOSMesa opened with dlopen, a 3.2 core
+ * context rendering into `buffer` (width x height RGBA8), every entry point
+ * above loaded through OSMesaGetProcAddress. Returns 0 and prints why on
+ * failure. destroy_context() then only forgets EGL's (none was made). */
+typedef void *(*OsMesaCreateContextAttribs)(const int *, void *);
+typedef unsigned char (*OsMesaMakeCurrent)(void *, void *, GLenum, GLsizei, GLsizei);
+typedef void (*(*OsMesaGetProcAddress)(const char *))(void);
+typedef void (*OsMesaDestroyContext)(void *);
+static void *osmesa_context;
+static OsMesaDestroyContext osmesa_destroy;
+
+static inline int create_osmesa_context(void *buffer, int width, int height)
+{
+    void *lib = dlopen("libOSMesa.so.8", RTLD_NOW | RTLD_LOCAL);
+    if (!lib) {
+        fprintf(stderr, "no libOSMesa.so.8: %s\n", dlerror());
+        return 0;
+    }
+    OsMesaCreateContextAttribs create = (OsMesaCreateContextAttribs)dlsym(lib, "OSMesaCreateContextAttribs");
+    OsMesaMakeCurrent make_current = (OsMesaMakeCurrent)dlsym(lib, "OSMesaMakeCurrent");
+    OsMesaGetProcAddress get_proc = (OsMesaGetProcAddress)dlsym(lib, "OSMesaGetProcAddress");
+    osmesa_destroy = (OsMesaDestroyContext)dlsym(lib, "OSMesaDestroyContext");
+    if (!create || !make_current || !get_proc || !osmesa_destroy) {
+        fprintf(stderr, "libOSMesa.so.8 lacks an entry point\n");
+        return 0;
+    }
+    /* OSMESA_FORMAT RGBA, depth 24, stencil 8, core profile 3.2 */
+    const int attributes[] = {0x22, 0x1908, 0x30, 24, 0x31, 8, 0x33, 0x34, 0x36, 3, 0x37, 2, 0};
+    osmesa_context = create(attributes, NULL);
+    if (!osmesa_context || !make_current(osmesa_context, buffer, GL_UNSIGNED_BYTE, width, height)) {
+        fprintf(stderr, "no OSMesa 3.2 core context\n");
+        return 0;
+    }
+#define GL_LOAD_OSMESA(type, name)                                             \
+    name = (type)get_proc(#name);                                              \
+    if (!name) {                                                               \
+        fprintf(stderr, "no GL entry point %s\n", #name);                      \
+        return 0;                                                              \
+    }
+    GL_FUNCTIONS(GL_LOAD_OSMESA)
+#undef GL_LOAD_OSMESA
+    return 1;
+}
+
 static void destroy_context(void)
 {
+    if (osmesa_context) {
+        osmesa_destroy(osmesa_context);
+        osmesa_context = NULL;
+        return;
+    }
     eglMakeCurrent(egl_display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(egl_display, egl_context);
     eglTerminate(egl_display);

@@ -40,6 +40,9 @@ static const char *version_line = "#version 330 core\n";
 /* engine_program.c's --orphan-camera: the camera block written with
  * glBufferData each frame rather than glBufferSubData */
 static int camera_orphaned = 0;
+/* engine_program.c's --mapped-camera: the camera block written through
+ * glMapBufferRange, a path the library does not follow */
+static int camera_mapped = 0;
 /* engine_program.c's --depth-tested-lighting: the radiance framebuffer
  * shares the G-buffer's depth and stencil, and the lighting is two draws of
  * a quad at the far plane tested against it, as engines light: GL_GREATER
@@ -403,7 +406,16 @@ static void geometry_pass(const Engine *e, GLuint target)
      * camera_orphaned) the whole block given new storage each frame, as
      * engines orphan a buffer the GPU may still read */
     glBindBuffer(GL_UNIFORM_BUFFER, e->camera_ubo);
-    if (camera_orphaned) {
+    if (camera_mapped) {
+        float *mapped = (float *)glMapBufferRange(GL_UNIFORM_BUFFER, 0, 32 * sizeof(float),
+                                                  GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT);
+        CHECK(mapped != NULL, "the camera block could not be mapped");
+        if (mapped) {
+            memcpy(mapped, e->projection, sizeof e->projection);
+            memcpy(mapped + 16, e->view, sizeof e->view);
+        }
+        glUnmapBuffer(GL_UNIFORM_BUFFER);
+    } else if (camera_orphaned) {
         float camera[32];
         memcpy(camera, e->projection, sizeof e->projection);
         memcpy(camera + 16, e->view, sizeof e->view);

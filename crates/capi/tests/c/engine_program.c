@@ -14,7 +14,8 @@
  *   the radiance target before the tonemap.
  *
  * Usage: engine_program OUT_FILE [--frames N] [--reference DIR] [--shadow-block] [--orphan-camera]
- *                       [--depth-tested-lighting]
+ *                       [--depth-tested-lighting] [--mapped-camera] [--forward-renderer]
+ *                       [--two-gbuffers] [--osmesa]
  *   --reference DIR  also writes the engine's 16x image (reference.rgba:
  *                    4x the width and height, averaged 4x4 in linear light)
  *                    and its edges (edges.mask) into DIR
@@ -27,6 +28,13 @@
  *                    depth, and the lighting is two quads at the far plane
  *                    tested against it (GL_GREATER: geometry; GL_LEQUAL:
  *                    sky), as engines light
+ *   --mapped-camera  the camera block written through glMapBufferRange
+ *   --forward-renderer  no G-buffer: the cubes drawn straight into the
+ *                    screen target, unlit (a forward renderer)
+ *   --two-gbuffers   a second engine (a mirror's view, say) with a G-buffer
+ *                    of the same shape, drawn and lit each frame too
+ *   --osmesa         the context made by Mesa's off-screen renderer (dlopened
+ *                    libOSMesa, entry points from OSMesaGetProcAddress)
  *
  * Prints "ok" last, or exits non-zero with a line saying why.
  */
@@ -45,7 +53,7 @@ int main(int argc, char **argv)
     const char *out = argv[1];
     const char *reference = NULL;
     int frames = 3;
-    int shadow_block = 0;
+    int shadow_block = 0, forward_renderer = 0, two_gbuffers = 0, osmesa = 0;
     for (int i = 2; i < argc; i++) {
         if (strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
             frames = atoi(argv[++i]);
@@ -57,6 +65,14 @@ int main(int argc, char **argv)
             camera_orphaned = 1;
         } else if (strcmp(argv[i], "--depth-tested-lighting") == 0) {
             depth_tested_lighting = 1;
+        } else if (strcmp(argv[i], "--mapped-camera") == 0) {
+            camera_mapped = 1;
+        } else if (strcmp(argv[i], "--forward-renderer") == 0) {
+            forward_renderer = 1;
+        } else if (strcmp(argv[i], "--two-gbuffers") == 0) {
+            two_gbuffers = 1;
+        } else if (strcmp(argv[i], "--osmesa") == 0) {
+            osmesa = 1;
         } else {
             fprintf(stderr, "unknown argument %s\n", argv[i]);
             return 2;
@@ -66,7 +82,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "--frames needs 1 or more\n");
         return 2;
     }
-    if (!create_context())
+    static unsigned char osmesa_buffer[WIDTH * HEIGHT * 4];
+    if (osmesa ? !create_osmesa_context(osmesa_buffer, WIDTH, HEIGHT) : !create_context())
         return 3;
     GLint major = 0, minor = 0;
     glGetIntegerv(GL_MAJOR_VERSION, &major);
@@ -83,6 +100,9 @@ int main(int argc, char **argv)
     if (!ok(dmsaa_retrofit_new(load_gl, NULL, e.gbuffer, &options, &msaa), "dmsaa_retrofit_new"))
         return 1;
 #endif
+    Engine mirror;
+    if (two_gbuffers)
+        engine_init(&mirror, WIDTH, HEIGHT);
     GLuint shadow_ubo = 0;
     float shadow[32];
     if (shadow_block) {
@@ -106,6 +126,21 @@ int main(int argc, char **argv)
             glBindBuffer(GL_UNIFORM_BUFFER, shadow_ubo);
             glBufferSubData(GL_UNIFORM_BUFFER, 0, sizeof shadow, shadow);
             glBindBuffer(GL_UNIFORM_BUFFER, 0);
+        }
+        if (forward_renderer) {
+            /* no G-buffer: unlit cubes straight into the screen target */
+            static const float black[4] = {0, 0, 0, 1};
+            glBindFramebuffer(GL_FRAMEBUFFER, e.screen_fbo);
+            glClearBufferfv(GL_COLOR, 0, black);
+            geometry_pass(&e, e.screen_fbo);
+            gl_errors("a forward frame");
+            continue;
+        }
+        if (two_gbuffers) {
+            /* the mirror's view: its own G-buffer of the same shape, lit */
+            clear_gbuffer(&mirror);
+            geometry_pass(&mirror, mirror.gbuffer);
+            lighting_pass(&mirror);
         }
         clear_gbuffer(&e);
 #ifdef DMSAA_IN_SOURCE
@@ -137,6 +172,8 @@ int main(int argc, char **argv)
 #endif
     if (shadow_ubo)
         glDeleteBuffers(1, &shadow_ubo);
+    if (two_gbuffers)
+        engine_free(&mirror);
     engine_free(&e);
     gl_errors("the end");
     destroy_context();

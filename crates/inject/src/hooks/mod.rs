@@ -50,7 +50,14 @@ pub unsafe extern "C" fn dlsym(handle: *mut c_void, name: *const c_char) -> *mut
     }
     // SAFETY: a non-null name `dlsym` was given is a C string.
     let bytes = unsafe { CStr::from_ptr(name) }.to_bytes();
+    // Any lookup: a program that reaches GL some way the library does not
+    // follow still hears why it was left alone, at its exit.
+    crate::state::handlers::watch_exit();
     match bytes {
+        b"OSMesaGetProcAddress" => {
+            crate::state::handlers::saw_other_loader("OSMesaGetProcAddress");
+            found
+        }
         b"glXGetProcAddress" | b"glXGetProcAddressARB" => {
             // A global lookup finds this library's own definition first.
             let found = past_own(

@@ -130,6 +130,10 @@ pub(crate) struct Context {
     pub(super) found_block: Option<crate::profile::CameraBlock>,
     pub(crate) framebuffers: HashMap<u32, Framebuffer>,
     pub(crate) gbuffer: Option<u32>,
+    /// Every framebuffer a later draw read two colour textures of, while
+    /// no retrofit is made (without a profile): more than one is a choice
+    /// left to a profile.
+    pub(super) read_as_gbuffers: std::collections::HashSet<u32>,
     /// The G-buffer last deleted, as it was seen (for `--learn`).
     pub(crate) last_gbuffer: Option<Framebuffer>,
     /// How many times a G-buffer was deleted (for `--learn`: one made anew
@@ -191,6 +195,7 @@ impl Context {
             found_block: None,
             framebuffers: HashMap::new(),
             gbuffer: None,
+            read_as_gbuffers: std::collections::HashSet::new(),
             last_gbuffer: None,
             gbuffers_deleted: 0,
             retrofit: None,

@@ -154,6 +154,7 @@ impl Context {
     pub(super) fn delete_framebuffers(&mut self, names: &[u32]) {
         for name in names {
             let seen_as = self.framebuffers.remove(name);
+            self.read_as_gbuffers.remove(name);
             if self.gbuffer == Some(*name) {
                 self.last_gbuffer = seen_as;
                 self.gbuffers_deleted += 1;

@@ -98,7 +98,10 @@ impl Context {
                 f.drawn = true;
             }
         }
-        if self.gbuffer.is_none() {
+        // Until the retrofit is made, every framebuffer read as a G-buffer
+        // is counted: a second one (a mirror's view beside the camera's)
+        // makes the choice the program's, not the first read's.
+        if self.gbuffer.is_none() || self.retrofit.is_none() {
             self.find_gbuffer(d);
         }
     }
@@ -179,7 +182,8 @@ impl Context {
     fn find_gbuffer(&mut self, draw: u32) {
         let profile = settings().profile.as_ref();
         if let Some(p) = profile.filter(|p| p.framebuffer.is_some()) {
-            if let Some(f) = self.framebuffers.get(&draw)
+            if self.gbuffer.is_none()
+                && let Some(f) = self.framebuffers.get(&draw)
                 && Self::matches_profile(p, f)
             {
                 self.gbuffer = Some(draw);
@@ -214,11 +218,16 @@ impl Context {
             })
             .map(|(name, _)| *name)
             .collect();
-        match found.as_slice() {
+        self.read_as_gbuffers.extend(found.iter().copied());
+        let mut all: Vec<u32> = self.read_as_gbuffers.iter().copied().collect();
+        all.sort_unstable();
+        match all.as_slice() {
             [] => {}
             [g] => {
-                self.gbuffer = Some(*g);
-                seen(|s| s.found = Some(*g));
+                if self.gbuffer.is_none() {
+                    self.gbuffer = Some(*g);
+                    seen(|s| s.found = Some(*g));
+                }
             }
             many => {
                 say_once(
@@ -227,6 +236,7 @@ impl Context {
                         "framebuffers {many:?} all look like G-buffers; leaving the program untouched (a profile names which)"
                     ),
                 );
+                self.gbuffer = None;
                 self.off = true;
             }
         }

@@ -76,6 +76,12 @@ pub(crate) fn watch_exit() {
     });
 }
 
+/// The program looked up `name`, a get-proc-address the library does not
+/// stand in for: said in the line of a run left alone.
+pub(crate) fn saw_other_loader(name: &'static str) {
+    super::run::seen(|s| s.other_loader = Some(name));
+}
+
 /// At exit: `--learn`'s profile if none was written yet; otherwise, for a
 /// run that said nothing, the one line saying why the program was left
 /// alone.

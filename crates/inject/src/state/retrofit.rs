@@ -167,8 +167,9 @@ impl Context {
             say_once(
                 "projection",
                 &format!(
-                    "found the G-buffer (framebuffer {g}) but no projection matrix: no uniform named {:?} was set; \
-                     leaving the program untouched (a profile names the uniform or gives the matrix)",
+                    "found the G-buffer (framebuffer {g}) but no projection matrix: no uniform named {:?} was set, \
+                     and no uniform block was written one with glBufferSubData or glBufferData; leaving the program \
+                     untouched (a profile names the uniform or the block, or gives the matrix)",
                     profile
                         .and_then(|p| p.projection_uniform())
                         .unwrap_or("projection")

@@ -84,6 +84,9 @@ pub(crate) struct Seen {
     /// again: its name, and how many times (twice or more: one made and
     /// deleted for each image; once: a program that ends after one).
     pub(crate) made_and_deleted: Option<(u32, u64)>,
+    /// A get-proc-address the library does not stand in for, that the
+    /// program looked up (`OSMesaGetProcAddress`).
+    pub(crate) other_loader: Option<&'static str>,
 }
 
 /// What was seen, every context.
@@ -93,6 +96,7 @@ pub(crate) static SEEN: Mutex<Seen> = Mutex::new(Seen {
     found: None,
     retrofitted: false,
     made_and_deleted: None,
+    other_loader: None,
 });
 
 /// Frames ended (swaps), every context.
@@ -125,7 +129,13 @@ pub(crate) fn left_alone(seen: &Seen, frames: u64, ended: bool) -> String {
     if seen.draws == 0 {
         return format!(
             "no draw call reached the library ({frames_said}): GL was not reached through glXGetProcAddress, \
-             eglGetProcAddress, dlsym or libGL's symbols; leaving the program untouched"
+             eglGetProcAddress, dlsym or libGL's symbols{}; leaving the program untouched",
+            match seen.other_loader {
+                Some(name) => format!(
+                    " (the program looked up {name}, whose contexts and entry points the library does not follow)"
+                ),
+                None => String::new(),
+            }
         );
     }
     if let Some((g, times)) = seen.made_and_deleted.filter(|&(_, n)| n >= 2) {
