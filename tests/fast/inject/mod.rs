@@ -320,8 +320,9 @@ fn before_and_after(before: &[u8], after: &[u8], path: &Path) {
 
 /// The program's own frame and its frame under inject with two layers (the
 /// tutorial profile at two layers, the light cubes in the forward target)
-/// against the program's 16x image (`--reference`): two layers at most
-/// 0.7x the own frame's FLIP.
+/// against the program's 16x image (`--reference`, which also writes its
+/// edge pixels): two layers at most 0.7x the own frame's FLIP, and 0.6x
+/// over the edge pixels.
 fn against_16x(plain: &Path, out: &Path, display: &str, own: &[u8], two_layers: &[u8]) {
     let reference = out.join("reference.rgba");
     capi::run(
@@ -334,20 +335,34 @@ fn against_16x(plain: &Path, out: &Path, display: &str, own: &[u8], two_layers: 
     );
     let (w, h) = FRAME;
     let image = |bytes: Vec<u8>| image::RgbaImage::from_raw(w, h, bytes).expect("a 160x120 frame");
+    let edges = image::GrayImage::from_raw(w, h, frame(&out.join("reference.rgba.edges")))
+        .expect("a 160x120 edge mask");
     let reference = image(frame(&reference));
     let error = |bytes: &[u8]| {
-        deferred_msaa_lab::compare::flip(&reference, &image(bytes.to_vec()))
+        let test = image(bytes.to_vec());
+        let all = deferred_msaa_lab::compare::flip(&reference, &test)
             .expect("same sizes")
-            .mean
+            .mean;
+        let over_edges = deferred_msaa_lab::compare::flip_by_mask(&reference, &test, &edges)
+            .expect("same sizes")
+            .marked
+            .expect("edge pixels");
+        (all, over_edges)
     };
-    let (none, two) = (error(own), error(two_layers));
+    let ((none, none_edges), (two, two_edges)) = (error(own), error(two_layers));
     eprintln!(
-        "the tutorial program under inject, FLIP against its 16x image: own {none:.4}, two layers {two:.4}: {:.2}x",
-        two / none
+        "the tutorial program under inject, FLIP against its 16x image (over its edge pixels): own {none:.4} \
+         ({none_edges:.4}), two layers {two:.4} ({two_edges:.4}): {:.2}x ({:.2}x)",
+        two / none,
+        two_edges / none_edges
     );
     assert!(
         two <= 0.7 * none,
         "two layers under inject {two:.4} above 0.7x the program's own frame {none:.4}"
+    );
+    assert!(
+        two_edges <= 0.6 * none_edges,
+        "two layers under inject over edges {two_edges:.4} above 0.6x the program's own frame {none_edges:.4}"
     );
 }
 

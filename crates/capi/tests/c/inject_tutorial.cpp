@@ -52,7 +52,9 @@
 //                       engines keep per-light data, not as uniforms
 //   --reference FILE    also write the program's 16x image (every pass at 4x
 //                       the width and height, averaged 4x4 in the light a
-//                       screen emits) to FILE, raw RGBA8, rows bottom-up
+//                       screen emits) to FILE, raw RGBA8, rows bottom-up,
+//                       and its last frame's edge pixels (edgeMask) to
+//                       FILE.edges
 //   --named-writes      (with --light-block) those writes made with
 //                       glNamedBufferSubData, as GL 4.5 engines make them,
 //                       the buffer never bound for them; exits 4 on a
@@ -766,8 +768,18 @@ int main(int argc, char **argv)
             delete shader;
         }
     }
+    std::vector<unsigned char> edges;
+    if (referenceFile)
+        edges = edgeMask(e);
     engineFree(e);
     if (referenceFile) {
+        std::string edgesFile = std::string(referenceFile) + ".edges";
+        FILE *m = std::fopen(edgesFile.c_str(), "wb");
+        CHECK(m != nullptr, "cannot write %s", edgesFile.c_str());
+        if (m) {
+            std::fwrite(edges.data(), 1, edges.size(), m);
+            std::fclose(m);
+        }
         std::vector<unsigned char> reference = supersampled(WIDTH, HEIGHT, false);
         FILE *r = std::fopen(referenceFile, "wb");
         CHECK(r != nullptr, "cannot write %s", referenceFile);

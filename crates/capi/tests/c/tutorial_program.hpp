@@ -739,4 +739,51 @@ static inline std::vector<unsigned char> supersampled(int width, int height, boo
     return small;
 }
 
+// The edge pixels of the engine's last frame, from its G-buffer (one byte a
+// pixel, 255 on an edge, rows bottom-up): a 4-neighbour that is background
+// where this pixel is geometry (or the reverse), whose position is more
+// than 2% of this pixel's distance to the camera away, or whose normal
+// turns more than 10 degrees.
+static inline std::vector<unsigned char> edgeMask(Engine &e)
+{
+    const int w = e.width, h = e.height;
+    std::vector<float> position(static_cast<size_t>(w) * static_cast<size_t>(h) * 4);
+    std::vector<float> normal(position.size());
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, e.gBuffer);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, position.data());
+    glReadBuffer(GL_COLOR_ATTACHMENT1);
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, normal.data());
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    auto at = [&](const std::vector<float> &v, int i) { return Vec3{v[4 * i], v[4 * i + 1], v[4 * i + 2]}; };
+    auto length = [](Vec3 v) { return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z); };
+    std::vector<unsigned char> mask(static_cast<size_t>(w) * static_cast<size_t>(h), 0);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            int i = y * w + x;
+            Vec3 p = at(position, i), n = at(normal, i);
+            bool geometry = length(n) > 0.5f;
+            static const int d[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+            for (const auto &step : d) {
+                int nx = x + step[0], ny = y + step[1];
+                if (nx < 0 || ny < 0 || nx >= w || ny >= h)
+                    continue;
+                int j = ny * w + nx;
+                Vec3 q = at(position, j), m = at(normal, j);
+                bool other = length(m) > 0.5f;
+                bool edge = geometry != other;
+                if (geometry && other) {
+                    Vec3 toCamera = {p.x - cameraPosition.x, p.y - cameraPosition.y, p.z - cameraPosition.z};
+                    Vec3 apart = {p.x - q.x, p.y - q.y, p.z - q.z};
+                    float turn = (n.x * m.x + n.y * m.y + n.z * m.z) / (length(n) * length(m));
+                    edge = length(apart) > 0.02f * length(toCamera) || turn < 0.985f;
+                }
+                if (edge)
+                    mask[static_cast<size_t>(i)] = 255;
+            }
+        }
+    return mask;
+}
+
 #endif
