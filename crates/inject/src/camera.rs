@@ -104,7 +104,7 @@ pub(crate) fn is_rigid_view(m: &[f32; 16]) -> bool {
 }
 
 /// The 16 floats at `at` in `bytes` (native order), where they fit.
-fn matrix_at(bytes: &[u8], at: usize) -> Option<[f32; 16]> {
+pub(crate) fn matrix_at(bytes: &[u8], at: usize) -> Option<[f32; 16]> {
     let chunk = bytes.get(at..at + 64)?;
     let mut m = [0f32; 16];
     for (k, v) in m.iter_mut().enumerate() {

@@ -24,7 +24,7 @@
 //!   edge pixels of its frame); the same bit for bit with its lighting
 //!   tested against the G-buffer's depth (`--depth-tested-lighting`).
 
-use super::runs::{clean_check, inject, run_ok, said};
+use super::runs::{clean_check, completed, inject, run_ok, said};
 use super::{capi, frame};
 use crate::common;
 use deferred_msaa_lab::context::Backend;
@@ -35,26 +35,22 @@ use std::process::Command;
 /// The learned profile as a user completes it from docs/hosts.md's row for
 /// this style: the octahedral normals named and selected, the packed byte
 /// selected, two layers, the radiance's tonemap (exposure 0.8, then clamp)
-/// as the curve. Every key the file holds is kept.
-fn completed(learned: &str) -> String {
-    let mut text = String::new();
-    for line in learned.lines() {
-        text.push_str(line);
-        text.push('\n');
-        match line {
-            "index = 1" => text.push_str(
+/// as the curve.
+fn engine_profile(learned: &str) -> String {
+    completed(
+        learned,
+        &[
+            (
+                1,
                 "meaning = \"normal\"\nencoding = \"octahedral-unorm\"\nrule = \"select\"\n",
             ),
-            "index = 2" | "index = 3" => text.push_str("rule = \"select\"\n"),
-            _ => {}
-        }
-    }
-    text.push_str(
-        "\n[retrofit]\nlayers = 2\nlayer_mix = \"curve\"\nlayer_mix_curve = \"\"\"\n\
+            (2, "rule = \"select\"\n"),
+            (3, "rule = \"select\"\n"),
+        ],
+        "[retrofit]\nlayers = 2\nlayer_mix = \"curve\"\nlayer_mix_curve = \"\"\"\n\
          vec3 dmsaa_curve(vec3 x) { return clamp(x * 0.8, 0.0, 1.0); }\n\
          vec3 dmsaa_curve_inverse(vec3 y) { return y / 0.8; }\n\"\"\"\n",
-    );
-    text
+    )
 }
 
 #[test]
@@ -341,7 +337,7 @@ fn an_unmodified_c_engine_under_inject_draws_its_in_source_two_layers() {
 
     // That profile completed: two layers, the in-source frame bit for bit.
     let profile = out.join("engine.toml");
-    std::fs::write(&profile, completed(&text)).expect("writing the completed profile");
+    std::fs::write(&profile, engine_profile(&text)).expect("writing the completed profile");
     let stderr = checked(
         Some(&profile),
         "two-layers.rgba",

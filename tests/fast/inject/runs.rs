@@ -63,3 +63,22 @@ where
     eprint!("{what}:\n{stderr}");
     stderr
 }
+
+/// A learned profile completed as a user completes it: each `(index,
+/// keys)` put under that attachment's `index = N` line, `tables` (TOML)
+/// appended. Every line the file holds is kept.
+pub(super) fn completed(learned: &str, keys: &[(u32, &str)], tables: &str) -> String {
+    let mut text = String::new();
+    for line in learned.lines() {
+        text.push_str(line);
+        text.push('\n');
+        for (index, more) in keys {
+            if line == format!("index = {index}") {
+                text.push_str(more);
+            }
+        }
+    }
+    text.push('\n');
+    text.push_str(tables);
+    text
+}

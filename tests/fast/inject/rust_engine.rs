@@ -15,7 +15,7 @@
 //!   with the retrofit in its source (`--in-source`) bit for bit, and at most
 //!   0.7x its own frame's FLIP against its 16x image (0.6x over edges).
 
-use super::runs::{clean_check, inject, run_ok, said};
+use super::runs::{clean_check, completed, inject, run_ok, said};
 use super::{capi, frame};
 use crate::common;
 use deferred_msaa_lab::context::Backend;
@@ -86,17 +86,19 @@ fn a_rust_engine_under_inject_draws_its_in_source_two_layers() {
             "no `{line}` in the learned profile:\n{text}"
         );
     }
-    let mut completed = String::new();
-    for line in text.lines() {
-        completed.push_str(line);
-        completed.push('\n');
-        if line == "index = 1" {
-            completed.push_str("meaning = \"normal\"\nencoding = \"xyz\"\nrule = \"select\"\n");
-        }
-    }
-    completed.push_str("\n[retrofit]\nlayers = 2\nlayer_mix = \"srgb-encoded\"\n");
     let profile = out.join("engine.toml");
-    std::fs::write(&profile, completed).expect("writing the completed profile");
+    std::fs::write(
+        &profile,
+        completed(
+            &text,
+            &[(
+                1,
+                "meaning = \"normal\"\nencoding = \"xyz\"\nrule = \"select\"\n",
+            )],
+            "[retrofit]\nlayers = 2\nlayer_mix = \"srgb-encoded\"\n",
+        ),
+    )
+    .expect("writing the completed profile");
     let injected = out.join("two-layers.rgba");
     let stderr = inject(
         &library,

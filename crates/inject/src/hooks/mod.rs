@@ -66,7 +66,6 @@ pub unsafe extern "C" fn dlsym(handle: *mut c_void, name: *const c_char) -> *mut
                 c"glXGetProcAddressARB",
             );
             GLX_GET_PROC_ADDRESS.set(found);
-            crate::state::handlers::watch_exit();
             // SAFETY: the same handle, a C string literal.
             GLX_GET_CURRENT_CONTEXT.set(unsafe { real(handle, c"glXGetCurrentContext".as_ptr()) });
             glx_get_proc_address as *mut c_void
@@ -78,7 +77,6 @@ pub unsafe extern "C" fn dlsym(handle: *mut c_void, name: *const c_char) -> *mut
                 c"eglGetProcAddress",
             );
             EGL_GET_PROC_ADDRESS.set(found);
-            crate::state::handlers::watch_exit();
             // SAFETY: as above.
             EGL_GET_CURRENT_CONTEXT.set(unsafe { real(handle, c"eglGetCurrentContext".as_ptr()) });
             egl_get_proc_address as *mut c_void

@@ -135,16 +135,7 @@ impl Context {
                     }
                     let mut bytes = [0u8; 64];
                     gl.get_buffer_sub_data(glow::COPY_READ_BUFFER, at, &mut bytes);
-                    let mut m = [0f32; 16];
-                    for (k, v) in m.iter_mut().enumerate() {
-                        *v = f32::from_ne_bytes([
-                            bytes[4 * k],
-                            bytes[4 * k + 1],
-                            bytes[4 * k + 2],
-                            bytes[4 * k + 3],
-                        ]);
-                    }
-                    Some(m)
+                    crate::camera::matrix_at(&bytes, 0)
                 };
                 read = (matrix(block.offset), block.view_offset.and_then(matrix));
                 gl.bind_buffer(

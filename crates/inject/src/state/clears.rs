@@ -88,9 +88,6 @@ unsafe fn clear_bound(gl: &glow::Context, call: &ClearBuffer, i: u32) {
 }
 
 impl Context {
-    /// After `glClear(mask)` into the bound draw framebuffer: where it is
-    /// not the G-buffer but shares attachments with it, the same clear on
-    /// the retrofit's framebuffer.
     /// Where the bound draw framebuffer is not the G-buffer but shares a
     /// colour texture with it: the G-buffer, that framebuffer, and the
     /// twin to replay a clear on (the retrofit made now if it is not yet:
@@ -132,9 +129,15 @@ impl Context {
     /// not the G-buffer but shares attachments with it, the same clear of
     /// the same attachment, with the same value, on the twin.
     pub(super) fn after_clear_buffer(&mut self, call: ClearBuffer) {
-        let Some((g, d, twin)) = self.sharing_gbuffer() else {
-            return;
-        };
+        if let Some(shared) = self.sharing_gbuffer() {
+            self.replay_clear(shared, call);
+        }
+    }
+
+    /// `call`, made through framebuffer `d` sharing G-buffer `g`'s
+    /// textures, made again on the twin `twin`: on the attachment it
+    /// reached, with its value.
+    fn replay_clear(&mut self, (g, d, twin): (u32, u32, u32), call: ClearBuffer) {
         let mut replayed = false;
         self.checked(
             "a clear through a framebuffer sharing the G-buffer's, replayed",
@@ -277,9 +280,9 @@ impl Context {
     /// colour, the depth and stencil with their clear values), each
     /// replayed as a `glClearBuffer*` call through that framebuffer is.
     pub(super) fn after_clear(&mut self, mask: u32) {
-        if self.draw_fbo == 0 || self.twin_bound || self.off || self.learning() {
+        let Some(shared) = self.sharing_gbuffer() else {
             return;
-        }
+        };
         let mut calls: Vec<ClearBuffer> = Vec::new();
         // SAFETY: queries of the current context.
         unsafe {
@@ -325,7 +328,7 @@ impl Context {
             }
         }
         for call in calls {
-            self.after_clear_buffer(call);
+            self.replay_clear(shared, call);
         }
     }
 }

@@ -77,12 +77,11 @@ impl Context {
         if looking {
             self.uniform_buffer_written(buffer, offset, bytes);
         }
-        let bytes = bytes.to_vec();
         if let Some(r) = self.recording.as_mut() {
             r.buffers.push(BufferChange::Data {
                 buffer,
                 offset: offset as i32,
-                bytes,
+                bytes: bytes.to_vec(),
             });
         }
     }
