@@ -622,6 +622,33 @@ fn sdl_and_linked_libgl_programs_under_inject_draw_the_in_source_frame() {
             calls: &["dmsaa_retrofit_new 1"],
         }
         .compare(&in_source, &plain, &own, api);
+        if flavour == Flavour::LinkedGl {
+            // Linked with libGL, the program loads glBufferSubData and the
+            // block calls with glXGetProcAddressARB by name, which reaches
+            // the library's own definition: its camera block's writes are
+            // seen, the camera found, the in-source frame bit for bit (with
+            // libGL's definition reached instead, the writes go unseen and
+            // the program is left alone).
+            let camera: &[&str] = &["--camera-block"];
+            let own = own_frame(
+                &plain,
+                &out,
+                "linked-gl-camera-block",
+                camera,
+                &xvfb.display(),
+            );
+            Run {
+                what: "linked-gl GLX, camera block, default options".into(),
+                out: &out,
+                display: xvfb.display(),
+                args: camera,
+                in_source_args: &[],
+                profile: None,
+                resolves: 2,
+                calls: &["the camera read from its uniform block 2"],
+            }
+            .compare(&in_source, &plain, &own, "GLX");
+        }
     }
 }
 

@@ -169,6 +169,16 @@ static void useViewProjection(Engine &e)
     e.shaderLightBox = new Shader(box.c_str(), lightBoxFs);
 }
 
+// What the shared loader does not list, the program loads itself: through
+// its window library's loader, or, linked with libGL, through GLX's
+// get-proc-address called by name (its prototype as libGL exports it).
+#ifdef TUTORIAL_LINK_GL
+extern "C" void (*glXGetProcAddressARB(const GLubyte *name))(void);
+#define PROGRAM_GET_PROC_ADDRESS(name) glXGetProcAddressARB(reinterpret_cast<const GLubyte *>(name))
+#else
+#define PROGRAM_GET_PROC_ADDRESS(name) TUTORIAL_GET_PROC_ADDRESS(name)
+#endif
+
 // The uniform-block functions, loaded by the program itself (the shared
 // loader lists the tutorial's calls only).
 static PFNGLBINDBUFFERBASEPROC cbBindBufferBase;
@@ -483,12 +493,12 @@ int main(int argc, char **argv)
     std::printf("GL %s through %s\n", reinterpret_cast<const char *>(glGetString(GL_VERSION)), egl ? "EGL" : "GLX");
     glViewport(0, 0, WIDTH, HEIGHT);
 
-    cbBindBufferBase = reinterpret_cast<PFNGLBINDBUFFERBASEPROC>(TUTORIAL_GET_PROC_ADDRESS("glBindBufferBase"));
-    cbBufferSubData = reinterpret_cast<PFNGLBUFFERSUBDATAPROC>(TUTORIAL_GET_PROC_ADDRESS("glBufferSubData"));
+    cbBindBufferBase = reinterpret_cast<PFNGLBINDBUFFERBASEPROC>(PROGRAM_GET_PROC_ADDRESS("glBindBufferBase"));
+    cbBufferSubData = reinterpret_cast<PFNGLBUFFERSUBDATAPROC>(PROGRAM_GET_PROC_ADDRESS("glBufferSubData"));
     cbGetUniformBlockIndex =
-        reinterpret_cast<PFNGLGETUNIFORMBLOCKINDEXPROC>(TUTORIAL_GET_PROC_ADDRESS("glGetUniformBlockIndex"));
+        reinterpret_cast<PFNGLGETUNIFORMBLOCKINDEXPROC>(PROGRAM_GET_PROC_ADDRESS("glGetUniformBlockIndex"));
     cbUniformBlockBinding =
-        reinterpret_cast<PFNGLUNIFORMBLOCKBINDINGPROC>(TUTORIAL_GET_PROC_ADDRESS("glUniformBlockBinding"));
+        reinterpret_cast<PFNGLUNIFORMBLOCKBINDINGPROC>(PROGRAM_GET_PROC_ADDRESS("glUniformBlockBinding"));
     Engine e;
     engineInit(e, WIDTH, HEIGHT, false);
     if (dsa) {
