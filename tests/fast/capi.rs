@@ -58,7 +58,16 @@ fn built_library(kind: &str) -> PathBuf {
 /// A library cargo built for this binary (the lab's dev-dependencies'
 /// `cdylib`s and `staticlib`s), newest first among the builds in its folder
 /// (`target/<profile>/deps`) whose names start with `prefix`, as `kind`.
+///
+/// Looked up only once the examples' nested build is done: a `cdylib` or
+/// `staticlib` in `deps` carries no hash in its name, and a test selection
+/// that leaves the examples out (`cargo test --tests`) unifies features
+/// differently, so that build writes these same files anew; a lookup (or a
+/// link) while it does finds nothing.
 pub(crate) fn built(prefix: &str, kind: &str) -> PathBuf {
+    if let Err(e) = common::examples::built_examples() {
+        panic!("{e}");
+    }
     let exe = std::env::current_exe().expect("the test binary's path");
     let deps = exe.parent().expect("the test binary's folder");
     let mut found: Vec<(std::time::SystemTime, PathBuf)> = std::fs::read_dir(deps)
