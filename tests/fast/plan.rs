@@ -328,22 +328,25 @@ fn the_model_and_lighting_shaders_follow_the_plan_not_the_method() {
     assert_eq!(live_objects().total(), 0, "{:?}", live_objects());
 }
 
-/// The pixels whose depth keys (view-space z of the position samples) are
-/// not all bitwise equal, computed on the CPU from the twins.
+/// The pixels whose depth keys (view-space z of the position samples) or
+/// depth samples are not all bitwise equal, computed on the CPU from the
+/// twins: a half-float position gives two faces' samples one key.
 fn key_complex_pixels(gl: &glow::Context, r: &Renderer) -> Vec<bool> {
     let retrofit = r.retrofit().expect("multisampled");
-    let (_, colors, _) = retrofit.inputs().unwrap();
+    let (depth, colors, _) = retrofit.inputs().unwrap();
     let KeySource::Position(ResolveSlot(k)) = retrofit.key() else {
         panic!("the key comes from the position attachment");
     };
     let mut readback = Readback::new(gl).unwrap();
     let img = readback.read(gl, colors[k], 1).unwrap();
+    let depths = readback.read(gl, depth, 1).unwrap();
     readback.destroy(gl);
     // Row 0 is the top row, as in the mask.
     (0..(img.width * img.height) as usize)
         .map(|p| {
             let key = |s: u32| img.plane(s)[p * 4 + 2].to_bits();
-            (1..img.samples).any(|s| key(s) != key(0))
+            let depth = |s: u32| depths.plane(s)[p * 4].to_bits();
+            (1..img.samples).any(|s| key(s) != key(0) || depth(s) != depth(0))
         })
         .collect()
 }
@@ -377,9 +380,10 @@ fn the_complex_view_shows_the_resolves_slow_path() {
     let expected = key_complex_pixels(gl, &r);
     let marked: Vec<bool> = mask.pixels().map(|p| p[0] == 255).collect();
     assert!(mask.pixels().all(|p| p[0] == 0 || p[0] == 255));
-    // The fast path skips exactly the pixels whose keys agree (background
-    // samples agree too: their key is +inf); allow only pixels where the
-    // keys differ but every sample is background (none here) to disagree.
+    // The fast path skips exactly the pixels whose keys and depths agree
+    // (background samples agree too: their key is +inf); allow only pixels
+    // where they differ but every sample is background (none here) to
+    // disagree.
     let differ = marked.iter().zip(&expected).filter(|(a, b)| a != b).count();
     assert_eq!(differ, 0, "{differ} pixels disagree");
     let fraction = r.complex_pixel_fraction(gl).unwrap().expect("a fraction");

@@ -15,8 +15,10 @@ bool dmsaa_same_surface(bool bg_i, float key_i, bool bg_0, float key_0) {
     return bg_i == bg_0 && (bg_0 || key_i == key_0);
 }
 
-// The same with a whole key: a world-space position's xyz and the raw depth
-// in w (both must agree; see resolve.frag's keys_uniform).
+// The same with a whole key: a position (a world-space one's xyz, a
+// view-space one's z) and the raw depth in w, all of which must agree (a
+// half-float position rounds nearby depths to one value; see resolve.frag's
+// keys_uniform).
 bool dmsaa_same_surface(bool bg_i, vec4 key_i, bool bg_0, vec4 key_0) {
     return bg_i == bg_0 && (bg_0 || all(equal(key_i, key_0)));
 }

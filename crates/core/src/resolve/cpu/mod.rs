@@ -400,12 +400,15 @@ impl CpuResolve {
         let n = px.depth.len();
         let keys = self.keys(px);
 
-        // A world-space key compares whole positions (the shader's keys_uniform).
+        // A position key is compared with the depth samples too (a world-space
+        // one as a whole position), as the shader's keys_uniform does: a
+        // half-float position rounds two faces' samples to one value.
         let same_key = |i: usize| match self.key_source {
             CpuKeySource::WorldPosition { attachment, .. } => {
                 let a = &px.attachments[attachment];
                 a[i][..3] == a[0][..3] && px.depth[i] == px.depth[0]
             }
+            CpuKeySource::Position(_) => keys.z[i] == keys.z[0] && px.depth[i] == px.depth[0],
             _ => keys.z[i] == keys.z[0],
         };
         let position_test = match self.key_source {

@@ -312,6 +312,39 @@ fn normals_split_a_crease_with_one_layer_or_two() {
 }
 
 #[test]
+fn a_crease_a_half_float_position_hides_is_found_by_its_depth_samples() {
+    // Two facets meeting at a ridge, a quarter pixel apart: their view
+    // depths round to one half float, so every key is equal; the depth
+    // samples (32-bit) differ, and the normals are 40 degrees apart.
+    let mut cpu = resolver(ResolveMethod::Median, Window::Hard);
+    cpu.normal = Some((0, NormalEncoding::Xyz));
+    let (s, c) = (20f64.to_radians().sin(), 20f64.to_radians().cos());
+    let mut px = pixel(&[12.0; 4]);
+    px.attachments[0] = vec![
+        [-s, 0.0, c, 0.0],
+        [s, 0.0, c, 0.0],
+        [-s, 0.0, c, 0.0],
+        [s, 0.0, c, 0.0],
+    ];
+    px.depth = vec![0.9000, 0.9001, 0.9000, 0.9001];
+    let out = cpu.resolve_pixel_at(&px, at(false));
+    assert!(
+        out.complex,
+        "equal keys over different depth samples are not one surface"
+    );
+    assert_eq!(out.weights.iter().filter(|&&w| w > 0.0).count(), 2);
+    cpu.settings.layers = 2;
+    let second = cpu.resolve_second_layer_at(&px, at(false));
+    assert_eq!(second.coverage, 0.5);
+    // Where the depth samples agree too, the pixel is one surface: sample 0.
+    px.depth = vec![0.9; 4];
+    cpu.settings.layers = 1;
+    let out = cpu.resolve_pixel_at(&px, at(false));
+    assert!(!out.complex);
+    assert_eq!(out.attachments[0], px.attachments[0][0]);
+}
+
+#[test]
 fn a_side_sliver_joins_its_front_face_not_the_wall() {
     // A thin box's silhouette pixel: its front face (+z, sample 0), its
     // side face 0.06 behind it (+x, sample 1), a far wall (samples 2, 3).
