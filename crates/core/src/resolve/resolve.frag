@@ -409,24 +409,18 @@ vec4 acc_finish(Acc a, int rule, vec4 reference) {
     return a.weight > 0.0 ? (a.same ? a.first : a.sum / a.weight) : reference;
 }
 
-
 // Uniform pixel: every sample is background, or every sample is geometry
 // with the same key (complex.glsl's dmsaa_same_surface, composed in front of
-// this file; the CPU reference's definition, keep them equal).
+// this file; the CPU reference's definition, keep them equal), and with the
+// normal test one orientation (one_orientation).
 //
-// With a position key the test reads every position sample (the key) and
-// every depth sample, not depth sample 0 alone: deciding from the position
-// samples alone is not exact. A sample is background by its own depth (the
-// clear depth), and a background sample's position is whatever the host
-// cleared the attachment to, which a geometry sample's may equal (a host
-// clearing position to (0, 0, -far); tests/fast/resolve_layers.rs's
-// one-geometry-sample case, whose background samples keep the geometry's z);
-// geometry exactly at the clear depth (a sky drawn at the far plane) is
-// background in one sample and geometry in its neighbour. The converse is
-// exact without any appeal to fragments: equal keys of geometry samples make
-// every weight 1, and the CPU reference calls such a pixel uniform whatever
-// wrote it (per-sample shading, or two coplanar triangles, included), so
-// sample 0 is its value bit for bit.
+// With a position key every depth sample is read too: a sample is background
+// by its own depth, and a background sample's position is whatever the host
+// cleared it to, which a geometry sample's may equal (position cleared to
+// (0, 0, -far): tests/fast/resolve_layers.rs's one-geometry-sample case); a
+// sky drawn at the far plane is background in one sample, geometry in the
+// next. Equal keys of geometry samples make every weight 1: the CPU
+// reference calls such a pixel uniform whatever wrote it.
 bool keys_uniform() {
     bool same = true;
 #ifdef KEY_WORLD
@@ -438,21 +432,33 @@ bool keys_uniform() {
         if (!dmsaa_same_surface(g_bg[i], vec4(g_key_vals[i].xyz, g_raw_depth[i]),
                                 g_bg[0], vec4(g_key_vals[0].xyz, g_raw_depth[0])))
             same = false;
-#elif defined(KEY_SAMPLER)
-    // A view-space position: its depth and the depth sample must agree. A
-    // half-float position rounds the depths of two faces meeting at a crease
-    // (a ridge's facets, a quarter pixel apart) to one value, which made such
-    // a pixel one surface and hid the crease from the normal test.
-    for (int i = 1; i < NUM_SAMPLES; ++i)
-        if (!dmsaa_same_surface(g_bg[i], vec4(0.0, 0.0, g_key[i], g_raw_depth[i]),
-                                g_bg[0], vec4(0.0, 0.0, g_key[0], g_raw_depth[0])))
-            same = false;
 #else
     for (int i = 1; i < NUM_SAMPLES; ++i)
         if (!dmsaa_same_surface(g_bg[i], g_key[i], g_bg[0], g_key[0])) same = false;
 #endif
     return same;
 }
+
+#if defined(KEY_SAMPLER) && !defined(KEY_WORLD) && defined(CLUSTER_NORMALS)
+// Equal view-space keys are one surface where the depth samples agree too,
+// or every normal passes the normal test against sample 0's (cpu.rs's
+// one_orientation): a half-float position rounds a ridge's two facets to one
+// key, which hid the crease. Normals are read only where depths differ.
+bool one_orientation(ivec2 p) {
+    bool same = true;
+    for (int i = 1; i < NUM_SAMPLES; ++i) same = same && g_raw_depth[i] == g_raw_depth[0];
+    bool check = !same;
+    vec3 n_0 = decode_normal(vec4(FETCH(NORMAL_SAMPLER, p, 0)));
+    for (int i = g_zero + 1; i < NUM_SAMPLES; ++i) {
+        if (!check) break;
+        bool bg_i;
+        PICK(bg_i, g_bg, i)
+        check = same_normal(decode_normal(vec4(FETCH(NORMAL_SAMPLER, p, i))), n_0, bg_i, g_bg[0]);
+        same = check && i == NUM_SAMPLES - 1;
+    }
+    return same;
+}
+#endif
 
 #ifdef PLANE_UNIFORMITY
 // The opt-in plane test (ResolveSettings::plane_uniformity; cpu.rs's
@@ -571,6 +577,9 @@ bool takes_one_sample(ivec2 p) {
     one = g_positions_equal;
 #else
     one = keys_uniform();
+#if defined(KEY_SAMPLER) && !defined(KEY_WORLD) && defined(CLUSTER_NORMALS)
+    one = one && one_orientation(p);
+#endif
 #endif
 #ifdef PLANE_UNIFORMITY
     one = one || plane_uniform(p);

@@ -362,6 +362,30 @@ impl CpuResolve {
         self.resolve_pixel_at(px, None)
     }
 
+    /// Whether a pixel of equal view-space keys is one surface by its
+    /// orientation too (the shader's one_orientation), and whether `f32` may
+    /// decide it differently: with a normal attachment named, where its depth
+    /// samples differ (a half-float position rounds a crease's two facets to
+    /// one key), every sample's normal must pass the normal test against
+    /// sample 0's. Always one surface for another key or without the test.
+    fn one_orientation(&self, px: &PixelSamples, keys: &Keys) -> (bool, bool) {
+        if !matches!(self.key_source, CpuKeySource::Position(_))
+            || self.splits_by_normal().is_none()
+            || px.depth.iter().all(|&d| d == px.depth[0])
+        {
+            return (true, false);
+        }
+        let mut ambiguous = false;
+        for i in 1..px.depth.len() {
+            let (same, near_threshold) = self.same_normal(px, keys, i, 0);
+            ambiguous |= near_threshold;
+            if !same {
+                return (false, ambiguous);
+            }
+        }
+        (true, ambiguous)
+    }
+
     /// Whether the pixel lies outside the selective-AA selection, and whether
     /// `f32` may decide that differently (a key at the depth threshold).
     fn outside_selection(
@@ -400,15 +424,12 @@ impl CpuResolve {
         let n = px.depth.len();
         let keys = self.keys(px);
 
-        // A position key is compared with the depth samples too (a world-space
-        // one as a whole position), as the shader's keys_uniform does: a
-        // half-float position rounds two faces' samples to one value.
+        // A world-space key compares whole positions (the shader's keys_uniform).
         let same_key = |i: usize| match self.key_source {
             CpuKeySource::WorldPosition { attachment, .. } => {
                 let a = &px.attachments[attachment];
                 a[i][..3] == a[0][..3] && px.depth[i] == px.depth[0]
             }
-            CpuKeySource::Position(_) => keys.z[i] == keys.z[0] && px.depth[i] == px.depth[0],
             _ => keys.z[i] == keys.z[0],
         };
         let position_test = match self.key_source {
@@ -427,7 +448,14 @@ impl CpuResolve {
                     && (1..n).all(|i| keys.bg[i] == keys.bg[0] && (keys.bg[0] || same_key(i)))
             }
         };
+        let mut orientation_ambiguous = false;
+        if uniform && position_test.is_none() {
+            let (one, ambiguous) = self.one_orientation(px, &keys);
+            uniform = one;
+            orientation_ambiguous = ambiguous;
+        }
         let (outside, mut selection_ambiguous) = self.outside_selection(px, &keys, at);
+        selection_ambiguous |= orientation_ambiguous;
         if self.settings.fast_path
             && self.settings.plane_uniformity
             && position_test.is_none()

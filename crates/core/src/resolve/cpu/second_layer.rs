@@ -10,7 +10,7 @@ use crate::resolve::{NormalEncoding, ResolveMethod, ResolveRule};
 impl CpuResolve {
     /// Whether clusters split by normal: a normal attachment, with one
     /// layer or two.
-    fn splits_by_normal(&self) -> Option<(usize, NormalEncoding)> {
+    pub(super) fn splits_by_normal(&self) -> Option<(usize, NormalEncoding)> {
         self.normal
     }
 

@@ -337,11 +337,22 @@ fn a_crease_a_half_float_position_hides_is_found_by_its_depth_samples() {
     let second = cpu.resolve_second_layer_at(&px, at(false));
     assert_eq!(second.coverage, 0.5);
     // Where the depth samples agree too, the pixel is one surface: sample 0.
-    px.depth = vec![0.9; 4];
     cpu.settings.layers = 1;
-    let out = cpu.resolve_pixel_at(&px, at(false));
+    let mut flat = px.clone();
+    flat.depth = vec![0.9; 4];
+    let out = cpu.resolve_pixel_at(&flat, at(false));
     assert!(!out.complex);
-    assert_eq!(out.attachments[0], px.attachments[0][0]);
+    assert_eq!(out.attachments[0], flat.attachments[0][0]);
+    // So is a slanted plane whose keys round alike: depths that differ
+    // under one orientation.
+    let mut slanted = px.clone();
+    slanted.attachments[0] = vec![[s, 0.0, c, 0.0]; 4];
+    let out = cpu.resolve_pixel_at(&slanted, at(false));
+    assert!(!out.complex);
+    // Without the normal test there is nothing to split: equal keys are
+    // one surface, as before.
+    cpu.normal = None;
+    assert!(!cpu.resolve_pixel_at(&px, at(false)).complex);
 }
 
 #[test]
