@@ -112,7 +112,6 @@ pub(crate) fn compare(
         first_mismatches: Vec::new(),
         failure: None,
     };
-    let n = depth.samples;
     // `what` names the value; it is formatted only for the reports.
     let note = |c: &mut Comparison, what: &dyn Fn() -> String, got: f32, want: f64, tol: f64| {
         let (ok, err) = judge(got, want, tol);
@@ -135,13 +134,7 @@ pub(crate) fn compare(
     };
     for y in 0..depth.height {
         for x in 0..depth.width {
-            let px = PixelSamples {
-                depth: (0..n).map(|s| depth.get(s, x, y)[0] as f64).collect(),
-                attachments: samples
-                    .iter()
-                    .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
-                    .collect(),
-            };
+            let px = PixelSamples::read_back(depth, samples, x, y);
             let at = PixelPlace {
                 x,
                 y,

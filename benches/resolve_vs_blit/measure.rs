@@ -52,7 +52,6 @@ pub(crate) fn count_complex(
     let cpu = cpu_for(params);
     let cpu_exact = cpu_for(exact);
     let with_option = params.settings != exact.settings;
-    let n = depth.samples;
     let mut c = Complexity {
         pixels: 0,
         complex_key: 0,
@@ -62,13 +61,7 @@ pub(crate) fn count_complex(
     };
     for y in 0..depth.height {
         for x in 0..depth.width {
-            let px = PixelSamples {
-                depth: (0..n).map(|s| depth.get(s, x, y)[0] as f64).collect(),
-                attachments: colors
-                    .iter()
-                    .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
-                    .collect(),
-            };
+            let px = PixelSamples::read_back(&depth, &colors, x, y);
             c.pixels += 1;
             let at = Some(PixelPlace {
                 x,

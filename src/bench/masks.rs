@@ -57,15 +57,8 @@ pub(super) fn cluster_masks(
         })();
         readback.destroy(gl);
         let (colors, depth) = read?;
-        let n = depth.samples;
         let three = GrayImage::from_fn(depth.width, depth.height, |x, y| {
-            let px = crate::resolve::cpu::PixelSamples {
-                depth: (0..n).map(|s| f64::from(depth.get(s, x, y)[0])).collect(),
-                attachments: colors
-                    .iter()
-                    .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
-                    .collect(),
-            };
+            let px = crate::resolve::cpu::PixelSamples::read_back(&depth, &colors, x, y);
             // Samples of neither kept cluster, each joined to one of them.
             let at = crate::resolve::cpu::PixelPlace {
                 x,

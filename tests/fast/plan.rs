@@ -348,17 +348,10 @@ fn cpu_complex_pixels(gl: &glow::Context, r: &Renderer) -> Vec<bool> {
         .collect();
     let depth = readback.read(gl, depth, 1).unwrap();
     readback.destroy(gl);
-    let n = depth.samples;
     let mut complex = Vec::new();
     for y in 0..depth.height {
         for x in 0..depth.width {
-            let px = PixelSamples {
-                depth: (0..n).map(|s| f64::from(depth.get(s, x, y)[0])).collect(),
-                attachments: colors
-                    .iter()
-                    .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
-                    .collect(),
-            };
+            let px = PixelSamples::read_back(&depth, &colors, x, y);
             let at = PixelPlace {
                 x,
                 y,

@@ -180,13 +180,7 @@ fn a_front_face_a_side_sliver_and_a_wall_keep_their_shares() {
     let mut bad = Vec::new();
     for y in 0..H {
         for x in 0..W {
-            let px = PixelSamples {
-                depth: (0..n).map(|s| f64::from(depth.get(s, x, y)[0])).collect(),
-                attachments: colors
-                    .iter()
-                    .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
-                    .collect(),
-            };
+            let px = PixelSamples::read_back(&depth, &colors, x, y);
             let (mut front, mut side, mut wall) = (0, 0, 0);
             for s in 0..n as usize {
                 let (position, normal) = (px.attachments[1][s], px.attachments[2][s]);

@@ -275,15 +275,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
                 let mut bad = Vec::new();
                 for y in 0..H {
                     for x in 0..W {
-                        let px = PixelSamples {
-                            depth: (0..n)
-                                .map(|s| depth_samples.get(s, x, y)[0] as f64)
-                                .collect(),
-                            attachments: samples
-                                .iter()
-                                .map(|a| (0..n).map(|s| a.get(s, x, y).map(|c| c as f64)).collect())
-                                .collect(),
-                        };
+                        let px = PixelSamples::read_back(&depth_samples, &samples, x, y);
                         let at = PixelPlace { x, y, height: H };
                         let want = cpu.resolve_pixel_at(&px, Some(at));
                         if settings.selection.is_active() {
@@ -379,15 +371,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
         let mut bad = Vec::new();
         for y in 0..H {
             for x in 0..W {
-                let px = PixelSamples {
-                    depth: (0..n)
-                        .map(|s| depth_samples.get(s, x, y)[0] as f64)
-                        .collect(),
-                    attachments: samples
-                        .iter()
-                        .map(|a| (0..n).map(|s| a.get(s, x, y).map(|c| c as f64)).collect())
-                        .collect(),
-                };
+                let px = PixelSamples::read_back(&depth_samples, &samples, x, y);
                 let at = Some(PixelPlace { x, y, height: H });
                 let want_first = cpu.resolve_pixel_at(&px, at);
                 let want = cpu.resolve_second_layer_at(&px, at);

@@ -683,7 +683,6 @@ fn two_layers_on_wide_gbuffers_at_the_contexts_draw_buffers() {
         unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, Some(msaa.begin_frame(gl).unwrap())) };
         host.draw(gl, &projection(), false);
         msaa.resolve(gl, &frame()).unwrap();
-        let n = msaa.samples();
         let (depth_ref, color_refs, _) = msaa.inputs().unwrap();
         let samples: Vec<_> = color_refs
             .iter()
@@ -703,15 +702,7 @@ fn two_layers_on_wide_gbuffers_at_the_contexts_draw_buffers() {
         let (mut bad, mut covered) = (Vec::new(), 0);
         for y in 0..H {
             for x in 0..W {
-                let px = PixelSamples {
-                    depth: (0..n)
-                        .map(|s| f64::from(depth_samples.get(s, x, y)[0]))
-                        .collect(),
-                    attachments: samples
-                        .iter()
-                        .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
-                        .collect(),
-                };
+                let px = PixelSamples::read_back(&depth_samples, &samples, x, y);
                 let want = cpu.resolve_second_layer_at(&px, Some(PixelPlace { x, y, height: H }));
                 if want.ambiguous {
                     continue;
