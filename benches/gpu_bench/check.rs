@@ -4,8 +4,8 @@
 use crate::setup::*;
 use deferred_msaa::gbuffer::GBufferLayout;
 use deferred_msaa::gl::{Format, TextureRef};
-use deferred_msaa::readback::{Readback, SampleImage};
-use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
+use deferred_msaa::readback::{Readback, SampleImage, pixel_samples};
+use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace};
 use deferred_msaa::resolve::{KeySource, ResolveSlot};
 use deferred_msaa::{Error, MsaaRetrofit};
 use deferred_msaa_testkit::Host;
@@ -134,7 +134,7 @@ pub(crate) fn compare(
     };
     for y in 0..depth.height {
         for x in 0..depth.width {
-            let px = PixelSamples::read_back(depth, samples, x, y);
+            let px = pixel_samples(depth, samples, x, y);
             let at = PixelPlace {
                 x,
                 y,

@@ -2,8 +2,8 @@
 //! the times, and the methods timed.
 
 use crate::common::quantile;
-use deferred_msaa_lab::readback::Readback;
-use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
+use deferred_msaa_lab::readback::{Readback, pixel_samples};
+use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace};
 use deferred_msaa_lab::resolve::{KeySource, ResolveParams};
 use deferred_msaa_lab::retrofit::MsaaRetrofit;
 
@@ -61,7 +61,7 @@ pub(crate) fn count_complex(
     };
     for y in 0..depth.height {
         for x in 0..depth.width {
-            let px = PixelSamples::read_back(&depth, &colors, x, y);
+            let px = pixel_samples(&depth, &colors, x, y);
             c.pixels += 1;
             let at = Some(PixelPlace {
                 x,

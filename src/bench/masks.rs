@@ -58,7 +58,7 @@ pub(super) fn cluster_masks(
         readback.destroy(gl);
         let (colors, depth) = read?;
         let three = GrayImage::from_fn(depth.width, depth.height, |x, y| {
-            let px = crate::resolve::cpu::PixelSamples::read_back(&depth, &colors, x, y);
+            let px = crate::readback::pixel_samples(&depth, &colors, x, y);
             // Samples of neither kept cluster, each joined to one of them.
             let at = crate::resolve::cpu::PixelPlace {
                 x,

@@ -8,11 +8,11 @@ use crate::common;
 use deferred_msaa_lab::compare;
 use deferred_msaa_lab::gbuffer::GBufferLayout;
 use deferred_msaa_lab::gl::{TextureRef, live_objects};
-use deferred_msaa_lab::readback::Readback;
+use deferred_msaa_lab::readback::{Readback, pixel_samples};
 use deferred_msaa_lab::renderer::plan::{Pass, Plan, PlanContext, SceneNeeds, SpecularResponse};
 use deferred_msaa_lab::renderer::technique::Complex;
 use deferred_msaa_lab::renderer::{AaMode, RenderOptions, Renderer};
-use deferred_msaa_lab::resolve::cpu::{PixelPlace, PixelSamples};
+use deferred_msaa_lab::resolve::cpu::PixelPlace;
 use deferred_msaa_lab::resolve::{KeySource, ResolveSettings, ResolveSlot};
 use deferred_msaa_lab::scene::Scene;
 use std::process::Command;
@@ -351,7 +351,7 @@ fn cpu_complex_pixels(gl: &glow::Context, r: &Renderer) -> Vec<bool> {
     let mut complex = Vec::new();
     for y in 0..depth.height {
         for x in 0..depth.width {
-            let px = PixelSamples::read_back(&depth, &colors, x, y);
+            let px = pixel_samples(&depth, &colors, x, y);
             let at = PixelPlace {
                 x,
                 y,

@@ -9,9 +9,9 @@ use crate::common;
 use deferred_msaa::resolve::NormalEncoding;
 use deferred_msaa::{ColorAttachment, LayerMix, NormalAttachment};
 use deferred_msaa_lab::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef, live_objects};
-use deferred_msaa_lab::readback::Readback;
+use deferred_msaa_lab::readback::{Readback, pixel_samples};
 use deferred_msaa_lab::resolve::ResolveSettings;
-use deferred_msaa_lab::resolve::cpu::{PixelPlace, PixelSamples};
+use deferred_msaa_lab::resolve::cpu::PixelPlace;
 use deferred_msaa_lab::retrofit::{MsaaRetrofit, RetrofitOptions};
 use deferred_msaa_testkit::Host;
 use deferred_msaa_testkit::projection::perspective;
@@ -180,7 +180,7 @@ fn a_front_face_a_side_sliver_and_a_wall_keep_their_shares() {
     let mut bad = Vec::new();
     for y in 0..H {
         for x in 0..W {
-            let px = PixelSamples::read_back(&depth, &colors, x, y);
+            let px = pixel_samples(&depth, &colors, x, y);
             let (mut front, mut side, mut wall) = (0, 0, 0);
             for s in 0..n as usize {
                 let (position, normal) = (px.attachments[1][s], px.attachments[2][s]);

@@ -8,6 +8,7 @@ use crate::gl::{
     Attachment, Format, Framebuffer, FullscreenPass, RenderTarget, SavedState, ShaderSource,
     TextureRef, VertexArray, check_error,
 };
+use crate::resolve::cpu::PixelSamples;
 use glow::HasContext;
 use std::collections::HashMap;
 
@@ -42,6 +43,21 @@ impl SampleImage {
     pub fn plane(&self, s: u32) -> &[f32] {
         let n = (self.width * self.height * 4) as usize;
         &self.data[s as usize * n..(s as usize + 1) * n]
+    }
+}
+
+/// Pixel (`x`, `y`; row 0 at the top) of a frame's samples read back, for
+/// the resolve's CPU reference: the depth in `depth`'s first component, each
+/// colour attachment's RGBA from `colors`, in the order the reference
+/// numbers its attachments.
+pub fn pixel_samples(depth: &SampleImage, colors: &[SampleImage], x: u32, y: u32) -> PixelSamples {
+    let n = depth.samples;
+    PixelSamples {
+        depth: (0..n).map(|s| f64::from(depth.get(s, x, y)[0])).collect(),
+        attachments: colors
+            .iter()
+            .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
+            .collect(),
     }
 }
 

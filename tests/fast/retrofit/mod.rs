@@ -11,8 +11,8 @@ use crate::common;
 use deferred_msaa::resolve::NormalEncoding;
 use deferred_msaa::{ColorAttachment, Error, FirstLayerRestore, LayerMix, NormalAttachment};
 use deferred_msaa_lab::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef, live_objects};
-use deferred_msaa_lab::readback::Readback;
-use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace, PixelSamples};
+use deferred_msaa_lab::readback::{Readback, pixel_samples};
+use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace};
 use deferred_msaa_lab::resolve::{
     Region, ResolveMethod, ResolveRule, ResolveSettings, Selection, SelectionFlag, Window,
 };
@@ -275,7 +275,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
                 let mut bad = Vec::new();
                 for y in 0..H {
                     for x in 0..W {
-                        let px = PixelSamples::read_back(&depth_samples, &samples, x, y);
+                        let px = pixel_samples(&depth_samples, &samples, x, y);
                         let at = PixelPlace { x, y, height: H };
                         let want = cpu.resolve_pixel_at(&px, Some(at));
                         if settings.selection.is_active() {
@@ -371,7 +371,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
         let mut bad = Vec::new();
         for y in 0..H {
             for x in 0..W {
-                let px = PixelSamples::read_back(&depth_samples, &samples, x, y);
+                let px = pixel_samples(&depth_samples, &samples, x, y);
                 let at = Some(PixelPlace { x, y, height: H });
                 let want_first = cpu.resolve_pixel_at(&px, at);
                 let want = cpu.resolve_second_layer_at(&px, at);

@@ -702,7 +702,7 @@ fn two_layers_on_wide_gbuffers_at_the_contexts_draw_buffers() {
         let (mut bad, mut covered) = (Vec::new(), 0);
         for y in 0..H {
             for x in 0..W {
-                let px = PixelSamples::read_back(&depth_samples, &samples, x, y);
+                let px = deferred_msaa_lab::readback::pixel_samples(&depth_samples, &samples, x, y);
                 let want = cpu.resolve_second_layer_at(&px, Some(PixelPlace { x, y, height: H }));
                 if want.ambiguous {
                     continue;

@@ -4,7 +4,6 @@
 //! Tests compare the GLSL against it; change both together.
 
 use super::{DepthProjection, NormalEncoding, ResolveMethod, ResolveRule, ResolveSettings, Window};
-use crate::readback::SampleImage;
 
 mod blend;
 mod second_layer;
@@ -55,23 +54,6 @@ pub struct PixelSamples {
     pub depth: Vec<f64>,
     /// Per colour attachment, one RGBA value per sample.
     pub attachments: Vec<Vec<[f64; 4]>>,
-}
-
-impl PixelSamples {
-    /// Pixel (`x`, `y`; row 0 at the top) of a frame's samples read back
-    /// with [`Readback`](crate::readback::Readback): the depth in `depth`'s
-    /// first component, each colour attachment's RGBA from `colors`, in the
-    /// order the CPU reference numbers its attachments.
-    pub fn read_back(depth: &SampleImage, colors: &[SampleImage], x: u32, y: u32) -> Self {
-        let n = depth.samples;
-        PixelSamples {
-            depth: (0..n).map(|s| f64::from(depth.get(s, x, y)[0])).collect(),
-            attachments: colors
-                .iter()
-                .map(|a| (0..n).map(|s| a.get(s, x, y).map(f64::from)).collect())
-                .collect(),
-        }
-    }
 }
 
 /// Where a pixel is, for a selective-AA region.
