@@ -106,6 +106,21 @@ pub(crate) fn cc() -> Command {
     c
 }
 
+/// The gain two layers must show on a real program against its own frame
+/// without them (FLIP against its 16x image, and over its edge pixels): at
+/// most 0.7x, and 0.6x over edges. `what` names the run in the message.
+pub(crate) fn assert_two_layer_gain(what: &str, none: (f32, f64), two: (f32, f64)) {
+    let ((none, none_edges), (two, two_edges)) = (none, two);
+    assert!(
+        two <= 0.7 * none,
+        "{what}: two layers {two:.4} above 0.7x its own frame {none:.4}"
+    );
+    assert!(
+        two_edges <= 0.6 * none_edges,
+        "{what}: two layers over edges {two_edges:.4} above 0.6x its own frame {none_edges:.4}"
+    );
+}
+
 /// A test program's 16x image and edge mask at 320x180 (`reference.rgba`,
 /// `edges.mask`), as the C engine's programs and the Rust engine example
 /// write them into one folder, for measuring its frames there.
@@ -601,12 +616,5 @@ fn a_c_engine_with_six_attachments_retrofitted_from_the_docs() {
             "declared {declared}, two layers measure {flip:.4} ({edges:.4} over edges), closer than with the tonemap declared (Curve) {two:.4} ({two_edges:.4})"
         );
     }
-    assert!(
-        two <= 0.7 * none,
-        "two layers {two:.4} above 0.7x none {none:.4}"
-    );
-    assert!(
-        two_edges <= 0.6 * none_edges,
-        "two layers over edges {two_edges:.4} above 0.6x none {none_edges:.4}"
-    );
+    assert_two_layer_gain("the C engine", (none, none_edges), (two, two_edges));
 }

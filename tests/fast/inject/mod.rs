@@ -356,13 +356,10 @@ fn against_16x(plain: &Path, out: &Path, display: &str, own: &[u8], two_layers: 
         two / none,
         two_edges / none_edges
     );
-    assert!(
-        two <= 0.7 * none,
-        "two layers under inject {two:.4} above 0.7x the program's own frame {none:.4}"
-    );
-    assert!(
-        two_edges <= 0.6 * none_edges,
-        "two layers under inject over edges {two_edges:.4} above 0.6x the program's own frame {none_edges:.4}"
+    capi::assert_two_layer_gain(
+        "the tutorial program under inject",
+        (none, none_edges),
+        (two, two_edges),
     );
 }
 
