@@ -443,7 +443,7 @@ bool keys_uniform() {
 // Equal view-space keys are one surface where the depth samples agree too,
 // or every normal passes the normal test against sample 0's (cpu.rs's
 // one_orientation): a half-float position rounds a ridge's two facets to one
-// key, which hid the crease. Normals are read only where depths differ.
+// key, which hid the crease. Normals past sample 0's: only where depths differ.
 bool one_orientation(ivec2 p) {
     bool same = true;
     for (int i = 1; i < NUM_SAMPLES; ++i) same = same && g_raw_depth[i] == g_raw_depth[0];
