@@ -5,7 +5,7 @@ use crate::setup::*;
 use deferred_msaa::gbuffer::GBufferLayout;
 use deferred_msaa::gl::{Format, TextureRef};
 use deferred_msaa::readback::{Readback, SampleImage, pixel_samples};
-use deferred_msaa::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace};
+use deferred_msaa::resolve::cpu::{CpuCamera, CpuKeySource, CpuResolve, PixelPlace};
 use deferred_msaa::resolve::{KeySource, ResolveSlot};
 use deferred_msaa::{Error, MsaaRetrofit};
 use deferred_msaa_testkit::Host;
@@ -138,6 +138,7 @@ pub(crate) fn compare(
             let at = PixelPlace {
                 x,
                 y,
+                width: depth.width,
                 height: depth.height,
             };
             let want = cpu.resolve_pixel_at(&px, Some(at));
@@ -270,6 +271,7 @@ pub(crate) fn check_retrofit(
             clear_depth: projection.clear_depth,
             footprint: (fov_y / model.height as f64).tan(),
             normal: None,
+            camera: CpuCamera { projection, fov_y },
         };
         comparisons.push(compare(
             &cpu,

@@ -3,7 +3,7 @@
 
 use crate::common::quantile;
 use deferred_msaa_lab::readback::{Readback, pixel_samples};
-use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace};
+use deferred_msaa_lab::resolve::cpu::{CpuCamera, CpuKeySource, CpuResolve, PixelPlace};
 use deferred_msaa_lab::resolve::{KeySource, ResolveParams};
 use deferred_msaa_lab::retrofit::MsaaRetrofit;
 
@@ -48,6 +48,7 @@ pub(crate) fn count_complex(
         clear_depth: params.projection.clear_depth,
         footprint: params.footprint(),
         normal: None,
+        camera: CpuCamera::of(params),
     };
     let cpu = cpu_for(params);
     let cpu_exact = cpu_for(exact);
@@ -66,6 +67,7 @@ pub(crate) fn count_complex(
             let at = Some(PixelPlace {
                 x,
                 y,
+                width: depth.width,
                 height: depth.height,
             });
             let resolved = cpu.resolve_pixel_at(&px, at);

@@ -63,6 +63,7 @@ pub(super) fn cluster_masks(
             let at = crate::resolve::cpu::PixelPlace {
                 x,
                 y,
+                width: depth.width,
                 height: depth.height,
             };
             let joined = cpu.resolve_second_layer_at(&px, Some(at)).joined;

@@ -355,6 +355,7 @@ fn cpu_complex_pixels(gl: &glow::Context, r: &Renderer) -> Vec<bool> {
             let at = PixelPlace {
                 x,
                 y,
+                width: depth.width,
                 height: depth.height,
             };
             complex.push(cpu.resolve_pixel_at(&px, Some(at)).complex);

@@ -195,7 +195,15 @@ fn a_front_face_a_side_sliver_and_a_wall_keep_their_shares() {
                     side += 1;
                 }
             }
-            let second = cpu.resolve_second_layer_at(&px, Some(PixelPlace { x, y, height: H }));
+            let second = cpu.resolve_second_layer_at(
+                &px,
+                Some(PixelPlace {
+                    x,
+                    y,
+                    width: W,
+                    height: H,
+                }),
+            );
             if front + side + wall == n as usize && side > 0 && wall > 0 {
                 *seen.entry((front, side, wall)).or_default() += 1;
                 assert!(

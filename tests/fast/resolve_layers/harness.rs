@@ -7,7 +7,7 @@ use deferred_msaa_lab::gl::{
 };
 use deferred_msaa_lab::readback::Readback;
 use deferred_msaa_lab::resolve::cpu::{
-    CpuKeySource, CpuResolve, PixelPlace, PixelSamples, ResolvedPixel, SecondLayerPixel,
+    CpuCamera, CpuKeySource, CpuResolve, PixelPlace, PixelSamples, ResolvedPixel, SecondLayerPixel,
 };
 use deferred_msaa_lab::resolve::{
     DepthProjection, KeySource, LayerPass, NormalEncoding, ResolveInputs, ResolveParams,
@@ -178,6 +178,7 @@ impl Harness {
             clear_depth: CLEAR_DEPTH as f64,
             footprint: params.footprint(),
             normal: self.normal,
+            camera: CpuCamera::of(&params),
         };
         let mut ambiguous = 0;
         let mut pixels = Vec::with_capacity(self.cases.len());
@@ -196,6 +197,7 @@ impl Harness {
             let at = PixelPlace {
                 x: p as u32 % W,
                 y: H - 1 - p as u32 / W,
+                width: W,
                 height: H,
             };
             let want = cpu.resolve_pixel_at(&px, Some(at));
@@ -335,6 +337,7 @@ impl Harness {
             clear_depth: CLEAR_DEPTH as f64,
             footprint: params.footprint(),
             normal: self.normal,
+            camera: CpuCamera::of(&params),
         };
         let mut failures = Vec::new();
         let mut ambiguous = 0;
@@ -351,6 +354,7 @@ impl Harness {
             let at = PixelPlace {
                 x: p as u32 % W,
                 y: H - 1 - p as u32 / W,
+                width: W,
                 height: H,
             };
             let want = cpu.resolve_second_layer_at(&px, Some(at));

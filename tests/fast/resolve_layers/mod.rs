@@ -10,6 +10,7 @@
 #![allow(clippy::needless_range_loop)]
 
 mod cases;
+mod creases;
 mod harness;
 
 use crate::common;
@@ -21,6 +22,7 @@ use deferred_msaa_lab::resolve::{
 use deferred_msaa_testkit::Rng;
 
 use cases::*;
+use creases::{Normals, gen_crease_case};
 use harness::Harness;
 
 fn settings_matrix() -> Vec<ResolveSettings> {
@@ -318,4 +320,61 @@ fn second_layer_matches_the_cpu_reference() {
     resolver.destroy(gl);
     readback.destroy(gl);
     assert_eq!(deferred_msaa_lab::gl::live_objects(), before);
+}
+
+/// A tie between a crease's two faces (as many samples on each) goes to the
+/// face the pixel centre sees where the normals are the faces' view-space
+/// normals (the crease rule), and by the pixel's parity where they are not
+/// (turned normals, which the rule must not trust): the GPU agrees with the
+/// CPU reference on every pixel either way.
+#[test]
+fn a_crease_tie_goes_to_the_face_the_centre_sees() {
+    let Some(ctx) = common::egl_context() else {
+        return;
+    };
+    let gl = ctx.gl();
+    let mut resolver = Resolver::new(gl).unwrap();
+    let mut readback = Readback::new(gl).unwrap();
+    for n in [2u32, 4, 8, 16] {
+        for normals in [Normals::View, Normals::Turned] {
+            let mut rng = Rng::new(0xC4EA5E + n as u64);
+            let (cases, truths): (Vec<_>, Vec<_>) = (0..W * H)
+                .map(|p| gen_crease_case(&mut rng, n as usize, p, normals))
+                .unzip();
+            let mut harness = Harness::upload(gl, n, cases);
+            harness.normal = Some((2, NormalEncoding::Xyz));
+            for layers in [1, 2] {
+                let settings = ResolveSettings {
+                    layers,
+                    ..ResolveSettings::default()
+                };
+                let key = KeySource::Position(ResolveSlot(1));
+                let got = harness.check_keyed(gl, &mut resolver, &mut readback, settings, key);
+                let (mut ties, mut centre) = (0usize, 0usize);
+                for (px, truth) in got.iter().zip(&truths) {
+                    let on_first = truth.faces.iter().filter(|&&f| f == 0).count();
+                    if on_first * 2 != n as usize || px.ambiguous {
+                        continue;
+                    }
+                    ties += 1;
+                    centre += usize::from(truth.faces[px.reference] == truth.centre);
+                }
+                eprintln!(
+                    "{n}x {layers} layer(s): {centre} of {ties} crease ties on the centre's face"
+                );
+                assert!(ties >= 30, "too few ties to judge: {ties}");
+                if normals == Normals::View {
+                    assert!(centre * 100 >= ties * 97, "{centre} of {ties}");
+                } else {
+                    assert!(
+                        centre * 4 >= ties && centre * 4 <= ties * 3,
+                        "{centre} of {ties}"
+                    );
+                }
+            }
+            harness.destroy(gl);
+        }
+    }
+    resolver.destroy(gl);
+    readback.destroy(gl);
 }

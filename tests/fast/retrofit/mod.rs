@@ -12,7 +12,7 @@ use deferred_msaa::resolve::NormalEncoding;
 use deferred_msaa::{ColorAttachment, Error, FirstLayerRestore, LayerMix, NormalAttachment};
 use deferred_msaa_lab::gl::{Attachment, Format, Framebuffer, Texture2d, TextureRef, live_objects};
 use deferred_msaa_lab::readback::{Readback, pixel_samples};
-use deferred_msaa_lab::resolve::cpu::{CpuKeySource, CpuResolve, PixelPlace};
+use deferred_msaa_lab::resolve::cpu::{CpuCamera, CpuKeySource, CpuResolve, PixelPlace};
 use deferred_msaa_lab::resolve::{
     Region, ResolveMethod, ResolveRule, ResolveSettings, Selection, SelectionFlag, Window,
 };
@@ -91,6 +91,12 @@ fn lit_output(gl: &glow::Context, format: Format) -> (Texture2d, Framebuffer) {
 
 fn frame() -> deferred_msaa::Frame {
     deferred_msaa_testkit::projection::frame(&projection(), false)
+}
+
+/// The camera the resolve derives from the frame, for the CPU reference.
+fn camera() -> CpuCamera {
+    let (projection, fov_y) = frame().depth_terms().unwrap();
+    CpuCamera { projection, fov_y }
 }
 
 /// `tan(fov_y / height)`: the pixel footprint the resolve derives from the frame.
@@ -263,6 +269,7 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
                     clear_depth: 1.0,
                     footprint: footprint(),
                     normal: None,
+                    camera: camera(),
                 };
                 // The same resolve without selective AA.
                 let plain = CpuResolve {
@@ -276,7 +283,12 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
                 for y in 0..H {
                     for x in 0..W {
                         let px = pixel_samples(&depth_samples, &samples, x, y);
-                        let at = PixelPlace { x, y, height: H };
+                        let at = PixelPlace {
+                            x,
+                            y,
+                            width: W,
+                            height: H,
+                        };
                         let want = cpu.resolve_pixel_at(&px, Some(at));
                         if settings.selection.is_active() {
                             let all = plain.resolve_pixel_at(&px, Some(at));
@@ -372,7 +384,12 @@ fn resolve_matches_at(ctx: &deferred_msaa_lab::context::HeadlessContext, samples
         for y in 0..H {
             for x in 0..W {
                 let px = pixel_samples(&depth_samples, &samples, x, y);
-                let at = Some(PixelPlace { x, y, height: H });
+                let at = Some(PixelPlace {
+                    x,
+                    y,
+                    width: W,
+                    height: H,
+                });
                 let want_first = cpu.resolve_pixel_at(&px, at);
                 let want = cpu.resolve_second_layer_at(&px, at);
                 second_pixels += usize::from(want.reference.is_some());

@@ -703,7 +703,15 @@ fn two_layers_on_wide_gbuffers_at_the_contexts_draw_buffers() {
         for y in 0..H {
             for x in 0..W {
                 let px = deferred_msaa_lab::readback::pixel_samples(&depth_samples, &samples, x, y);
-                let want = cpu.resolve_second_layer_at(&px, Some(PixelPlace { x, y, height: H }));
+                let want = cpu.resolve_second_layer_at(
+                    &px,
+                    Some(PixelPlace {
+                        x,
+                        y,
+                        width: W,
+                        height: H,
+                    }),
+                );
                 if want.ambiguous {
                     continue;
                 }

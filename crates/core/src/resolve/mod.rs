@@ -58,16 +58,21 @@ pub const COMPLEX_GLSL: &str = include_str!("complex.glsl");
 pub const COMPLEX_GLSL_NAME: &str = "complex.glsl";
 
 /// How the resolve decodes a stored normal and tests two samples' normals
-/// (`normals.glsl`), the part before [`RESOLVE_FRAG`].
+/// (`normals.glsl`), the part before [`CREASE_GLSL`].
 pub const NORMALS_GLSL: &str = include_str!("normals.glsl");
 
+/// The resolve's sample pattern and crease rule (`crease.glsl`), the part
+/// between [`NORMALS_GLSL`] and [`RESOLVE_FRAG`].
+pub const CREASE_GLSL: &str = include_str!("crease.glsl");
+
 /// The resolve's fragment stage: `header`, then [`COMPLEX_GLSL`],
-/// [`NORMALS_GLSL`] and [`RESOLVE_FRAG`] as three parts (so messages name
-/// the right file).
+/// [`NORMALS_GLSL`], [`CREASE_GLSL`] and [`RESOLVE_FRAG`] as four parts (so
+/// messages name the right file).
 pub fn resolve_fragment_source(header: &str) -> ShaderSource {
     ShaderSource::with_header(header)
         .part(COMPLEX_GLSL_NAME, COMPLEX_GLSL)
         .part("normals.glsl", NORMALS_GLSL)
+        .part("crease.glsl", CREASE_GLSL)
         .part("resolve.frag", RESOLVE_FRAG)
 }
 
@@ -442,6 +447,7 @@ impl Resolver {
             program.set_vec2(gl, "u_depth_to_ndc", to_ndc);
             program.set_vec2(gl, "u_projection", [proj.p22 as f32, proj.p23 as f32]);
             program.set_f32(gl, "u_footprint", params.footprint() as f32);
+            program.set_f32(gl, "u_tan_half_fov_y", (params.fov_y / 2.0).tan() as f32);
             program.set_f32(gl, "u_c", s.c as f32);
             program.set_f32(gl, "u_c_in", s.c_in as f32);
             if let Some(row) = params.view_row {

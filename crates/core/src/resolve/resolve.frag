@@ -43,7 +43,8 @@
 //                          different surfaces (cpu.rs's same_normal)
 //   MAJORITY_REFERENCE     a normal attachment (one layer or two): the reference
 //                          moves to the orientation most samples within its
-//                          depth window share, a tie by the pixel's parity
+//                          depth window share, a tie to the face the centre
+//                          sees (crease.glsl) or by the pixel's parity
 //                          (cpu.rs's majority_reference)
 //   SECOND_LAYER_OUTPUT    write the second layer (cpu.rs's
 //                          resolve_second_layer_at), its coverage to
@@ -70,9 +71,11 @@
 #ifdef SAMPLES_AS_LAYERS
 #define DEPTH_SAMPLER sampler2DArray
 #define FETCH(s, p, i) texelFetch(s, ivec3(p, i), 0)
+#define TARGET_SIZE textureSize(u_depth, 0).xy
 #else
 #define DEPTH_SAMPLER sampler2DMS
 #define FETCH(s, p, i) texelFetch(s, p, i)
+#define TARGET_SIZE textureSize(u_depth)
 #endif
 
 uniform DEPTH_SAMPLER u_depth;
@@ -466,21 +469,7 @@ bool one_orientation(ivec2 p) {
 // the depth samples lie on one plane over the standard sample pattern, and
 // the first blended attachment's samples are all equal. One triangle's
 // samples pass it; it does not prove that one fragment wrote the pixel.
-// Offsets from the pixel centre in 1/16 pixel, x right, y up.
-#if NUM_SAMPLES == 4
-#define PLANE_PATTERN 1
-const vec2 SAMPLE_POS[4] = vec2[4](vec2(-2.0, -6.0), vec2(6.0, -2.0), vec2(-6.0, 2.0), vec2(2.0, 6.0));
-#elif NUM_SAMPLES == 8
-#define PLANE_PATTERN 1
-const vec2 SAMPLE_POS[8] = vec2[8](vec2(1.0, -3.0), vec2(-1.0, 3.0), vec2(5.0, 1.0), vec2(-3.0, -5.0),
-                                   vec2(-5.0, 5.0), vec2(-7.0, -1.0), vec2(3.0, 7.0), vec2(7.0, -7.0));
-#elif NUM_SAMPLES == 16
-#define PLANE_PATTERN 1
-const vec2 SAMPLE_POS[16] = vec2[16](vec2(1.0, 1.0), vec2(-1.0, -3.0), vec2(-3.0, 2.0), vec2(4.0, -1.0),
-                                     vec2(-5.0, -2.0), vec2(2.0, 5.0), vec2(5.0, 3.0), vec2(3.0, -5.0),
-                                     vec2(-2.0, 6.0), vec2(0.0, -7.0), vec2(-4.0, -6.0), vec2(-6.0, 4.0),
-                                     vec2(-8.0, 0.0), vec2(7.0, -4.0), vec2(6.0, 7.0), vec2(-7.0, -8.0));
-#endif
+// The sample pattern is crease.glsl's.
 
 // Least squares over e_i = d_i - d_0 (exact where depths are close), with
 // positions and e centred; up to 3 samples always fit, a count without a
@@ -488,7 +477,7 @@ const vec2 SAMPLE_POS[16] = vec2[16](vec2(1.0, 1.0), vec2(-1.0, -3.0), vec2(-3.0
 bool plane_fits() {
 #if NUM_SAMPLES <= 3
     return true;
-#elif !defined(PLANE_PATTERN)
+#elif !defined(SAMPLE_PATTERN)
     return false;
 #else
     vec2 mean_pos = vec2(0.0);
@@ -711,7 +700,8 @@ void main() {
     // window share (cpu.rs's majority_reference). A crease, or a
     // box's side face behind its front face, can put the median on the
     // smaller of two faces, which the larger's samples would then join, lit
-    // as it; a tie goes by the pixel's parity.
+    // as it; a tie goes to the face the pixel centre sees where the crease
+    // rule knows it, else by the pixel's parity.
     {
         int best = r;
         int best_size;
@@ -735,7 +725,17 @@ void main() {
             tied = tie ? s : tied;
         }
         ivec2 place = ivec2(gl_FragCoord.xy);
-        bool take_tie = best == r && tied >= 0 && ((place.x + place.y) & 1) == 1;
+        bool tie_open = best == r && tied >= 0 && !settled;
+        int side = 0;
+#ifdef CREASE_RULE
+        float inv_w[NUM_SAMPLES];
+        for (int i = 0; i < NUM_SAMPLES; ++i)
+            inv_w[i] = (g_raw_depth[i] * u_depth_to_ndc.x + u_depth_to_ndc.y + u_projection.x) / u_projection.y;
+        int in_tied;
+        PICK(in_tied, members, max(tied, 0))
+        side = crease_side(inv_w, normals, r, in_r, max(tied, 0), in_tied, gl_FragCoord.xy, vec2(TARGET_SIZE));
+#endif
+        bool take_tie = tie_open && (side < 0 || (side == 0 && ((place.x + place.y) & 1) == 1));
         best = take_tie ? tied : best;
         bool moved = best != r;
         for (int i = 0; i < NUM_SAMPLES; ++i) {

@@ -26,7 +26,7 @@ use crate::gl::{
 };
 pub use crate::host::{HostAttachment, HostFramebuffer, HostImageKind, introspect};
 use crate::profile::StepProfile;
-use crate::resolve::cpu::{CpuKeySource, CpuResolve};
+use crate::resolve::cpu::{CpuCamera, CpuKeySource, CpuResolve};
 use crate::resolve::{
     ExtraOutputs, KeySource, NormalEncoding, ResolveInputs, ResolveParams, ResolveRule,
     ResolveSlot, Resolver, StencilCopy,
@@ -682,6 +682,7 @@ impl MsaaRetrofit {
             clear_depth: params.projection.clear_depth,
             footprint: params.footprint(),
             normal: self.normal.map(|(slot, encoding)| (slot.0, encoding)),
+            camera: CpuCamera::of(&params),
         })
     }
 

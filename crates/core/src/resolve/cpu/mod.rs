@@ -6,11 +6,13 @@
 use super::{DepthProjection, NormalEncoding, ResolveMethod, ResolveRule, ResolveSettings, Window};
 
 mod blend;
+mod crease;
 mod second_layer;
 #[cfg(test)]
 mod tests;
 
 pub use blend::{blend, blend_hdr, blend_normal};
+pub use crease::CpuCamera;
 
 /// Where the depth key of a sample comes from.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,6 +47,9 @@ pub struct CpuResolve {
     /// The normal attachment (index into the pixel's attachments) and its
     /// encoding: clusters split by normal too (one layer or two).
     pub normal: Option<(usize, NormalEncoding)>,
+    /// The camera, for the crease rule that settles a tie between two faces
+    /// of a crease (with a normal attachment).
+    pub camera: CpuCamera,
 }
 
 /// One pixel's samples: `depth[i]` and `attachments[k][i]`.
@@ -63,6 +68,8 @@ pub struct PixelPlace {
     pub x: u32,
     /// Row, from the top (as images are read back).
     pub y: u32,
+    /// The target's width in pixels.
+    pub width: u32,
     /// The target's height in pixels.
     pub height: u32,
 }

@@ -109,14 +109,10 @@ impl CpuResolve {
     /// samples would then join it and be lit as it. Where no cluster is
     /// larger than the reference's but another within its window is as
     /// large (a crease through the middle of the pixel), the reference
-    /// stays on pixels of even parity and moves to the first sample of
-    /// that other face on odd ones ([`odd_pixel`](super::odd_pixel)).
-    /// With the median's own tie by parity, a crease whose two middle
-    /// samples by depth lie on different faces (a face holds the two
-    /// nearest) goes to the face of the nearest samples on every pixel,
-    /// and one whose middle samples share a face (the other face holds the
-    /// nearest and the farthest), which the median alone would take on
-    /// every pixel, alternates between the faces.
+    /// goes to the face the pixel centre sees where the crease rule
+    /// ([`crease_side`](Self::crease_side)) knows it; otherwise it stays on
+    /// pixels of even parity and moves to the first sample of that other
+    /// face on odd ones ([`odd_pixel`](super::odd_pixel)).
     /// The second value: `f32` may decide differently.
     pub(super) fn majority_reference(
         &self,
@@ -152,10 +148,18 @@ impl CpuResolve {
                 tied = Some(s);
             }
         }
-        // A tie between the reference's face and another: the median's on
-        // pixels of even parity, the other on odd ones.
-        if let (true, true, Some(t)) = (best == r, odd, tied) {
-            best = t;
+        // A tie between the reference's face and another: the face the
+        // pixel centre sees where the crease rule knows it; otherwise the
+        // median's on pixels of even parity, the other on odd ones.
+        if let (true, Some(t)) = (best == r, tied) {
+            // (Membership's own f32 doubts were counted with the sizes.)
+            let in_r: Vec<bool> = (0..n).map(|j| self.member(px, keys, j, r).0).collect();
+            let in_t: Vec<bool> = (0..n).map(|j| self.member(px, keys, j, t).0).collect();
+            let (side, unsure) = self.crease_side(px, (r, &in_r), (t, &in_t), at);
+            ambiguous |= unsure;
+            if side.map_or(odd, |on_r| !on_r) {
+                best = t;
+            }
         }
         (best, ambiguous)
     }

@@ -14,6 +14,10 @@ fn resolver(method: ResolveMethod, window: Window) -> CpuResolve {
         clear_depth: 1.0,
         footprint: 0.001,
         normal: None,
+        camera: CpuCamera {
+            projection: DepthProjection::from_matrix(&[0.0; 16], false, 1.0),
+            fov_y: 1.0,
+        },
     }
 }
 
@@ -23,6 +27,7 @@ fn at(odd: bool) -> Option<PixelPlace> {
     Some(PixelPlace {
         x: u32::from(odd),
         y: 0,
+        width: 2,
         height: 1,
     })
 }
@@ -76,7 +81,12 @@ fn a_half_covered_pixel_goes_to_either_surface_by_its_parity() {
     let upper = resolver(ResolveMethod::UpperMedian, Window::Hard);
     let px = pixel(&[50.0, 10.0, 50.0, 10.0]);
     let on = |cpu: &CpuResolve, x: u32, y: u32| {
-        let place = PixelPlace { x, y, height: 8 };
+        let place = PixelPlace {
+            x,
+            y,
+            width: 8,
+            height: 8,
+        };
         cpu.resolve_pixel_at(&px, Some(place)).reference
     };
     // Rows from the top: y = 0 is GL's row 7, so (0, 0) is odd.
