@@ -467,3 +467,109 @@ fn normal_encodings_decode_to_the_stored_direction() {
         );
     }
 }
+
+/// A convex crease through pixel (x, 3) of an 8x8 target (rows from the
+/// top), its line vertical at `offset` pixels right of the centre: two
+/// samples on each face of the standard 4x pattern for |offset| < 2/16.
+/// The faces are turned ±0.5 rad about y; `turn` more turns every stored
+/// normal about x (world-space normals under a view turned that way).
+/// Returns the pixel, its place, which face (0: the left one) each sample
+/// holds and the face the centre sees.
+fn crease_pixel(x: u32, offset: f64, turn: f64) -> (PixelSamples, PixelPlace, Vec<usize>, usize) {
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let t = 0.5f64.tan(); // fov_y 1.0
+    let ray = |x: f64, y: f64| [(2.0 * x / 8.0 - 1.0) * t, (2.0 * y / 8.0 - 1.0) * t, -1.0];
+    let (cx, cy) = (x as f64 + 0.5, (8 - 1 - 3) as f64 + 0.5);
+    let on_crease = ray(cx + offset, cy).map(|c| c * 10.0);
+    // The left face leans left, the right face right: a ridge.
+    let faces = [
+        [-0.5f64.sin(), 0.0, 0.5f64.cos()],
+        [0.5f64.sin(), 0.0, 0.5f64.cos()],
+    ];
+    let face_at = |x: f64, y: f64| {
+        let v = ray(x, y);
+        let w = faces.map(|n| dot(n, on_crease) / dot(n, v));
+        // A convex crease shows the farther face.
+        if w[0] > w[1] { (0, w[0]) } else { (1, w[1]) }
+    };
+    let (s, c) = turn.sin_cos();
+    let stored = |n: [f64; 3]| [n[0], c * n[1] - s * n[2], s * n[1] + c * n[2], 0.0];
+    let mut px = PixelSamples {
+        depth: Vec::new(),
+        attachments: vec![Vec::new(), Vec::new(), Vec::new()],
+    };
+    let mut which = Vec::new();
+    for o in standard_sample_positions(4).unwrap() {
+        let (x, y) = (cx + o[0] / 16.0, cy + o[1] / 16.0);
+        let (face, w) = face_at(x, y);
+        let v = ray(x, y);
+        // Standard depth of an infinite-far projection with near 0.1.
+        px.depth.push(1.0 - 0.1 / w);
+        px.attachments[0].push([face as f64, 0.0, 0.0, 1.0]);
+        px.attachments[1].push([v[0] * w, v[1] * w, -w, 1.0]);
+        px.attachments[2].push(stored(faces[face]));
+        which.push(face);
+    }
+    let place = PixelPlace {
+        x,
+        y: 3,
+        width: 8,
+        height: 8,
+    };
+    (px, place, which, face_at(cx, cy).0)
+}
+
+#[test]
+fn a_crease_tie_goes_to_the_face_the_pixel_centre_sees() {
+    let cpu = CpuResolve {
+        rules: vec![ResolveRule::Blend, ResolveRule::Blend, ResolveRule::Select],
+        normal: Some((2, NormalEncoding::Xyz)),
+        camera: CpuCamera {
+            projection: DepthProjection {
+                p22: -1.0,
+                p23: -0.2,
+                zero_to_one: false,
+                clear_depth: 1.0,
+            },
+            fov_y: 1.0,
+        },
+        // tan(fov_y / height), as a resolve of this target has it.
+        footprint: 0.125f64.tan(),
+        ..resolver(ResolveMethod::Median, Window::Smooth)
+    };
+    // GL's (4, 4) is an even place, (5, 4) an odd one.
+    for x in [4, 5] {
+        for (offset, centre) in [(0.05, 0), (-0.05, 1)] {
+            let (px, at, which, truth) = crease_pixel(x, offset, 0.0);
+            assert_eq!(which, [0, 1, 0, 1], "a tie");
+            assert_eq!(truth, centre);
+            let got = cpu.resolve_pixel_at(&px, Some(at));
+            assert!(!got.ambiguous);
+            assert_eq!(which[got.reference], centre, "x {x} offset {offset}");
+            let faces = |face: usize| which.iter().map(|&f| f == face).collect::<Vec<_>>();
+            let side = cpu.crease_side(&px, (0, &faces(0)), (1, &faces(1)), Some(at));
+            assert_eq!(side, (Some(centre == 0), false));
+            // Normals that are not the faces' view-space normals: the rule
+            // does not decide (the parity does); nor does it without a place.
+            let (px, at, ..) = crease_pixel(x, offset, 0.35);
+            let side = cpu.crease_side(&px, (0, &faces(0)), (1, &faces(1)), Some(at));
+            assert_eq!(side.0, None);
+            assert_eq!(
+                cpu.crease_side(&px, (0, &faces(0)), (1, &faces(1)), None).0,
+                None
+            );
+        }
+    }
+    // Faces that do not meet (a silhouette: the left face 5 units nearer
+    // than its plane would meet the right one) are not a crease.
+    let (mut px, at, which, _) = crease_pixel(4, 0.05, 0.0);
+    for (i, &face) in which.iter().enumerate() {
+        if face == 0 {
+            let w = 0.1 / (1.0 - px.depth[i]) - 5.0;
+            px.depth[i] = 1.0 - 0.1 / w;
+        }
+    }
+    let faces = |face: usize| which.iter().map(|&f| f == face).collect::<Vec<_>>();
+    let side = cpu.crease_side(&px, (0, &faces(0)), (1, &faces(1)), Some(at));
+    assert_eq!(side.0, None);
+}
