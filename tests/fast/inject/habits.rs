@@ -278,7 +278,10 @@ pub(super) fn run(setup: &Setup<'_>) {
     // the view's z row. The matrices are the product's, rounded otherwise
     // than the in-source build's own, so the frame may differ from the
     // in-source one where the depth window's weights round apart: in at
-    // most 1% of the pixels, by at most 8 of 255.
+    // most 1% of the pixels, by at most 8 of 255; and where a crease's tie
+    // lies within that rounding of the crease rule's threshold (which the
+    // projection's terms place) it may go to the other face: in at most
+    // 0.05% of them (1 pixel of 19200 here, 0 with the rule off).
     let vp: &[&str] = &["--view-projection"];
     let own = own_frame(
         setup.plain,
@@ -312,7 +315,7 @@ pub(super) fn run(setup: &Setup<'_>) {
         resolves: 3,
         calls: &["dmsaa_resolve 3"],
     }
-    .compare_within(setup.in_source, setup.plain, &own, "GLX", 0.01, 8);
+    .compare_within(setup.in_source, setup.plain, &own, "GLX", 0.01, 8, 0.0005);
     // What needs GL 4.5 (direct state access), after one probe of it.
     // A G-buffer made through direct state access (`--dsa`, GL 4.5:
     // glCreateFramebuffers, glTextureStorage2D, glNamedFramebufferTexture,

@@ -728,12 +728,11 @@ void main() {
         bool tie_open = best == r && tied >= 0 && !settled;
         int side = 0;
 #ifdef CREASE_RULE
-        float inv_w[NUM_SAMPLES];
-        for (int i = 0; i < NUM_SAMPLES; ++i)
-            inv_w[i] = (g_raw_depth[i] * u_depth_to_ndc.x + u_depth_to_ndc.y + u_projection.x) / u_projection.y;
         int in_tied;
         PICK(in_tied, members, max(tied, 0))
-        side = crease_side(inv_w, normals, r, in_r, max(tied, 0), in_tied, gl_FragCoord.xy, vec2(TARGET_SIZE));
+        vec2 inv_w_terms = vec2(u_depth_to_ndc.x, u_depth_to_ndc.y + u_projection.x) / u_projection.y;
+        side = crease_side(tie_open, g_zero, g_raw_depth, inv_w_terms, normals, r, in_r, max(tied, 0),
+                           in_tied, gl_FragCoord.xy, vec2(TARGET_SIZE));
 #endif
         bool take_tie = tie_open && (side < 0 || (side == 0 && ((place.x + place.y) & 1) == 1));
         best = take_tie ? tied : best;
