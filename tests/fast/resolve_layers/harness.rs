@@ -228,10 +228,6 @@ impl Harness {
                         close(got[c], want.attachments[k][c])
                     };
                     if !within {
-                        eprintln!(
-                            "DEBUG {:?}",
-                            px.attachments[k].iter().map(|v| v[c]).collect::<Vec<_>>()
-                        );
                         failures.push(format!(
                             "pixel {p} (case {}) attachment {k}[{c}]: gpu {} cpu {} (ref {}, weights {:?})",
                             p % 11, got[c], want.attachments[k][c], want.reference, want.weights
